@@ -1,0 +1,3 @@
+//! # hce-bake
+//!
+//! The baker: normal sets (stage 1), enriched hierarchical radiosity (stage 2) and HCE encoding.

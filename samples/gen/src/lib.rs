@@ -1,0 +1,1 @@
+//! Generators for the bundled sample scenes.
