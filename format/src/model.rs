@@ -115,6 +115,11 @@ pub struct TriangleRecord {
 ///   (indices of corners mod 3).
 /// * `neighbours[3 * t + e]`: the triangle across edge `e` = `(v_e, v_{e+1})`, or
 ///   [`NO_NEIGHBOUR`] on a boundary.
+/// * `edges[3 * t + e]`: the id of edge `e` of triangle `t`. Ids are dense, `0 .. E`, numbered in
+///   order of first appearance when scanning `(t, e)` in increasing order; an interior edge's id
+///   appears exactly twice (in `t` and in `neighbours[3 * t + e]`), a boundary edge's once. The
+///   triangle where an edge first appears owns it: refined vertices on the edge are numbered
+///   and written from that triangle's side, from its `v_e` towards its `v_{e+1}`.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ControlMesh {
     pub positions: Vec<f32>,
@@ -125,6 +130,7 @@ pub struct ControlMesh {
     pub spoke_flags: Vec<u32>,
     pub corner_spokes: Vec<u32>,
     pub neighbours: Vec<u32>,
+    pub edges: Vec<u32>,
 }
 
 /// `neighbours` entry for a boundary edge.
