@@ -4,8 +4,14 @@
 //! samples) and a small glTF 2.0 binary writer. The `gen-samples` binary writes the three
 //! `.glb` files committed under `samples/`.
 
+pub mod chess;
+pub mod cornell;
 pub mod glb;
+pub mod lathe;
 pub mod mesh;
 pub mod scene;
+pub mod scenes;
+pub mod shapes;
+pub mod spoon;
 pub mod teapot;
 mod teapot_data;

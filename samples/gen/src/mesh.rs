@@ -47,15 +47,19 @@ impl Mesh {
     }
 
     /// Appends the quad `(a, b, c, d)` (counter-clockwise) as two triangles, split along the
-    /// shorter diagonal so that the triangles stay as well-shaped as the quad allows.
+    /// shorter diagonal so that the triangles stay as well-shaped as the quad allows. A quad
+    /// with a repeated corner (at a pole of a surface of revolution) gives one triangle.
     pub fn quad(&mut self, [a, b, c, d]: [u32; 4], group: u32) {
         let p = |i: u32| self.positions[i as usize];
-        if p(a).distance_squared(p(c)) <= p(b).distance_squared(p(d)) {
-            self.triangle([a, b, c], group);
-            self.triangle([a, c, d], group);
+        let (t1, t2) = if p(a).distance_squared(p(c)) <= p(b).distance_squared(p(d)) {
+            ([a, b, c], [a, c, d])
         } else {
-            self.triangle([a, b, d], group);
-            self.triangle([b, c, d], group);
+            ([a, b, d], [b, c, d])
+        };
+        for t in [t1, t2] {
+            if t[0] != t[1] && t[1] != t[2] && t[2] != t[0] {
+                self.triangle(t, group);
+            }
         }
     }
 
