@@ -289,7 +289,8 @@ pub fn to_gltf(scene: &Scene) -> Result<(json::Root, Vec<u8>), GlbError> {
             primitives,
             weights: None,
         });
-        let t = object.translation.map(snap).as_vec3().to_array();
+        // Translations are literal constants, so no platform-dependent rounding to guard against.
+        let t = object.translation.as_vec3().to_array();
         let extras = if object.multires {
             Some(
                 json::extras::RawValue::from_string(r#"{"hce":{"multires":true}}"#.to_string())
