@@ -45,14 +45,15 @@ pub struct Lathe {
     pub band_groups: Vec<u32>,
 }
 
-/// Revolves `profile` around the Y axis in `segments` steps, counter-clockwise seen from
-/// above, starting at +X. `skip(k, j)` leaves out the quad between profile points `k`, `k + 1`
+/// Revolves `profile` around the Y axis in `segments` steps (at least 3), counter-clockwise
+/// seen from above, starting at +X. `skip(k, j)` leaves out the quad between profile points `k`, `k + 1`
 /// and angle steps `j`, `j + 1` (to cut a hole for a handle).
 pub fn lathe_with_holes(
     profile: &[ProfilePoint],
     segments: u32,
     skip: impl Fn(usize, u32) -> bool,
 ) -> Lathe {
+    let segments = segments.max(3);
     let mut mesh = Mesh::default();
     let rings: Vec<Vec<u32>> = profile
         .iter()

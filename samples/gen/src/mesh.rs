@@ -89,9 +89,9 @@ impl Mesh {
     /// Merges positions closer than `tolerance` (the first one seen is kept), drops triangles
     /// that become degenerate (a repeated corner, as at the poles of the teapot's lid and
     /// bottom) and drops positions no triangle uses. Deterministic: the result depends only on
-    /// the input order.
+    /// the input order. A tolerance below 1e-12 is taken as 1e-12.
     pub fn weld(&mut self, tolerance: f64) {
-        assert!(tolerance > 0.0, "weld tolerance must be positive");
+        let tolerance = if tolerance >= 1e-12 { tolerance } else { 1e-12 };
         let cell = |p: DVec3| {
             let q = (p / tolerance).floor();
             (q.x as i64, q.y as i64, q.z as i64)

@@ -23,8 +23,8 @@ const HANDLE_FOOT: usize = 68;
 /// How to tessellate the teapot.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TeapotParams {
-    /// Segments along each side of a patch (default 3: 552 triangles). 1 gives a shape too
-    /// degenerate to recognise; 2-4 are what subdivision needs.
+    /// Segments along each side of a patch (default 3: 552 triangles), clamped to 1..=64.
+    /// 1 gives a shape too degenerate to recognise; 2-4 are what subdivision needs.
     pub segments: u32,
     /// Metres per data unit (default 0.05: the teapot is 0.1575 m tall).
     pub scale: f64,
@@ -59,7 +59,7 @@ fn evaluate(patch: &[u16; 16], u: f64, v: f64) -> DVec3 {
 
 /// Builds the teapot, Y up, standing on `y = 0`, centred on the Y axis, spout towards +X.
 pub fn teapot(params: &TeapotParams) -> Mesh {
-    let n = params.segments.max(1);
+    let n = params.segments.clamp(1, 64);
     let mut mesh = Mesh::default();
     let handle_foot = DVec3::from_array(VERTICES[HANDLE_FOOT]);
     for (k, patch) in PATCHES.iter().enumerate() {
