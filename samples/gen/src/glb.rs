@@ -105,6 +105,15 @@ fn split_vertices(
     })
 }
 
+/// The rotation that turns a glTF camera (looking down its local -Z, +Y up) at `eye` towards
+/// `target`, keeping world +Y up.
+pub fn look_rotation(eye: glam::DVec3, target: glam::DVec3) -> glam::DQuat {
+    let back = (eye - target).normalize();
+    let right = glam::DVec3::Y.cross(back).normalize();
+    let up = back.cross(right);
+    glam::DQuat::from_mat3(&glam::DMat3::from_cols(right, up, back)).normalize()
+}
+
 /// Appends `bytes` to the binary chunk as a new buffer view starting on a 4-byte boundary.
 fn push_view(
     root: &mut json::Root,
@@ -306,6 +315,36 @@ pub fn to_gltf(scene: &Scene) -> Result<(json::Root, Vec<u8>), GlbError> {
             extras,
             ..Default::default()
         }));
+    }
+    if let Some(camera) = &scene.camera {
+        let index = root.push(json::Camera {
+            name: Some(camera.name.clone()),
+            orthographic: None,
+            perspective: Some(json::camera::Perspective {
+                aspect_ratio: None,
+                yfov: camera.yfov_degrees.to_radians() as f32,
+                zfar: None,
+                znear: 0.01,
+                extensions: None,
+                extras: Default::default(),
+            }),
+            type_: Checked::Valid(json::camera::Type::Perspective),
+            extensions: None,
+            extras: Default::default(),
+        });
+        nodes.push(
+            root.push(json::Node {
+                camera: Some(index),
+                name: Some(camera.name.clone()),
+                translation: Some(camera.eye.as_vec3().to_array()),
+                rotation: Some(json::scene::UnitQuaternion(
+                    look_rotation(camera.eye, camera.target)
+                        .as_quat()
+                        .to_array(),
+                )),
+                ..Default::default()
+            }),
+        );
     }
     while bin.len() % 4 != 0 {
         bin.push(0);

@@ -85,12 +85,24 @@ impl Object {
     }
 }
 
+/// A suggested viewpoint, written as a glTF perspective camera node so that viewers and
+/// `hce render` can show the scene as intended without being told where to look.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pub name: String,
+    pub eye: DVec3,
+    pub target: DVec3,
+    /// Vertical field of view in degrees.
+    pub yfov_degrees: f64,
+}
+
 /// A whole sample scene, Y up, in metres.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Scene {
     pub name: String,
     pub materials: Vec<Material>,
     pub objects: Vec<Object>,
+    pub camera: Option<Camera>,
 }
 
 impl Scene {

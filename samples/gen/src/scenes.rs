@@ -5,7 +5,7 @@ use glam::DVec3;
 use crate::chess::{self, Piece};
 use crate::cornell;
 use crate::lathe;
-use crate::scene::{Material, Object, Primitive, Scene};
+use crate::scene::{Camera, Material, Object, Primitive, Scene};
 use crate::shapes;
 use crate::spoon;
 use crate::teapot::{self, TeapotParams};
@@ -43,6 +43,12 @@ fn room_with_light(scene: &mut Scene, size: DVec3, light: f64, emission: [f64; 3
 pub fn teatime() -> Scene {
     let mut s = Scene {
         name: "Teatime".to_string(),
+        camera: Some(Camera {
+            name: "view".to_string(),
+            eye: DVec3::new(0.35, 1.08, 0.85),
+            target: DVec3::new(0.02, 0.80, 0.06),
+            yfov_degrees: 40.0,
+        }),
         ..Default::default()
     };
     room_with_light(&mut s, DVec3::new(4.0, 2.6, 4.0), 0.8, [12.0, 11.4, 10.2]);
@@ -84,6 +90,12 @@ pub fn teatime() -> Scene {
 pub fn chesstime() -> Scene {
     let mut s = Scene {
         name: "Chesstime".to_string(),
+        camera: Some(Camera {
+            name: "view".to_string(),
+            eye: DVec3::new(0.35, 0.32, 0.45),
+            target: DVec3::new(0.0, 0.04, 0.0),
+            yfov_degrees: 45.0,
+        }),
         ..Default::default()
     };
     room_with_light(&mut s, DVec3::new(1.6, 1.2, 1.6), 0.5, [10.0, 9.6, 8.8]);
@@ -137,6 +149,14 @@ pub fn chesstime() -> Scene {
 pub fn cornell_box() -> Scene {
     let mut s = Scene {
         name: "Cornell box".to_string(),
+        // The published camera: at (278, 273, -800) mm looking towards +Z, 39.3° field of view
+        // (35 mm focal length on a 25 mm film).
+        camera: Some(Camera {
+            name: "view".to_string(),
+            eye: DVec3::new(0.278, 0.273, -0.8),
+            target: DVec3::new(0.278, 0.273, 0.0),
+            yfov_degrees: 39.3077,
+        }),
         ..Default::default()
     };
     let white = s.material(Material::diffuse("white", cornell::WHITE));

@@ -66,7 +66,11 @@ fn parse(bytes: &[u8]) -> (gltf_json::Root, BTreeMap<String, Vec<Prim>>) {
     assert!(problems.is_empty(), "{problems:?}");
     let mut out = BTreeMap::new();
     for node in &root.nodes {
-        let mesh = &root.meshes[node.mesh.expect("every node has a mesh").value()];
+        let Some(mesh) = node.mesh else {
+            assert!(node.camera.is_some(), "a node with neither mesh nor camera");
+            continue;
+        };
+        let mesh = &root.meshes[mesh.value()];
         let mut prims = Vec::new();
         for p in &mesh.primitives {
             let attr = |s: gltf_json::mesh::Semantic| {
@@ -138,7 +142,9 @@ fn glbs_parse_back_with_valid_geometry() {
     for (name, scene) in scenes::all() {
         let bytes = write_glb(&scene).unwrap();
         let (root, prims) = parse(&bytes);
-        assert_eq!(root.nodes.len(), scene.objects.len(), "{name}");
+        // One node per object, plus the camera.
+        assert_eq!(root.nodes.len(), scene.objects.len() + 1, "{name}");
+        assert_eq!(root.cameras.len(), 1, "{name}");
         assert_eq!(
             root.meshes.len(),
             scene.objects.len(),
@@ -296,4 +302,29 @@ fn readme_triangle_counts_match_the_generators() {
             "README section for {name} lacks {total:?}"
         );
     }
+}
+
+#[test]
+fn cameras_look_at_their_targets() {
+    for (name, scene) in scenes::all() {
+        let camera = scene.camera.as_ref().expect("every sample suggests a view");
+        let (root, _) = parse(&write_glb(&scene).unwrap());
+        let node = root.nodes.iter().find(|n| n.camera.is_some()).unwrap();
+        let q = node.rotation.as_ref().unwrap().0;
+        let q = glam::Quat::from_array(q).as_dquat();
+        let forward = q * -glam::DVec3::Z;
+        let wanted = (camera.target - camera.eye).normalize();
+        assert!(
+            forward.dot(wanted) > 1.0 - 1e-6,
+            "{name}: looks along {forward}"
+        );
+        // Level: the camera's right vector is horizontal.
+        assert!((q * glam::DVec3::X).y.abs() < 1e-6, "{name}");
+    }
+    // The Cornell camera is the published one: turned half a turn about Y.
+    let q = hce_samples::glb::look_rotation(
+        glam::DVec3::new(0.278, 0.273, -0.8),
+        glam::DVec3::new(0.278, 0.273, 0.0),
+    );
+    assert!((q.y.abs() - 1.0).abs() < 1e-12 && q.x.abs() < 1e-12 && q.z.abs() < 1e-12);
 }
