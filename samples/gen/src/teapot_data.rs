@@ -153,3 +153,42 @@ pub const VERTICES: [[f64; 3]; 290] = [
     [0.0, -1.5, 0.075], [0.798, -1.425, 0.0], [1.425, -0.798, 0.0], [0.84, -1.5, 0.075],
     [1.5, -0.84, 0.075],
 ];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn contains(set: &[[f64; 3]], p: [f64; 3]) -> bool {
+        set.iter().any(|q| (0..3).all(|k| (q[k] - p[k]).abs() < 1e-12))
+    }
+
+    /// A transcription check: the rim, body, lid and bottom are symmetric under both mirror
+    /// planes through the axis, and the handle and spout under the plane y = 0, so a mistyped
+    /// coordinate almost always leaves a point without its mirror image.
+    #[test]
+    fn control_points_have_the_teapots_symmetries() {
+        let round: Vec<[f64; 3]> = VERTICES[..120]
+            .iter()
+            .chain(&VERTICES[203..])
+            .copied()
+            .collect();
+        for &[x, y, z] in &round {
+            assert!(contains(&round, [-x, y, z]), "{:?} lacks its x mirror", [x, y, z]);
+            assert!(contains(&round, [x, -y, z]), "{:?} lacks its y mirror", [x, y, z]);
+            // Quarter turns too: the rotationally symmetric parts repeat every 90°.
+            assert!(contains(&round, [-y, x, z]), "{:?} lacks its quarter turn", [x, y, z]);
+        }
+        let handle_spout = &VERTICES[120..203];
+        for &[x, y, z] in handle_spout {
+            assert!(contains(handle_spout, [x, -y, z]), "{:?}", [x, y, z]);
+        }
+        // Every control point is used, and the indices stay in range.
+        let mut used = [false; 290];
+        for patch in &PATCHES {
+            for &i in patch {
+                used[i as usize] = true;
+            }
+        }
+        assert!(used.iter().all(|&u| u));
+    }
+}
