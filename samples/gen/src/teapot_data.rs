@@ -159,7 +159,8 @@ mod tests {
     use super::*;
 
     fn contains(set: &[[f64; 3]], p: [f64; 3]) -> bool {
-        set.iter().any(|q| (0..3).all(|k| (q[k] - p[k]).abs() < 1e-12))
+        set.iter()
+            .any(|q| (0..3).all(|k| (q[k] - p[k]).abs() < 1e-12))
     }
 
     /// A transcription check: the rim, body, lid and bottom are symmetric under both mirror
@@ -173,10 +174,22 @@ mod tests {
             .copied()
             .collect();
         for &[x, y, z] in &round {
-            assert!(contains(&round, [-x, y, z]), "{:?} lacks its x mirror", [x, y, z]);
-            assert!(contains(&round, [x, -y, z]), "{:?} lacks its y mirror", [x, y, z]);
+            assert!(
+                contains(&round, [-x, y, z]),
+                "{:?} lacks its x mirror",
+                [x, y, z]
+            );
+            assert!(
+                contains(&round, [x, -y, z]),
+                "{:?} lacks its y mirror",
+                [x, y, z]
+            );
             // Quarter turns too: the rotationally symmetric parts repeat every 90°.
-            assert!(contains(&round, [-y, x, z]), "{:?} lacks its quarter turn", [x, y, z]);
+            assert!(
+                contains(&round, [-y, x, z]),
+                "{:?} lacks its quarter turn",
+                [x, y, z]
+            );
         }
         let handle_spout = &VERTICES[120..203];
         for &[x, y, z] in handle_spout {
