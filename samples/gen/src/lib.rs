@@ -15,3 +15,14 @@ pub mod shapes;
 pub mod spoon;
 pub mod teapot;
 mod teapot_data;
+
+/// The committed sample files, embedded, so that a binary (`hce demo`) works from any directory.
+/// `cargo test -p hce-samples` fails if they differ from what the generators produce.
+pub mod embedded {
+    /// `samples/teatime.glb`.
+    pub const TEATIME_GLB: &[u8] = include_bytes!("../../teatime.glb");
+    /// `samples/chesstime.glb`.
+    pub const CHESSTIME_GLB: &[u8] = include_bytes!("../../chesstime.glb");
+    /// `samples/cornell-box.glb`.
+    pub const CORNELL_BOX_GLB: &[u8] = include_bytes!("../../cornell-box.glb");
+}

@@ -138,6 +138,18 @@ fn committed_samples_match_the_generators() {
 }
 
 #[test]
+fn embedded_samples_are_the_generated_ones() {
+    use hce_samples::embedded::*;
+    let generated: Vec<Vec<u8>> = scenes::all()
+        .iter()
+        .map(|(_, s)| write_glb(s).unwrap())
+        .collect();
+    assert!(generated[0] == TEATIME_GLB, "teatime.glb is stale");
+    assert!(generated[1] == CHESSTIME_GLB, "chesstime.glb is stale");
+    assert!(generated[2] == CORNELL_BOX_GLB, "cornell-box.glb is stale");
+}
+
+#[test]
 fn glbs_parse_back_with_valid_geometry() {
     for (name, scene) in scenes::all() {
         let bytes = write_glb(&scene).unwrap();
