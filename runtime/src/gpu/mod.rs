@@ -9,13 +9,14 @@
 //! on a GPU" (GRAPP 2012): colours are chosen per subtriangle by walking the coarse triangle's
 //! breadth-first HCE tree and taking the representative normal closest to the subtriangle's.
 
-// pub mod bench;
+pub mod bench;
 pub mod context;
 pub mod cpu_reference;
 pub mod decode;
 pub mod flat;
-// pub mod lod;
-// pub mod render;
+pub mod lod;
+pub mod plain_mesh;
+pub mod render;
 pub mod testing;
 mod util;
 
@@ -23,8 +24,8 @@ pub use context::{AdapterDescription, AdapterKind, ContextOptions, GpuContext};
 pub use decode::{decode_colours, ColourQuery, DecodedColour};
 pub use cpu_reference::RefinedMesh;
 pub use flat::{refine_flat, FlatKernel, FlatObject, FlatOutput, KernelTiming};
-// pub use lod::{choose_level, Camera, LodParams};
-// pub use render::{render_mesh, tone_map_aces, Framing, RenderParams, RenderedImage};
+pub use lod::{choose_level, Camera, LodParams};
+pub use render::{render_gpu_mesh, render_mesh, tone_map_aces, Framing, GpuMesh, RenderParams, RenderedImage};
 
 /// Everything that can go wrong on the GPU path.
 #[derive(Debug, thiserror::Error)]
