@@ -7,7 +7,7 @@
 //! the sRGB transfer function (IEC 61966-2-1) and rounding to 8 bits. EXR output skips all of
 //! this and stores the linear values.
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec3, Vec4};
 
 use super::lod::Camera;
 use super::util::uniform_init;
@@ -127,13 +127,23 @@ pub fn view_projection(camera: &Camera, lo: [f32; 3], hi: [f32; 3], aspect: f32)
     let d = (centre - eye).length();
     let near = ((d - radius) * 0.5).max(radius * 1e-4);
     let far = (d + radius) * 1.5 + near;
-    let proj = Mat4::perspective_rh(
-        camera.fov_y_degrees.clamp(1.0, 179.0).to_radians(),
-        aspect,
-        near,
-        far,
+    // Right-handed, looking down −z, depth mapped to wgpu's 0..1.
+    let f = 1.0 / (camera.fov_y_degrees.clamp(1.0, 179.0).to_radians() * 0.5).tan();
+    let proj = Mat4::from_cols(
+        Vec4::new(f / aspect, 0.0, 0.0, 0.0),
+        Vec4::new(0.0, f, 0.0, 0.0),
+        Vec4::new(0.0, 0.0, far / (near - far), -1.0),
+        Vec4::new(0.0, 0.0, near * far / (near - far), 0.0),
     );
-    proj * Mat4::look_at_rh(eye, target, up)
+    let s = forward.cross(up).normalize();
+    let u = s.cross(forward);
+    let view = Mat4::from_cols(
+        Vec4::new(s.x, u.x, -forward.x, 0.0),
+        Vec4::new(s.y, u.y, -forward.y, 0.0),
+        Vec4::new(s.z, u.z, -forward.z, 0.0),
+        Vec4::new(-s.dot(eye), -u.dot(eye), forward.dot(eye), 1.0),
+    );
+    proj * view
 }
 
 /// A mesh already on the GPU: `positions` (f32 ×3), `colours` (f32 ×4 linear), `indices` (u32).
