@@ -6,7 +6,9 @@
 #![cfg(feature = "gpu")]
 
 use hce_runtime::gpu::cpu_reference::{self, FlatTopology};
-use hce_runtime::gpu::testing::{context_or_skip, grid, octahedron, random_object, RandomTrees, SplitMix};
+use hce_runtime::gpu::testing::{
+    context_or_skip, grid, octahedron, random_object, RandomTrees, SplitMix,
+};
 use hce_runtime::gpu::{decode_colours, refine_flat, ColourQuery};
 
 fn test_objects() -> Vec<hce_format::Object> {
@@ -46,7 +48,10 @@ fn gpu_decoding_matches_cpu_on_random_trees() {
     };
     for object in test_objects() {
         let summary = cpu_reference::validate_tables(&object).unwrap();
-        assert!(summary.max_depth >= 2, "random trees should be deep enough to test walking");
+        assert!(
+            summary.max_depth >= 2,
+            "random trees should be deep enough to test walking"
+        );
         let mut rng = SplitMix(99);
         let queries: Vec<ColourQuery> = (0..4000)
             .map(|_| {
@@ -85,7 +90,11 @@ fn gpu_decoding_matches_cpu_on_random_trees() {
                 deep += 1;
             }
         }
-        assert!(deep > 100, "{}: only {deep} queries reached depth 2", object.name);
+        assert!(
+            deep > 100,
+            "{}: only {deep} queries reached depth 2",
+            object.name
+        );
     }
 }
 
@@ -112,11 +121,22 @@ fn gpu_flat_refinement_matches_cpu() {
             let cpu = cpu_reference::refine_flat_cpu(&object, &topo, level);
             let gpu = refine_flat(&ctx, &object, level).unwrap();
             let what = format!("{} level {level}", object.name);
-            assert_eq!(gpu.vertex_count(), topo.refined_vertex_count(level) as usize, "{what}");
-            assert_eq!(gpu.triangle_count(), object.triangles.len() << (2 * level), "{what}");
+            assert_eq!(
+                gpu.vertex_count(),
+                topo.refined_vertex_count(level) as usize,
+                "{what}"
+            );
+            assert_eq!(
+                gpu.triangle_count(),
+                object.triangles.len() << (2 * level),
+                "{what}"
+            );
             assert_eq!(gpu.indices, cpu.indices, "{what}: indices");
             for (i, (g, c)) in gpu.positions.iter().zip(&cpu.positions).enumerate() {
-                assert!((g - c).abs() <= 1e-5 * diag, "{what}: position {i}: {g} vs {c}");
+                assert!(
+                    (g - c).abs() <= 1e-5 * diag,
+                    "{what}: position {i}: {g} vs {c}"
+                );
             }
             let close = |g: f32, c: f32| (g - c).abs() <= 1e-3 * c.abs().max(1e-3);
             let mut differing_faces = 0;
@@ -171,7 +191,11 @@ fn refined_closed_mesh_is_watertight_and_single_colours_stay_exact() {
     }
     for (&(a, b), &count) in &directed {
         assert_eq!(count, 1, "edge ({a}, {b}) used twice in one direction");
-        assert_eq!(directed.get(&(b, a)), Some(&1), "edge ({a}, {b}) is a border");
+        assert_eq!(
+            directed.get(&(b, a)),
+            Some(&1),
+            "edge ({a}, {b}) is a border"
+        );
     }
     // V − E + F = 2 for the refined sphere.
     let (v, e, f) = (cpu.vertex_count(), directed.len() / 2, cpu.triangle_count());
@@ -179,7 +203,8 @@ fn refined_closed_mesh_is_watertight_and_single_colours_stay_exact() {
     for c in cpu.colours.chunks_exact(4) {
         assert_eq!(c, [0.5, 0.25, 2.0, 1.0]);
     }
-    let Some(ctx) = context_or_skip("refined_closed_mesh_is_watertight_and_single_colours_stay_exact")
+    let Some(ctx) =
+        context_or_skip("refined_closed_mesh_is_watertight_and_single_colours_stay_exact")
     else {
         return;
     };
@@ -198,17 +223,26 @@ fn malformed_tables_are_rejected_before_upload() {
     let good = random_object("octahedron", p, t, RandomTrees::default(), 4);
     let mut bad = good.clone();
     bad.triangles[3].bits_start = bad.bit_len as u32;
-    let e = cpu_reference::validate_tables(&bad).unwrap_err().to_string();
-    assert!(e.contains("triangle 3") && e.contains("past the end"), "{e}");
+    let e = cpu_reference::validate_tables(&bad)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("triangle 3") && e.contains("past the end"),
+        "{e}"
+    );
     let mut bad = good.clone();
     bad.colours.truncate(bad.colours.len() - 1);
-    let e = cpu_reference::validate_tables(&bad).unwrap_err().to_string();
+    let e = cpu_reference::validate_tables(&bad)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("colours"), "{e}");
     let mut bad = good.clone();
     bad.triangles[0].normal_count = 0;
     assert!(cpu_reference::validate_tables(&bad).is_err());
     let mut bad = good;
     bad.mesh.edges[5] = 1000;
-    let e = FlatTopology::new("octahedron", &bad.mesh).unwrap_err().to_string();
+    let e = FlatTopology::new("octahedron", &bad.mesh)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("edge id 1000"), "{e}");
 }

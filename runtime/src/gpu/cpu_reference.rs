@@ -43,7 +43,11 @@ pub fn popcount_range(bits: &[u32], start: u32, len: u32) -> u32 {
     while i < end {
         let lo = i & 31;
         let take = (32 - lo).min(end - i);
-        let mask = if take < 32 { (1u32 << take) - 1 } else { u32::MAX };
+        let mask = if take < 32 {
+            (1u32 << take) - 1
+        } else {
+            u32::MAX
+        };
         count += ((bits[(i >> 5) as usize] >> lo) & mask).count_ones();
         i += take;
     }
@@ -105,8 +109,8 @@ pub fn decode_colour(object: &Object, t: u32, depth: u32, path: u32, n: [f32; 3]
     let record = &object.triangles[t as usize];
     let node = tree_node(&object.bits, record, depth, path);
     let normal_index = choose_normal(&object.normals, record, n);
-    let packed = object.colours
-        [(record.colour_start + node * record.normal_count + normal_index) as usize];
+    let packed =
+        object.colours[(record.colour_start + node * record.normal_count + normal_index) as usize];
     DecodedColour {
         rgb: rgb9e5::decode(packed),
         node,
@@ -155,7 +159,9 @@ pub fn validate_tables(object: &Object) -> Result<TreeSummary, GpuError> {
     for (t, r) in object.triangles.iter().enumerate() {
         let ctx = |what: String| err(format!("triangle {t}: {what}"));
         if r.normal_count == 0 {
-            return Err(ctx("normal_count is 0 (needs at least the geometric normal)".into()));
+            return Err(ctx(
+                "normal_count is 0 (needs at least the geometric normal)".into(),
+            ));
         }
         if u64::from(r.normal_start) + u64::from(r.normal_count) > object.normals.len() as u64 {
             return Err(ctx(format!(

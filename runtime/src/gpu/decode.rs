@@ -52,7 +52,10 @@ pub fn decode_colours(
             });
         }
         if u64::from(q.path) >= 1u64 << (2 * q.level) {
-            return Err(bad(format!("path {} too long for level {}", q.path, q.level)));
+            return Err(bad(format!(
+                "path {} too long for level {}",
+                q.path, q.level
+            )));
         }
     }
     if queries.is_empty() {

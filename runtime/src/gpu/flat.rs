@@ -189,7 +189,11 @@ impl FlatKernel {
             packed.extend_from_slice(s);
         }
         check_size(ctx, "topology tables", packed.len() as u64 * 4)?;
-        check_size(ctx, "coarse positions", object.mesh.positions.len() as u64 * 4)?;
+        check_size(
+            ctx,
+            "coarse positions",
+            object.mesh.positions.len() as u64 * 4,
+        )?;
         check_size(ctx, "HCE colours", object.colours.len() as u64 * 4)?;
         check_size(ctx, "HCE bits", object.bits.len() as u64 * 4)?;
         Ok(FlatObject {

@@ -100,13 +100,19 @@ mod tests {
         // d = 10 - r; 1 unit = 1000 / (2 d) px; a 0.5 edge covers 250 / d px.
         let d = 10.0 - r;
         let expected = ((250.0 / d) / 8.0f32).log2().ceil() as u32;
-        assert_eq!(choose_level(lo, hi, 0.5, &camera_at(10.0), 1000, &p), expected);
+        assert_eq!(
+            choose_level(lo, hi, 0.5, &camera_at(10.0), 1000, &p),
+            expected
+        );
         assert_eq!(expected, 2);
         let near = choose_level(lo, hi, 0.5, &camera_at(3.0), 1000, &p);
         let far = choose_level(lo, hi, 0.5, &camera_at(1000.0), 1000, &p);
         assert!(near > expected && far == 0, "near {near} far {far}");
         // Inside the bounds: the finest allowed level.
-        assert_eq!(choose_level(lo, hi, 0.5, &camera_at(0.5), 1000, &p), p.max_level);
+        assert_eq!(
+            choose_level(lo, hi, 0.5, &camera_at(0.5), 1000, &p),
+            p.max_level
+        );
     }
 
     #[test]
@@ -115,6 +121,9 @@ mod tests {
             force_level: Some(3),
             ..Default::default()
         };
-        assert_eq!(choose_level([0.0; 3], [1.0; 3], 0.1, &camera_at(1e6), 10, &p), 3);
+        assert_eq!(
+            choose_level([0.0; 3], [1.0; 3], 0.1, &camera_at(1e6), 10, &p),
+            3
+        );
     }
 }

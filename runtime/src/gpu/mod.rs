@@ -21,11 +21,13 @@ pub mod testing;
 mod util;
 
 pub use context::{AdapterDescription, AdapterKind, ContextOptions, GpuContext};
-pub use decode::{decode_colours, ColourQuery, DecodedColour};
 pub use cpu_reference::RefinedMesh;
+pub use decode::{decode_colours, ColourQuery, DecodedColour};
 pub use flat::{refine_flat, FlatKernel, FlatObject, FlatOutput, KernelTiming};
 pub use lod::{choose_level, Camera, LodParams};
-pub use render::{render_gpu_mesh, render_mesh, tone_map_aces, Framing, GpuMesh, RenderParams, RenderedImage};
+pub use render::{
+    render_gpu_mesh, render_mesh, tone_map_aces, Framing, GpuMesh, RenderParams, RenderedImage,
+};
 
 /// Everything that can go wrong on the GPU path.
 #[derive(Debug, thiserror::Error)]

@@ -83,10 +83,13 @@ pub fn load_plain_mesh(path: &Path) -> Result<PlainMesh, GpuError> {
                         Some(ix) => {
                             for i in ix.into_u32() {
                                 if i >= n {
-                                    return Err(load_err(path, format!(
-                                        "mesh {:?}: index {i} >= {n} vertices",
-                                        gm.name().unwrap_or("")
-                                    )));
+                                    return Err(load_err(
+                                        path,
+                                        format!(
+                                            "mesh {:?}: index {i} >= {n} vertices",
+                                            gm.name().unwrap_or("")
+                                        ),
+                                    ));
                                 }
                                 mesh.indices.push(base + i);
                             }
@@ -108,7 +111,12 @@ pub fn load_plain_mesh(path: &Path) -> Result<PlainMesh, GpuError> {
     }
     if any_colour {
         // Vertices without colours in a partly coloured file take neutral grey.
-        mesh.colours = Some(colours.iter().map(|&c| if c < 0.0 { 0.5 } else { c }).collect());
+        mesh.colours = Some(
+            colours
+                .iter()
+                .map(|&c| if c < 0.0 { 0.5 } else { c })
+                .collect(),
+        );
     }
     Ok(mesh)
 }
@@ -159,7 +167,9 @@ pub fn to_flat_object(name: &str, mesh: &PlainMesh) -> (Object, usize) {
                     [positions[v], positions[v + 1], positions[v + 2]]
                 });
                 let (n, _) = normal_and_area(p);
-                let d = (n[0] * PREVIEW_LIGHT[0] + n[1] * PREVIEW_LIGHT[1] + n[2] * PREVIEW_LIGHT[2]).max(0.0);
+                let d =
+                    (n[0] * PREVIEW_LIGHT[0] + n[1] * PREVIEW_LIGHT[1] + n[2] * PREVIEW_LIGHT[2])
+                        .max(0.0);
                 [0.6 * (0.2 + 0.8 * d); 3]
             }
         };

@@ -70,7 +70,11 @@ impl RenderedImage {
 pub fn tone_map_aces(rgb: [f32; 3], ev: f32) -> [u8; 3] {
     let exposure = 2f32.powf(ev);
     rgb.map(|x| {
-        let x = if x.is_finite() { x.max(0.0) * exposure } else { 0.0 };
+        let x = if x.is_finite() {
+            x.max(0.0) * exposure
+        } else {
+            0.0
+        };
         let y = ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0);
         let s = if y <= 0.003_130_8 {
             12.92 * y
@@ -174,7 +178,9 @@ pub fn render_mesh(
         )));
     }
     if let Some(&bad) = indices.iter().find(|&&i| i as usize >= v) {
-        return Err(GpuError::InvalidParams(format!("index {bad} >= vertex count {v}")));
+        return Err(GpuError::InvalidParams(format!(
+            "index {bad} >= vertex count {v}"
+        )));
     }
     let bounds = bounds(positions)
         .ok_or_else(|| GpuError::InvalidParams("mesh has no finite positions".into()))?;
@@ -187,9 +193,21 @@ pub fn render_mesh(
                 usage,
             })
     };
-    let p = make("positions", bytemuck::cast_slice(positions), wgpu::BufferUsages::VERTEX);
-    let c = make("colours", bytemuck::cast_slice(colours), wgpu::BufferUsages::VERTEX);
-    let i = make("indices", bytemuck::cast_slice(indices), wgpu::BufferUsages::INDEX);
+    let p = make(
+        "positions",
+        bytemuck::cast_slice(positions),
+        wgpu::BufferUsages::VERTEX,
+    );
+    let c = make(
+        "colours",
+        bytemuck::cast_slice(colours),
+        wgpu::BufferUsages::VERTEX,
+    );
+    let i = make(
+        "indices",
+        bytemuck::cast_slice(indices),
+        wgpu::BufferUsages::INDEX,
+    );
     render_gpu_mesh(
         ctx,
         &GpuMesh {
@@ -223,7 +241,13 @@ pub fn render_gpu_mesh(
         Framing::Auto => auto_camera(lo, hi, aspect),
         Framing::Camera(c) => c,
     };
-    if camera.eye == camera.target || !camera.eye.iter().chain(&camera.target).all(|x| x.is_finite()) {
+    if camera.eye == camera.target
+        || !camera
+            .eye
+            .iter()
+            .chain(&camera.target)
+            .all(|x| x.is_finite())
+    {
         return Err(GpuError::InvalidParams(
             "camera eye and target must be finite and distinct".into(),
         ));

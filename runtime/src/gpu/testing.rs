@@ -68,8 +68,12 @@ mod tests {
     #[test]
     fn missing_adapter_fails_only_when_required() {
         let e = GpuError::NoAdapter { hint: "install it" };
-        assert!(matches!(classify("t", &e, true), Unavailable::Fail(m) if m.contains("install it")));
-        assert!(matches!(classify("t", &e, false), Unavailable::Skip(m) if m.starts_with("SKIPPED t")));
+        assert!(
+            matches!(classify("t", &e, true), Unavailable::Fail(m) if m.contains("install it"))
+        );
+        assert!(
+            matches!(classify("t", &e, false), Unavailable::Skip(m) if m.starts_with("SKIPPED t"))
+        );
     }
 }
 

@@ -48,7 +48,12 @@ pub fn check_size(ctx: &GpuContext, what: &'static str, bytes: u64) -> Result<u6
 }
 
 /// An output storage buffer of `bytes` (already checked) that can be copied out and drawn from.
-pub fn storage_output(ctx: &GpuContext, label: &str, bytes: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
+pub fn storage_output(
+    ctx: &GpuContext,
+    label: &str,
+    bytes: u64,
+    extra: wgpu::BufferUsages,
+) -> wgpu::Buffer {
     ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size: bytes,
@@ -96,7 +101,9 @@ pub fn read_back<T: bytemuck::Pod>(
         .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
     encoder.copy_buffer_to_buffer(src, 0, &staging, 0, size);
     ctx.queue.submit([encoder.finish()]);
-    map_and_copy(ctx, &staging, bytes, |view| bytemuck::pod_collect_to_vec(view))
+    map_and_copy(ctx, &staging, bytes, |view| {
+        bytemuck::pod_collect_to_vec(view)
+    })
 }
 
 /// Maps `staging` for reading, waits, and hands the first `bytes` to `f`.
