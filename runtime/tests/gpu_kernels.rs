@@ -246,3 +246,57 @@ fn malformed_tables_are_rejected_before_upload() {
         .to_string();
     assert!(e.contains("edge id 1000"), "{e}");
 }
+
+#[test]
+fn gpu_flat_refinement_matches_cpu_on_real_meshes() {
+    let Some(dir) = std::env::var_os("HCE_EXTRA_MESHES") else {
+        eprintln!(
+            "SKIPPED gpu_flat_refinement_matches_cpu_on_real_meshes: HCE_EXTRA_MESHES is unset \
+             (point it at the shared meshes folder to run this test)"
+        );
+        return;
+    };
+    let Some(ctx) = context_or_skip("gpu_flat_refinement_matches_cpu_on_real_meshes") else {
+        return;
+    };
+    use hce_runtime::gpu::plain_mesh::{load_plain_mesh, to_flat_object};
+    for name in ["teapot.obj", "suzanne.obj"] {
+        let path = std::path::Path::new(&dir).join(name);
+        let plain = load_plain_mesh(&path).unwrap();
+        let (welded, _) = to_flat_object(name, &plain);
+        let object = random_object(
+            name,
+            welded.mesh.positions,
+            welded.mesh.triangles,
+            RandomTrees::default(),
+            11,
+        );
+        let topo = FlatTopology::new(name, &object.mesh).unwrap();
+        for level in 1..=2 {
+            let cpu = cpu_reference::refine_flat_cpu(&object, &topo, level);
+            let gpu = refine_flat(&ctx, &object, level).unwrap();
+            assert_eq!(gpu.indices, cpu.indices, "{name} level {level}");
+            let max_pos = gpu
+                .positions
+                .iter()
+                .zip(&cpu.positions)
+                .map(|(g, c)| (g - c).abs())
+                .fold(0f32, f32::max);
+            assert!(
+                max_pos < 1e-4,
+                "{name} level {level}: position error {max_pos}"
+            );
+            let faces_differing = gpu
+                .face_colours
+                .chunks_exact(4)
+                .zip(cpu.face_colours.chunks_exact(4))
+                .filter(|(g, c)| (0..3).any(|k| (g[k] - c[k]).abs() > 1e-3 * c[k].abs().max(1e-3)))
+                .count();
+            // Near ties in the normal choice are the only admissible difference.
+            assert!(
+                faces_differing * 10_000 <= gpu.triangle_count(),
+                "{name} level {level}: {faces_differing} fine triangles coloured differently"
+            );
+        }
+    }
+}

@@ -49,6 +49,8 @@ pub enum GpuError {
     },
     #[error("level {level} is above the supported maximum {max}")]
     LevelTooHigh { level: u32, max: u32 },
+    #[error("cannot load {path}: {reason}")]
+    Load { path: String, reason: String },
     #[error("invalid render parameters: {0}")]
     InvalidParams(String),
     #[error("reading results back from the GPU failed: {0}")]

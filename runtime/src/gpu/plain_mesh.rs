@@ -20,7 +20,10 @@ pub struct PlainMesh {
 }
 
 fn load_err(path: &Path, reason: impl std::fmt::Display) -> GpuError {
-    GpuError::InvalidParams(format!("{}: {reason}", path.display()))
+    GpuError::Load {
+        path: path.display().to_string(),
+        reason: reason.to_string(),
+    }
 }
 
 /// Loads every triangle primitive of an OBJ, glTF or GLB file into one mesh.

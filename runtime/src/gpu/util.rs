@@ -35,7 +35,7 @@ pub fn check_size(ctx: &GpuContext, what: &'static str, bytes: u64) -> Result<u6
     let limits = ctx.device.limits();
     let limit = limits
         .max_buffer_size
-        .min(u64::from(limits.max_storage_buffer_binding_size));
+        .min(limits.max_storage_buffer_binding_size);
     if bytes > limit {
         return Err(GpuError::TooLarge {
             what,
