@@ -362,4 +362,27 @@ mod tests {
         reader.next_frame(&mut buf).unwrap();
         assert_eq!(&buf[..pixels.len()], &pixels[..]);
     }
+
+    #[test]
+    fn exr_keeps_linear_values_and_row_order() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.exr");
+        // 3x2 image; pixel (x, y) = (x, y, 10 + x + 3y, 1), values above 1 kept as they are.
+        let rgba: Vec<f32> = (0..2)
+            .flat_map(|y| {
+                (0..3).flat_map(move |x| [x as f32, y as f32, 10.0 + (x + 3 * y) as f32, 1.0])
+            })
+            .collect();
+        write_exr(&path, 3, 2, &rgba).unwrap();
+        let image = exr::prelude::read_first_rgba_layer_from_file(
+            &path,
+            |size, _| vec![[0f32; 4]; size.width() * size.height()],
+            |pixels, pos, (r, g, b, a): (f32, f32, f32, f32)| {
+                pixels[pos.y() * 3 + pos.x()] = [r, g, b, a]
+            },
+        )
+        .unwrap();
+        let pixels = image.layer_data.channel_data.pixels;
+        assert_eq!(pixels.as_flattened(), &rgba[..]);
+    }
 }
