@@ -2,6 +2,8 @@
 
 use clap::{Parser, Subcommand};
 
+mod cmd;
+
 #[derive(Parser)]
 #[command(name = "hce", version, about, long_about = None)]
 struct Cli {
@@ -10,9 +12,17 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// Refine a mesh on the GPU and render it headless to PNG or EXR.
+    Render(cmd::render::RenderArgs),
+    /// Measure the GPU kernels' throughput per level.
+    BenchGpu(cmd::bench_gpu::BenchGpuArgs),
+}
 
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
-    match cli.command {}
+    match cli.command {
+        Command::Render(args) => cmd::render::run(args),
+        Command::BenchGpu(args) => cmd::bench_gpu::run(args),
+    }
 }

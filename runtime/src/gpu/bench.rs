@@ -1,0 +1,85 @@
+//! Kernel throughput measurement for `hce bench-gpu`: per level, coarse and output triangles,
+//! kernel time (GPU timestamps where the adapter has them, wall time around submit-and-wait
+//! otherwise, and labelled so), output triangles per second and bytes written per second.
+
+use std::time::Instant;
+
+use hce_format::Object;
+
+use super::flat::FlatKernel;
+use super::{GpuContext, GpuError};
+
+/// Where a time came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Timer {
+    /// Timestamps written by the GPU around the dispatches.
+    GpuTimestamps,
+    /// Host wall clock around submission and completion (includes driver overhead).
+    Wall,
+}
+
+/// One level's figures (the median of the repeats).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BenchRow {
+    pub level: u32,
+    pub coarse_triangles: u64,
+    pub output_triangles: u64,
+    pub output_vertices: u64,
+    pub seconds: f64,
+    pub timer: Timer,
+    /// Bytes the kernel writes: positions, vertex colours, indices and per-face colours.
+    pub bytes_written: u64,
+}
+
+impl BenchRow {
+    pub fn triangles_per_second(&self) -> f64 {
+        self.output_triangles as f64 / self.seconds.max(1e-12)
+    }
+    pub fn bytes_per_second(&self) -> f64 {
+        self.bytes_written as f64 / self.seconds.max(1e-12)
+    }
+}
+
+/// Times the flat refinement kernel (three dispatches: positions, faces with HCE decoding,
+/// vertex colours) on `object` at each level, `repeats` times after one warm-up, reusing the
+/// output buffers as a viewer would.
+pub fn bench_flat(
+    ctx: &GpuContext,
+    object: &Object,
+    levels: &[u32],
+    repeats: u32,
+) -> Result<Vec<BenchRow>, GpuError> {
+    let kernel = FlatKernel::new(ctx);
+    let uploaded = kernel.upload(ctx, object)?;
+    let mut rows = Vec::new();
+    for &level in levels {
+        let mut out = None;
+        kernel.refine_into(ctx, &uploaded, level, &mut out, true)?;
+        let mut samples = Vec::new();
+        let mut timer = Timer::Wall;
+        for _ in 0..repeats.max(1) {
+            let start = Instant::now();
+            let timing = kernel.refine_into(ctx, &uploaded, level, &mut out, true)?;
+            let wall = start.elapsed().as_secs_f64();
+            match timing.gpu_seconds {
+                Some(s) if s > 0.0 => {
+                    timer = Timer::GpuTimestamps;
+                    samples.push(s);
+                }
+                _ => samples.push(wall),
+            }
+        }
+        samples.sort_by(f64::total_cmp);
+        let o = out.as_ref().expect("refine_into allocates");
+        rows.push(BenchRow {
+            level,
+            coarse_triangles: u64::from(uploaded.topology.triangle_count),
+            output_triangles: u64::from(o.triangle_count),
+            output_vertices: u64::from(o.vertex_count),
+            seconds: samples[samples.len() / 2],
+            timer,
+            bytes_written: o.bytes_written(),
+        });
+    }
+    Ok(rows)
+}

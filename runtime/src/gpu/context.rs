@@ -1,0 +1,182 @@
+//! The GPU context: one wgpu instance, adapter, device and queue, chosen so that the same code
+//! runs on a discrete GPU and, on machines without one, on a software rasteriser (Mesa lavapipe).
+//!
+//! The adapter choice is explicit rather than left to `request_adapter`: we enumerate every
+//! adapter, rank hardware above software, and report which one we took, because a user looking
+//! at a slow render must be able to tell at once that it ran on the CPU.
+
+use std::fmt;
+
+use super::GpuError;
+
+/// What kind of adapter the context runs on, as the user should hear it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AdapterKind {
+    /// A discrete, integrated or virtual GPU.
+    Hardware,
+    /// A CPU implementation of the graphics API (Mesa lavapipe, SwiftShader, WARP).
+    Software,
+}
+
+/// The adapter a context was created on: name, backend and device type.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct AdapterDescription {
+    pub name: String,
+    pub backend: String,
+    pub device_type: String,
+    pub driver: String,
+    pub kind: AdapterKind,
+    /// Whether GPU timestamps can be written inside compute passes (kernel timing).
+    pub timestamps: bool,
+}
+
+impl fmt::Display for AdapterDescription {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let kind = match self.kind {
+            AdapterKind::Hardware => "hardware",
+            AdapterKind::Software => "software rasteriser, no GPU in use",
+        };
+        write!(
+            f,
+            "{} ({}, {}, {kind}",
+            self.name, self.backend, self.device_type
+        )?;
+        if !self.driver.is_empty() {
+            write!(f, ", driver {}", self.driver)?;
+        }
+        write!(f, ")")
+    }
+}
+
+/// Options for [`GpuContext::new`].
+#[derive(Clone, Debug, Default)]
+pub struct ContextOptions {
+    /// Take a software adapter even when a hardware one exists (reproducible CI images).
+    /// Default `false`.
+    pub force_software: bool,
+}
+
+/// A device and queue with the adapter they came from.
+pub struct GpuContext {
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub description: AdapterDescription,
+}
+
+impl fmt::Debug for GpuContext {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("GpuContext")
+            .field("adapter", &self.description)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Ranks adapters: lower is better. Hardware first, software last.
+fn rank(device_type: wgpu::DeviceType) -> u32 {
+    match device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    }
+}
+
+/// The message a user without any adapter needs: what to install.
+pub fn no_adapter_hint() -> &'static str {
+    if cfg!(target_os = "linux") {
+        "no Vulkan adapter found; install a GPU driver, or Mesa's software Vulkan \
+         (Debian/Ubuntu: `apt-get install mesa-vulkan-drivers libvulkan1`)"
+    } else {
+        "no Vulkan adapter found; install your GPU vendor's Vulkan driver (or MoltenVK on macOS)"
+    }
+}
+
+impl GpuContext {
+    /// Creates a context on the best adapter present. Fails with [`GpuError::NoAdapter`], whose
+    /// message says what to install, when there is none.
+    pub fn new(options: &ContextOptions) -> Result<Self, GpuError> {
+        pollster::block_on(Self::new_async(options))
+    }
+
+    /// The asynchronous form of [`GpuContext::new`], for callers that own an executor.
+    pub async fn new_async(options: &ContextOptions) -> Result<Self, GpuError> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = wgpu::Backends::VULKAN;
+        // Validation layers are for development; they slow lavapipe down several times.
+        desc.flags = wgpu::InstanceFlags::empty().with_env();
+        let instance = wgpu::Instance::new(desc);
+        let mut adapters = instance.enumerate_adapters(wgpu::Backends::all()).await;
+        if options.force_software {
+            adapters.retain(|a| a.get_info().device_type == wgpu::DeviceType::Cpu);
+        }
+        // Stable sort: among equals, keep the driver's own order.
+        adapters.sort_by_key(|a| rank(a.get_info().device_type));
+        let adapter = adapters.into_iter().next().ok_or(GpuError::NoAdapter {
+            hint: no_adapter_hint(),
+        })?;
+        let info = adapter.get_info();
+        let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        let mut required_features = wgpu::Features::empty();
+        if timestamps {
+            required_features |= wgpu::Features::TIMESTAMP_QUERY;
+        }
+        // Ask for what the adapter offers on buffer sizes: refined meshes are large.
+        let adapter_limits = adapter.limits();
+        let required_limits = wgpu::Limits {
+            max_storage_buffer_binding_size: adapter_limits.max_storage_buffer_binding_size,
+            max_buffer_size: adapter_limits.max_buffer_size,
+            max_storage_buffers_per_shader_stage: adapter_limits
+                .max_storage_buffers_per_shader_stage,
+            ..wgpu::Limits::default()
+        };
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("hce"),
+                required_features,
+                required_limits,
+                ..Default::default()
+            })
+            .await
+            .map_err(|e| GpuError::Device {
+                adapter: info.name.clone(),
+                reason: e.to_string(),
+            })?;
+        let kind = if info.device_type == wgpu::DeviceType::Cpu {
+            AdapterKind::Software
+        } else {
+            AdapterKind::Hardware
+        };
+        let description = AdapterDescription {
+            name: info.name.clone(),
+            backend: format!("{:?}", info.backend),
+            device_type: format!("{:?}", info.device_type),
+            driver: [info.driver.as_str(), info.driver_info.as_str()]
+                .iter()
+                .filter(|s| !s.is_empty())
+                .cloned()
+                .collect::<Vec<_>>()
+                .join(" "),
+            kind,
+            timestamps,
+        };
+        Ok(Self {
+            adapter,
+            device,
+            queue,
+            description,
+        })
+    }
+
+    /// Blocks until all submitted work is done, turning a device loss into an error.
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Device {
+                adapter: self.description.name.clone(),
+                reason: e.to_string(),
+            })
+    }
+}

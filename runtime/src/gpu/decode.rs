@@ -1,0 +1,125 @@
+//! Batch HCE colour decoding on the GPU (`decode.wgsl` + `hce_tree.wgsl`): for each query (coarse
+//! triangle, level, path, subtriangle normal) the tree node, chosen normal and linear colour.
+//!
+//! The flat and Loop kernels decode inline; this entry point lets the decoding be checked against
+//! [`cpu_reference::decode_colour`](super::cpu_reference::decode_colour) in isolation.
+
+use hce_format::Object;
+
+use super::cpu_reference::{validate_tables, MAX_LEVEL};
+use super::util::{check_size, dispatch_size, read_back, storage_init, storage_output};
+use super::{GpuContext, GpuError};
+
+pub use super::cpu_reference::DecodedColour;
+
+/// WGSL of the shared tree-walking functions, prepended to kernels that colour subtriangles.
+pub const TREE_WGSL: &str = include_str!("hce_tree.wgsl");
+
+/// One subtriangle to colour. 32 bytes, the layout of `Query` in `decode.wgsl`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct ColourQuery {
+    pub triangle: u32,
+    pub level: u32,
+    /// `level` child indices, first most significant, two bits each.
+    pub path: u32,
+    pub _pad: u32,
+    /// The subtriangle's normal (`w` ignored); need not be unit length.
+    pub normal: [f32; 4],
+}
+
+/// Decodes `queries` against `object`'s tables on the GPU. The tables are validated first
+/// ([`validate_tables`]) and every query is checked (triangle in range, `level <= 15`,
+/// `path < 4^level`), so nothing out of bounds reaches the kernel.
+pub fn decode_colours(
+    ctx: &GpuContext,
+    object: &Object,
+    queries: &[ColourQuery],
+) -> Result<Vec<DecodedColour>, GpuError> {
+    validate_tables(object)?;
+    for (i, q) in queries.iter().enumerate() {
+        let bad = |reason: String| GpuError::InvalidObject {
+            object: object.name.clone(),
+            reason: format!("query {i}: {reason}"),
+        };
+        if q.triangle as usize >= object.triangles.len() {
+            return Err(bad(format!("triangle {} out of range", q.triangle)));
+        }
+        if q.level > MAX_LEVEL {
+            return Err(GpuError::LevelTooHigh {
+                level: q.level,
+                max: MAX_LEVEL,
+            });
+        }
+        if u64::from(q.path) >= 1u64 << (2 * q.level) {
+            return Err(bad(format!(
+                "path {} too long for level {}",
+                q.path, q.level
+            )));
+        }
+    }
+    if queries.is_empty() {
+        return Ok(Vec::new());
+    }
+    let out_bytes = check_size(
+        ctx,
+        "decoded colours",
+        (queries.len() * std::mem::size_of::<DecodedColour>()) as u64,
+    )?;
+    let source = format!("{TREE_WGSL}\n{}", include_str!("decode.wgsl"));
+    let module = ctx
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("hce decode"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+    let pipeline = ctx
+        .device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("hce decode"),
+            layout: None,
+            module: &module,
+            entry_point: Some("decode_main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+    let queries_buf = storage_init(ctx, "queries", queries);
+    let results = storage_output(ctx, "decoded", out_bytes, wgpu::BufferUsages::empty());
+    let records = storage_init(ctx, "records", &records_words(object));
+    let bits = storage_init(ctx, "bits", &object.bits);
+    let normals = storage_init(ctx, "normals", object.normals.as_flattened());
+    let colours = storage_init(ctx, "colours", &object.colours);
+    let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("hce decode"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[&queries_buf, &results, &records, &bits, &normals, &colours]
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect::<Vec<_>>(),
+    });
+    let (x, y) = dispatch_size(ctx, queries.len() as u64)?;
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+    {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+    ctx.queue.submit([encoder.finish()]);
+    read_back(ctx, &results, queries.len())
+}
+
+/// The triangle records as the `array<TriRecord>` words the kernels read.
+pub(crate) fn records_words(object: &Object) -> Vec<u32> {
+    object
+        .triangles
+        .iter()
+        .flat_map(|r| [r.bits_start, r.colour_start, r.normal_start, r.normal_count])
+        .collect()
+}

@@ -1,0 +1,407 @@
+//! Flat refinement on the GPU (`flat.wgsl`): the linear 1-to-4 split of every coarse triangle to
+//! a level, HCE colours per fine triangle, and area-weighted vertex colours shared across coarse
+//! edges. This is how [`ObjectKind::Flat`](hce_format::ObjectKind::Flat) objects are drawn
+//! (Concheiro et al., GRAPP 2012: "flat" objects keep their element colours, unsmoothed), and how
+//! `hce render` previews a plain mesh.
+//!
+//! Use: [`FlatKernel::new`] once per device, [`FlatKernel::upload`] once per object, then
+//! [`FlatKernel::refine_into`] whenever the level changes; it reuses the output buffers when they
+//! are large enough, so a viewer can refine every frame without reallocating.
+
+use hce_format::Object;
+
+use super::cpu_reference::{validate_tables, FlatTopology, RefinedMesh, MAX_LEVEL};
+use super::decode::{records_words, TREE_WGSL};
+use super::util::{check_size, dispatch_size, read_back, storage_init, storage_output};
+use super::{GpuContext, GpuError};
+
+/// The kernel's uniform block (`Params` in `flat.wgsl`).
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+struct Params {
+    level: u32,
+    n: u32,
+    coarse_vertices: u32,
+    edge_count: u32,
+    triangle_count: u32,
+    interior_per_triangle: u32,
+    vertex_total: u32,
+    fine_total: u32,
+    tri_off: u32,
+    edges_off: u32,
+    edge_verts_off: u32,
+    edge_side_offsets_off: u32,
+    edge_sides_off: u32,
+    vertex_corner_offsets_off: u32,
+    vertex_corners_off: u32,
+    _pad: u32,
+}
+
+/// The compiled pipelines of the three steps.
+pub struct FlatKernel {
+    positions: wgpu::ComputePipeline,
+    faces: wgpu::ComputePipeline,
+    colours: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+/// An object's tables on the GPU, validated.
+pub struct FlatObject {
+    pub name: String,
+    pub topology: FlatTopology,
+    coarse_positions: wgpu::Buffer,
+    topo: wgpu::Buffer,
+    section_offsets: [u32; 7],
+    records: wgpu::Buffer,
+    bits: wgpu::Buffer,
+    normals: wgpu::Buffer,
+    colours: wgpu::Buffer,
+}
+
+/// Output buffers of a refinement: drawable as they are (`positions` and `colours` as vertex
+/// buffers, `indices` as an index buffer).
+pub struct FlatOutput {
+    pub level: u32,
+    pub vertex_count: u32,
+    pub triangle_count: u32,
+    /// `x, y, z` f32 per vertex (stride 12).
+    pub positions: wgpu::Buffer,
+    /// Linear `r, g, b, 1` f32 per vertex (stride 16).
+    pub colours: wgpu::Buffer,
+    /// `u32` ×3 per fine triangle.
+    pub indices: wgpu::Buffer,
+    /// Linear `r, g, b`, area per fine triangle.
+    pub faces: wgpu::Buffer,
+}
+
+impl FlatOutput {
+    /// Copies the refined mesh back to the CPU.
+    pub fn read_back(&self, ctx: &GpuContext) -> Result<RefinedMesh, GpuError> {
+        let v = self.vertex_count as usize;
+        let f = self.triangle_count as usize;
+        Ok(RefinedMesh {
+            level: self.level,
+            positions: read_back(ctx, &self.positions, 3 * v)?,
+            colours: read_back(ctx, &self.colours, 4 * v)?,
+            indices: read_back(ctx, &self.indices, 3 * f)?,
+            face_colours: read_back(ctx, &self.faces, 4 * f)?,
+        })
+    }
+
+    /// Bytes the kernel writes for this output.
+    pub fn bytes_written(&self) -> u64 {
+        u64::from(self.vertex_count) * (12 + 16) + u64::from(self.triangle_count) * (12 + 16)
+    }
+}
+
+/// Timing of one refinement, when asked for.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct KernelTiming {
+    /// GPU time between timestamps around the three dispatches, when the adapter supports
+    /// timestamp queries.
+    pub gpu_seconds: Option<f64>,
+}
+
+impl FlatKernel {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let source = format!("{TREE_WGSL}\n{}", include_str!("flat.wgsl"));
+        let module = ctx
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("hce flat"),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+        let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let mut entries = vec![wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }];
+        entries.extend((1..=6).map(|b| storage(b, true)));
+        entries.extend((7..=10).map(|b| storage(b, false)));
+        let layout = ctx
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("hce flat"),
+                entries: &entries,
+            });
+        let pipeline_layout = ctx
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("hce flat"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
+        let make = |entry: &str| {
+            ctx.device
+                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(entry),
+                    layout: Some(&pipeline_layout),
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
+        };
+        Self {
+            positions: make("positions_main"),
+            faces: make("faces_main"),
+            colours: make("colours_main"),
+            layout,
+        }
+    }
+
+    /// Validates `object` (tables and topology) and uploads it.
+    pub fn upload(&self, ctx: &GpuContext, object: &Object) -> Result<FlatObject, GpuError> {
+        validate_tables(object)?;
+        let topology = FlatTopology::new(&object.name, &object.mesh)?;
+        let sections: [&[u32]; 7] = [
+            &object.mesh.triangles,
+            &object.mesh.edges,
+            &topology.edge_verts,
+            &topology.edge_side_offsets,
+            &topology.edge_sides,
+            &topology.vertex_corner_offsets,
+            &topology.vertex_corners,
+        ];
+        let mut packed = Vec::with_capacity(sections.iter().map(|s| s.len()).sum());
+        let mut section_offsets = [0u32; 7];
+        for (i, s) in sections.iter().enumerate() {
+            section_offsets[i] = u32::try_from(packed.len()).map_err(|_| GpuError::TooLarge {
+                what: "topology tables",
+                needed: packed.len() as u64 * 4,
+                limit: u64::from(u32::MAX),
+            })?;
+            packed.extend_from_slice(s);
+        }
+        check_size(ctx, "topology tables", packed.len() as u64 * 4)?;
+        check_size(
+            ctx,
+            "coarse positions",
+            object.mesh.positions.len() as u64 * 4,
+        )?;
+        check_size(ctx, "HCE colours", object.colours.len() as u64 * 4)?;
+        check_size(ctx, "HCE bits", object.bits.len() as u64 * 4)?;
+        Ok(FlatObject {
+            name: object.name.clone(),
+            coarse_positions: storage_init(ctx, "coarse positions", &object.mesh.positions),
+            topo: storage_init(ctx, "topology", &packed),
+            section_offsets,
+            records: storage_init(ctx, "records", &records_words(object)),
+            bits: storage_init(ctx, "bits", &object.bits),
+            normals: storage_init(ctx, "normals", object.normals.as_flattened()),
+            colours: storage_init(ctx, "colours", &object.colours),
+            topology,
+        })
+    }
+
+    /// Output buffers sized for `level`, checked against the device limits.
+    pub fn allocate(
+        &self,
+        ctx: &GpuContext,
+        object: &FlatObject,
+        level: u32,
+    ) -> Result<FlatOutput, GpuError> {
+        let (v, f) = counts(object, level)?;
+        let vertex = wgpu::BufferUsages::VERTEX;
+        Ok(FlatOutput {
+            level,
+            vertex_count: v,
+            triangle_count: f,
+            positions: storage_output(
+                ctx,
+                "refined positions",
+                check_size(ctx, "refined positions", u64::from(v) * 12)?,
+                vertex,
+            ),
+            colours: storage_output(
+                ctx,
+                "refined colours",
+                check_size(ctx, "refined colours", u64::from(v) * 16)?,
+                vertex,
+            ),
+            indices: storage_output(
+                ctx,
+                "refined indices",
+                check_size(ctx, "refined indices", u64::from(f) * 12)?,
+                wgpu::BufferUsages::INDEX,
+            ),
+            faces: storage_output(
+                ctx,
+                "refined faces",
+                check_size(ctx, "refined faces", u64::from(f) * 16)?,
+                wgpu::BufferUsages::empty(),
+            ),
+        })
+    }
+
+    /// Refines `object` to `level` into `out`, reallocating only when `out` is too small (or
+    /// absent). With `measure`, returns the GPU time of the three dispatches when the adapter
+    /// has timestamp queries (this waits for the GPU).
+    pub fn refine_into(
+        &self,
+        ctx: &GpuContext,
+        object: &FlatObject,
+        level: u32,
+        out: &mut Option<FlatOutput>,
+        measure: bool,
+    ) -> Result<KernelTiming, GpuError> {
+        let (v, f) = counts(object, level)?;
+        let fits = out.as_ref().is_some_and(|o| {
+            o.positions.size() >= u64::from(v) * 12
+                && o.colours.size() >= u64::from(v) * 16
+                && o.indices.size() >= u64::from(f) * 12
+                && o.faces.size() >= u64::from(f) * 16
+        });
+        if !fits {
+            *out = Some(self.allocate(ctx, object, level)?);
+        }
+        let o = out.as_mut().expect("allocated above");
+        o.level = level;
+        o.vertex_count = v;
+        o.triangle_count = f;
+
+        let t = &object.topology;
+        let n = 1u32 << level;
+        let s = object.section_offsets;
+        let params = Params {
+            level,
+            n,
+            coarse_vertices: t.vertex_count,
+            edge_count: t.edge_count,
+            triangle_count: t.triangle_count,
+            interior_per_triangle: if n < 2 { 0 } else { (n - 1) * (n - 2) / 2 },
+            vertex_total: v,
+            fine_total: f,
+            tri_off: s[0],
+            edges_off: s[1],
+            edge_verts_off: s[2],
+            edge_side_offsets_off: s[3],
+            edge_sides_off: s[4],
+            vertex_corner_offsets_off: s[5],
+            vertex_corners_off: s[6],
+            _pad: 0,
+        };
+        let uniform = super::util::uniform_init(ctx, "flat params", &params);
+        let buffers = [
+            &uniform,
+            &object.coarse_positions,
+            &object.topo,
+            &object.records,
+            &object.bits,
+            &object.normals,
+            &object.colours,
+            &o.positions,
+            &o.indices,
+            &o.faces,
+            &o.colours,
+        ];
+        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("hce flat"),
+            layout: &self.layout,
+            entries: &buffers
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: b.as_entire_binding(),
+                })
+                .collect::<Vec<_>>(),
+        });
+        let timestamps = measure && ctx.description.timestamps;
+        let query = timestamps.then(|| {
+            ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("hce flat timing"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            })
+        });
+        let vertex_groups = dispatch_size(ctx, u64::from(v))?;
+        let face_groups = dispatch_size(ctx, u64::from(f))?;
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("hce flat"),
+                timestamp_writes: query.as_ref().map(|q| wgpu::ComputePassTimestampWrites {
+                    query_set: q,
+                    beginning_of_pass_write_index: Some(0),
+                    end_of_pass_write_index: Some(1),
+                }),
+            });
+            pass.set_bind_group(0, &bind_group, &[]);
+            // wgpu orders the dispatches: each one sees the previous one's writes.
+            pass.set_pipeline(&self.positions);
+            pass.dispatch_workgroups(vertex_groups.0, vertex_groups.1, 1);
+            pass.set_pipeline(&self.faces);
+            pass.dispatch_workgroups(face_groups.0, face_groups.1, 1);
+            pass.set_pipeline(&self.colours);
+            pass.dispatch_workgroups(vertex_groups.0, vertex_groups.1, 1);
+        }
+        let resolve = query.as_ref().map(|q| {
+            let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps"),
+                size: 16,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            encoder.resolve_query_set(q, 0..2, &buf, 0);
+            buf
+        });
+        ctx.queue.submit([encoder.finish()]);
+        let mut timing = KernelTiming::default();
+        if let Some(buf) = resolve {
+            let ticks: Vec<u64> = read_back(ctx, &buf, 2)?;
+            let period = f64::from(ctx.queue.get_timestamp_period());
+            timing.gpu_seconds = Some(ticks[1].saturating_sub(ticks[0]) as f64 * period * 1e-9);
+        } else if measure {
+            ctx.wait()?;
+        }
+        Ok(timing)
+    }
+}
+
+/// Output vertex and triangle counts at `level`, checked to fit 32-bit indices.
+fn counts(object: &FlatObject, level: u32) -> Result<(u32, u32), GpuError> {
+    if level > MAX_LEVEL {
+        return Err(GpuError::LevelTooHigh {
+            level,
+            max: MAX_LEVEL,
+        });
+    }
+    let v = object.topology.refined_vertex_count(level);
+    let f = object.topology.refined_triangle_count(level);
+    let too_large = |what, needed| GpuError::TooLarge {
+        what,
+        needed,
+        limit: u64::from(u32::MAX),
+    };
+    Ok((
+        u32::try_from(v).map_err(|_| too_large("refined vertex count", v))?,
+        u32::try_from(f).map_err(|_| too_large("refined triangle count", f))?,
+    ))
+}
+
+/// One-shot convenience: upload `object`, refine it to `level` and read the mesh back.
+pub fn refine_flat(ctx: &GpuContext, object: &Object, level: u32) -> Result<RefinedMesh, GpuError> {
+    let kernel = FlatKernel::new(ctx);
+    let uploaded = kernel.upload(ctx, object)?;
+    let mut out = None;
+    kernel.refine_into(ctx, &uploaded, level, &mut out, false)?;
+    out.expect("refine_into allocates").read_back(ctx)
+}

@@ -1,0 +1,81 @@
+// HCE colour decoding, shared by the kernels that colour subtriangles.
+//
+// Concheiro et al., "Synthesis of multiresolution scenes with global illumination on a GPU"
+// (GRAPP 2012), section 4. This file is prepended to a kernel that declares, with these names:
+//   hce_records: array<TriRecord>   one per coarse triangle
+//   hce_bits:    array<u32>         the HCE bitstream, least significant bit first
+//   hce_normals: array<f32>         representative normals, x y z packed (no vec3 padding)
+//   hce_colours: array<u32>         RGB9E5 colours, [node][normal] per triangle
+// The Rust side validates every record against those arrays before upload, so the indices
+// below stay in bounds for any input that reaches the GPU.
+
+struct TriRecord {
+    bits_start: u32,
+    colour_start: u32,
+    normal_start: u32,
+    normal_count: u32,
+}
+
+// Step 1: read one bit of the stream.
+fn hce_bit(i: u32) -> u32 {
+    return (hce_bits[i >> 5u] >> (i & 31u)) & 1u;
+}
+
+// Step 2: count the set bits in [start, start + len), a word (or part of one) at a time.
+// A node's rank among the subdivided nodes before it is this count from the tree's start.
+fn hce_popcount(start: u32, len: u32) -> u32 {
+    var count = 0u;
+    var i = start;
+    let end = start + len;
+    while (i < end) {
+        let lo = i & 31u;
+        let take = min(32u - lo, end - i);
+        var mask = 0xffffffffu;
+        if (take < 32u) {
+            mask = (1u << take) - 1u;
+        }
+        count += countOneBits((hce_bits[i >> 5u] >> lo) & mask);
+        i += take;
+    }
+    return count;
+}
+
+// Step 3: walk the breadth-first tree along `path` (two bits per level, first level most
+// significant). Node k's "subdivided" bit is bits_start + k; if r subdivided nodes precede it,
+// its children are 1 + 4r + child. Stop at a leaf or after `depth` levels.
+fn hce_tree_node(rec: TriRecord, depth: u32, path: u32) -> u32 {
+    var node = 0u;
+    for (var k = 0u; k < depth; k++) {
+        if (hce_bit(rec.bits_start + node) == 0u) {
+            break;
+        }
+        let rank = hce_popcount(rec.bits_start, node);
+        let child = (path >> (2u * (depth - 1u - k))) & 3u;
+        node = 1u + 4u * rank + child;
+    }
+    return node;
+}
+
+// Step 4: the representative normal closest to the subtriangle's (largest dot product; ties go
+// to the lower index, so a degenerate subtriangle takes the geometric normal).
+fn hce_choose_normal(rec: TriRecord, n: vec3<f32>) -> u32 {
+    var best = 0u;
+    var best_dot = -3.0e38;
+    for (var j = 0u; j < rec.normal_count; j++) {
+        let b = 3u * (rec.normal_start + j);
+        let m = vec3<f32>(hce_normals[b], hce_normals[b + 1u], hce_normals[b + 2u]);
+        let d = m.x * n.x + m.y * n.y + m.z * n.z;
+        if (j == 0u || d > best_dot) {
+            best = j;
+            best_dot = d;
+        }
+    }
+    return best;
+}
+
+// Step 5: RGB9E5 → linear RGB: three 9-bit mantissas scaled by 2^(exponent − 15 − 9).
+fn hce_rgb9e5(v: u32) -> vec3<f32> {
+    let e = i32(v >> 27u) - 24;
+    let m = vec3<f32>(f32(v & 511u), f32((v >> 9u) & 511u), f32((v >> 18u) & 511u));
+    return m * ldexp(1.0, e);
+}

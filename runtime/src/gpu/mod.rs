@@ -1,0 +1,58 @@
+//! The GPU side of the runtime (feature `gpu`): a wgpu context that prefers a hardware adapter
+//! and falls back to a software one, compute kernels that decode HCE colours and refine flat
+//! objects, a level-of-detail rule, and a headless renderer.
+//!
+//! Every kernel has a plain-Rust twin in [`cpu_reference`] that follows the same steps in the
+//! same order, so that tests can compare GPU output with it value by value.
+//!
+//! The method is Concheiro et al., "Synthesis of multiresolution scenes with global illumination
+//! on a GPU" (GRAPP 2012): colours are chosen per subtriangle by walking the coarse triangle's
+//! breadth-first HCE tree and taking the representative normal closest to the subtriangle's.
+
+pub mod bench;
+pub mod context;
+pub mod cpu_reference;
+pub mod decode;
+pub mod flat;
+pub mod lod;
+pub mod plain_mesh;
+pub mod render;
+pub mod testing;
+mod util;
+
+pub use context::{AdapterDescription, AdapterKind, ContextOptions, GpuContext};
+pub use cpu_reference::RefinedMesh;
+pub use decode::{decode_colours, ColourQuery, DecodedColour};
+pub use flat::{refine_flat, FlatKernel, FlatObject, FlatOutput, KernelTiming};
+pub use lod::{choose_level, Camera, LodParams};
+pub use render::{
+    render_gpu_mesh, render_mesh, tone_map_aces, Framing, GpuMesh, RenderParams, RenderedImage,
+};
+
+/// Everything that can go wrong on the GPU path.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error("{hint}")]
+    NoAdapter { hint: &'static str },
+    #[error("GPU adapter {adapter}: {reason}")]
+    Device { adapter: String, reason: String },
+    #[error("object {object}: {reason}")]
+    InvalidObject { object: String, reason: String },
+    #[error(
+        "{what} needs {needed} bytes but the adapter allows at most {limit} per buffer; \
+         choose a lower level"
+    )]
+    TooLarge {
+        what: &'static str,
+        needed: u64,
+        limit: u64,
+    },
+    #[error("level {level} is above the supported maximum {max}")]
+    LevelTooHigh { level: u32, max: u32 },
+    #[error("cannot load {path}: {reason}")]
+    Load { path: String, reason: String },
+    #[error("invalid render parameters: {0}")]
+    InvalidParams(String),
+    #[error("reading results back from the GPU failed: {0}")]
+    Readback(String),
+}

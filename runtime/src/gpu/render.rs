@@ -1,0 +1,465 @@
+//! Headless rendering: draw an indexed mesh with per-vertex linear colours into an offscreen
+//! floating-point texture with a depth buffer, read it back, and tone-map it for PNG.
+//!
+//! Tone mapping ([`tone_map_aces`]): exposure `2^ev`, then Krzysztof Narkowicz's fit of the ACES
+//! filmic curve ("ACES Filmic Tone Mapping Curve", 2016),
+//! `f(x) = x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14)` per channel, clamped to `[0, 1]`, then
+//! the sRGB transfer function (IEC 61966-2-1) and rounding to 8 bits. EXR output skips all of
+//! this and stores the linear values.
+
+use glam::{Mat4, Vec3, Vec4};
+
+use super::lod::Camera;
+use super::util::uniform_init;
+use super::{GpuContext, GpuError};
+
+/// How the camera is placed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Framing {
+    /// Look at the bounds' centre from the front-right-above, far enough that the bounding
+    /// sphere fills the view with a small margin; 40° vertical field of view.
+    Auto,
+    /// An explicit camera.
+    Camera(Camera),
+}
+
+/// Parameters of a render.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderParams {
+    pub width: u32,
+    pub height: u32,
+    pub framing: Framing,
+    /// Linear background colour. Default black.
+    pub background: [f32; 3],
+}
+
+impl Default for RenderParams {
+    fn default() -> Self {
+        Self {
+            width: 800,
+            height: 600,
+            framing: Framing::Auto,
+            background: [0.0; 3],
+        }
+    }
+}
+
+/// A rendered image: linear RGBA f32, rows top to bottom.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderedImage {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<f32>,
+    /// The camera actually used (useful after auto-framing).
+    pub camera: Camera,
+}
+
+impl RenderedImage {
+    /// 8-bit sRGB RGBA after [`tone_map_aces`] with exposure `ev` stops.
+    pub fn to_srgb8(&self, ev: f32) -> Vec<u8> {
+        let mut out = Vec::with_capacity(self.pixels.len());
+        for p in self.pixels.chunks_exact(4) {
+            out.extend(tone_map_aces([p[0], p[1], p[2]], ev));
+            out.push(255);
+        }
+        out
+    }
+}
+
+/// Exposure, ACES fitted curve and sRGB encoding of one linear colour (see module docs).
+pub fn tone_map_aces(rgb: [f32; 3], ev: f32) -> [u8; 3] {
+    let exposure = 2f32.powf(ev);
+    rgb.map(|x| {
+        let x = if x.is_finite() {
+            x.max(0.0) * exposure
+        } else {
+            0.0
+        };
+        let y = ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0);
+        let s = if y <= 0.003_130_8 {
+            12.92 * y
+        } else {
+            1.055 * y.powf(1.0 / 2.4) - 0.055
+        };
+        (s * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
+    })
+}
+
+/// Bounds of `x, y, z` triples; `None` when empty or not finite.
+pub fn bounds(positions: &[f32]) -> Option<([f32; 3], [f32; 3])> {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in positions.chunks_exact(3) {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (lo.iter().chain(&hi).all(|x| x.is_finite())).then_some((lo, hi))
+}
+
+/// The camera [`Framing::Auto`] uses for these bounds and aspect ratio (width / height).
+pub fn auto_camera(lo: [f32; 3], hi: [f32; 3], aspect: f32) -> Camera {
+    let fov = 40.0f32;
+    let centre = (Vec3::from(lo) + Vec3::from(hi)) * 0.5;
+    let radius = ((Vec3::from(hi) - Vec3::from(lo)).length() * 0.5).max(1e-6);
+    // Fit the sphere in the narrower of the two fields of view, with 10% margin.
+    let half_v = (fov * 0.5).to_radians();
+    let half_h = (half_v.tan() * aspect.min(1.0)).atan();
+    let distance = 1.1 * radius / half_h.sin();
+    let dir = Vec3::new(0.55, 0.45, 1.0).normalize();
+    Camera {
+        eye: (centre + dir * distance).into(),
+        target: centre.into(),
+        fov_y_degrees: fov,
+    }
+}
+
+/// View-projection matrix (wgpu clip space, depth 0..1) of `camera`, with near and far planes
+/// around the bounds.
+pub fn view_projection(camera: &Camera, lo: [f32; 3], hi: [f32; 3], aspect: f32) -> Mat4 {
+    let eye = Vec3::from(camera.eye);
+    let target = Vec3::from(camera.target);
+    let forward = (target - eye).normalize_or(Vec3::NEG_Z);
+    let up = if forward.cross(Vec3::Y).length() < 1e-4 {
+        Vec3::Z
+    } else {
+        Vec3::Y
+    };
+    let centre = (Vec3::from(lo) + Vec3::from(hi)) * 0.5;
+    let radius = ((Vec3::from(hi) - Vec3::from(lo)).length() * 0.5).max(1e-6);
+    let d = (centre - eye).length();
+    let near = ((d - radius) * 0.5).max(radius * 1e-4);
+    let far = (d + radius) * 1.5 + near;
+    // Right-handed, looking down −z, depth mapped to wgpu's 0..1.
+    let f = 1.0 / (camera.fov_y_degrees.clamp(1.0, 179.0).to_radians() * 0.5).tan();
+    let proj = Mat4::from_cols(
+        Vec4::new(f / aspect, 0.0, 0.0, 0.0),
+        Vec4::new(0.0, f, 0.0, 0.0),
+        Vec4::new(0.0, 0.0, far / (near - far), -1.0),
+        Vec4::new(0.0, 0.0, near * far / (near - far), 0.0),
+    );
+    let s = forward.cross(up).normalize();
+    let u = s.cross(forward);
+    let view = Mat4::from_cols(
+        Vec4::new(s.x, u.x, -forward.x, 0.0),
+        Vec4::new(s.y, u.y, -forward.y, 0.0),
+        Vec4::new(s.z, u.z, -forward.z, 0.0),
+        Vec4::new(-s.dot(eye), -u.dot(eye), forward.dot(eye), 1.0),
+    );
+    proj * view
+}
+
+/// A mesh already on the GPU: `positions` (f32 ×3), `colours` (f32 ×4 linear), `indices` (u32).
+pub struct GpuMesh<'a> {
+    pub positions: &'a wgpu::Buffer,
+    pub colours: &'a wgpu::Buffer,
+    pub indices: &'a wgpu::Buffer,
+    pub index_count: u32,
+    pub bounds: ([f32; 3], [f32; 3]),
+}
+
+/// Uploads and draws a CPU mesh (`positions` ×3, linear `colours` ×4, `indices`).
+pub fn render_mesh(
+    ctx: &GpuContext,
+    positions: &[f32],
+    colours: &[f32],
+    indices: &[u32],
+    params: &RenderParams,
+) -> Result<RenderedImage, GpuError> {
+    let v = positions.len() / 3;
+    if positions.len() % 3 != 0 || colours.len() != 4 * v || indices.len() % 3 != 0 {
+        return Err(GpuError::InvalidParams(format!(
+            "{} position floats, {} colour floats, {} indices: need 3 and 4 floats per vertex \
+             and 3 indices per triangle",
+            positions.len(),
+            colours.len(),
+            indices.len()
+        )));
+    }
+    if let Some(&bad) = indices.iter().find(|&&i| i as usize >= v) {
+        return Err(GpuError::InvalidParams(format!(
+            "index {bad} >= vertex count {v}"
+        )));
+    }
+    let bounds = bounds(positions)
+        .ok_or_else(|| GpuError::InvalidParams("mesh has no finite positions".into()))?;
+    let make = |label, data: &[u8], usage| {
+        use wgpu::util::DeviceExt;
+        ctx.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: if data.is_empty() { &[0; 4] } else { data },
+                usage,
+            })
+    };
+    let p = make(
+        "positions",
+        bytemuck::cast_slice(positions),
+        wgpu::BufferUsages::VERTEX,
+    );
+    let c = make(
+        "colours",
+        bytemuck::cast_slice(colours),
+        wgpu::BufferUsages::VERTEX,
+    );
+    let i = make(
+        "indices",
+        bytemuck::cast_slice(indices),
+        wgpu::BufferUsages::INDEX,
+    );
+    render_gpu_mesh(
+        ctx,
+        &GpuMesh {
+            positions: &p,
+            colours: &c,
+            indices: &i,
+            index_count: indices.len() as u32,
+            bounds,
+        },
+        params,
+    )
+}
+
+/// Draws a mesh that is already on the GPU (e.g. a kernel's output buffers) and reads the image
+/// back.
+pub fn render_gpu_mesh(
+    ctx: &GpuContext,
+    mesh: &GpuMesh<'_>,
+    params: &RenderParams,
+) -> Result<RenderedImage, GpuError> {
+    let (w, h) = (params.width, params.height);
+    let max_dim = ctx.device.limits().max_texture_dimension_2d;
+    if w == 0 || h == 0 || w > max_dim || h > max_dim {
+        return Err(GpuError::InvalidParams(format!(
+            "image size {w}x{h}: each side must be 1 to {max_dim} pixels"
+        )));
+    }
+    let aspect = w as f32 / h as f32;
+    let (lo, hi) = mesh.bounds;
+    let camera = match params.framing {
+        Framing::Auto => auto_camera(lo, hi, aspect),
+        Framing::Camera(c) => c,
+    };
+    if camera.eye == camera.target
+        || !camera
+            .eye
+            .iter()
+            .chain(&camera.target)
+            .all(|x| x.is_finite())
+    {
+        return Err(GpuError::InvalidParams(
+            "camera eye and target must be finite and distinct".into(),
+        ));
+    }
+    let view_proj = view_projection(&camera, lo, hi, aspect);
+    let uniform = uniform_init(ctx, "view projection", &view_proj.to_cols_array());
+
+    let format = wgpu::TextureFormat::Rgba32Float;
+    let extent = wgpu::Extent3d {
+        width: w,
+        height: h,
+        depth_or_array_layers: 1,
+    };
+    let colour_target = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("hce colour target"),
+        size: extent,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let depth = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("hce depth"),
+        size: extent,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Depth32Float,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let module = ctx
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("hce render"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("render.wgsl").into()),
+        });
+    let pipeline = ctx
+        .device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("hce render"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[
+                    Some(wgpu::VertexBufferLayout {
+                        array_stride: 12,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+                    }),
+                    Some(wgpu::VertexBufferLayout {
+                        array_stride: 16,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &wgpu::vertex_attr_array![1 => Float32x4],
+                    }),
+                ],
+            },
+            primitive: wgpu::PrimitiveState {
+                // Baked assets may be open surfaces: draw both sides.
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: wgpu::TextureFormat::Depth32Float,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+    let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("hce render"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: uniform.as_entire_binding(),
+        }],
+    });
+
+    let row_bytes = u64::from(w) * 16;
+    let padded_row = row_bytes.next_multiple_of(u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT));
+    let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("hce image read-back"),
+        size: padded_row * u64::from(h),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let colour_view = colour_target.create_view(&Default::default());
+    let depth_view = depth.create_view(&Default::default());
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+    {
+        let [r, g, b] = params.background.map(f64::from);
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("hce render"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &colour_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a: 1.0 }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.set_vertex_buffer(0, mesh.positions.slice(..));
+        pass.set_vertex_buffer(1, mesh.colours.slice(..));
+        pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..mesh.index_count, 0, 0..1);
+    }
+    encoder.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture: &colour_target,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &readback,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded_row as u32),
+                rows_per_image: Some(h),
+            },
+        },
+        extent,
+    );
+    ctx.queue.submit([encoder.finish()]);
+    let pixels = super::util::map_and_copy(ctx, &readback, readback.size(), |bytes| {
+        let mut out = Vec::with_capacity((w * h * 4) as usize);
+        for row in bytes.chunks_exact(padded_row as usize) {
+            out.extend_from_slice(bytemuck::cast_slice::<u8, f32>(&row[..row_bytes as usize]));
+        }
+        out
+    })?;
+    Ok(RenderedImage {
+        width: w,
+        height: h,
+        pixels,
+        camera,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tone_map_is_monotonic_and_saturates() {
+        assert_eq!(tone_map_aces([0.0; 3], 0.0), [0, 0, 0]);
+        assert_eq!(tone_map_aces([1e6; 3], 0.0), [255, 255, 255]);
+        // ACES fit at 0.18 mid-grey: 0.18 (0.4518 + 0.03) / (0.18 (0.4374 + 0.59) + 0.14)
+        // = 0.086724 / 0.324932 = 0.26690 → sRGB 0.55346 → 141.1 → 141.
+        assert_eq!(tone_map_aces([0.18; 3], 0.0)[0], 141);
+        let mut last = 0;
+        for i in 0..100 {
+            let v = tone_map_aces([i as f32 * 0.05; 3], 0.0)[0];
+            assert!(v >= last);
+            last = v;
+        }
+        // One stop of exposure equals doubling the input.
+        assert_eq!(tone_map_aces([0.1; 3], 1.0), tone_map_aces([0.2; 3], 0.0));
+    }
+
+    #[test]
+    fn auto_camera_sees_the_whole_bounding_sphere() {
+        let (lo, hi) = ([-1.0, -2.0, -0.5], [3.0, 1.0, 0.5]);
+        for aspect in [0.5f32, 1.0, 2.0] {
+            let cam = auto_camera(lo, hi, aspect);
+            let m = view_projection(&cam, lo, hi, aspect);
+            for corner in 0..8 {
+                let p = Vec3::new(
+                    if corner & 1 == 0 { lo[0] } else { hi[0] },
+                    if corner & 2 == 0 { lo[1] } else { hi[1] },
+                    if corner & 4 == 0 { lo[2] } else { hi[2] },
+                );
+                let c = m * p.extend(1.0);
+                let ndc = c.truncate() / c.w;
+                assert!(ndc.x.abs() < 1.0 && ndc.y.abs() < 1.0, "{aspect}: {ndc}");
+                assert!(ndc.z > 0.0 && ndc.z < 1.0, "{aspect}: depth {}", ndc.z);
+            }
+        }
+    }
+}

@@ -1,0 +1,4 @@
+//! One module per `hce` subcommand.
+
+pub mod bench_gpu;
+pub mod render;

@@ -1,0 +1,388 @@
+//! `hce render`: refine a mesh on the GPU and draw it headless to PNG (tone-mapped) or EXR
+//! (linear).
+//!
+//! For now the input is a plain mesh (OBJ, glTF, GLB) previewed as a flat object: one colour per
+//! coarse triangle (its `COLOR_0` mean, or grey under a fixed preview light), refined linearly by
+//! the flat kernel and averaged at the vertices. Baked `.hce`/glTF input plugs in here once the
+//! format reader lands.
+
+// Without the GPU the command only explains how to get it; its helpers stay compiled and tested.
+#![cfg_attr(not(feature = "gpu"), allow(dead_code))]
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// Mesh to render (.obj, .gltf, .glb).
+    pub file: PathBuf,
+    /// Output image: .png (tone-mapped, 8-bit sRGB) or .exr (linear, 32-bit float).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Refine every object to this level (0 = coarse mesh).
+    #[arg(long, conflicts_with = "auto")]
+    pub level: Option<u32>,
+    /// Choose the level from the view (the default): edges of about 8 pixels.
+    #[arg(long)]
+    pub auto: bool,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "800x600")]
+    pub size: String,
+    /// `auto`, or EYE:TARGET[:FOV] with EYE and TARGET as x,y,z and FOV the vertical field of
+    /// view in degrees (default 40), e.g. `3,2,5:0,0,0:35`.
+    #[arg(long, default_value = "auto")]
+    pub camera: String,
+    /// Exposure in stops applied before tone mapping (PNG only).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub exposure: f32,
+    /// Refuse levels whose output exceeds this many triangles (the level is lowered, with a
+    /// note, when chosen automatically).
+    #[arg(long, default_value_t = 16_000_000)]
+    pub max_triangles: u64,
+    /// Use a software adapter even if a GPU is present.
+    #[arg(long)]
+    pub software: bool,
+}
+
+/// Parses `WIDTHxHEIGHT`.
+pub fn parse_size(s: &str) -> Result<(u32, u32)> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .with_context(|| format!("--size {s:?}: expected WIDTHxHEIGHT, e.g. 800x600"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .with_context(|| format!("--size {s:?}: bad width"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .with_context(|| format!("--size {s:?}: bad height"))?;
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        bail!("--size {s:?}: each side must be 1 to 16384 pixels");
+    }
+    Ok((w, h))
+}
+
+fn parse_vec3(s: &str, what: &str) -> Result<[f32; 3]> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("--camera: {what} {s:?} is not x,y,z"))?;
+    match v[..] {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([x, y, z]),
+        _ => bail!("--camera: {what} {s:?} must be three finite numbers x,y,z"),
+    }
+}
+
+/// Parses `auto` or `EYE:TARGET[:FOV]`; `None` means auto-framing.
+#[cfg(feature = "gpu")]
+pub fn parse_camera(s: &str) -> Result<Option<hce_runtime::gpu::Camera>> {
+    if s == "auto" {
+        return Ok(None);
+    }
+    let parts: Vec<&str> = s.split(':').collect();
+    if parts.len() < 2 || parts.len() > 3 {
+        bail!("--camera {s:?}: expected auto or EYE:TARGET[:FOV], e.g. 3,2,5:0,0,0:35");
+    }
+    let eye = parse_vec3(parts[0], "eye")?;
+    let target = parse_vec3(parts[1], "target")?;
+    let fov = match parts.get(2) {
+        Some(f) => f
+            .trim()
+            .parse::<f32>()
+            .ok()
+            .filter(|f| *f > 0.0 && *f < 180.0)
+            .with_context(|| format!("--camera: FOV {f:?} must be between 0 and 180 degrees"))?,
+        None => 40.0,
+    };
+    if eye == target {
+        bail!("--camera {s:?}: eye and target must differ");
+    }
+    Ok(Some(hce_runtime::gpu::Camera {
+        eye,
+        target,
+        fov_y_degrees: fov,
+    }))
+}
+
+enum Format {
+    Png,
+    Exr,
+}
+
+fn output_format(path: &Path) -> Result<Format> {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .as_deref()
+    {
+        Some("png") => Ok(Format::Png),
+        Some("exr") => Ok(Format::Exr),
+        _ => bail!(
+            "{}: output must end in .png (tone-mapped) or .exr (linear)",
+            path.display()
+        ),
+    }
+}
+
+/// Writes through a temporary file in the same directory, then renames, so a reader never sees
+/// a half-written image.
+fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path.file_name().context("output path has no file name")?;
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("tmp");
+    let tmp = dir.join(format!(
+        ".{}.{}.tmp.{ext}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    let result = write(&tmp).and_then(|()| {
+        std::fs::rename(&tmp, path)
+            .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Writes 8-bit sRGB RGBA to a PNG, tagged sRGB.
+pub fn write_png(path: &Path, width: u32, height: u32, rgba8: &[u8]) -> Result<()> {
+    write_atomically(path, |tmp| {
+        let file =
+            std::fs::File::create(tmp).with_context(|| format!("creating {}", tmp.display()))?;
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+        enc.set_color(png::ColorType::Rgba);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        let mut writer = enc.write_header()?;
+        writer.write_image_data(rgba8)?;
+        writer.finish()?;
+        Ok(())
+    })
+    .with_context(|| format!("writing {}", path.display()))
+}
+
+/// Writes linear RGBA f32 (rows top to bottom) to an OpenEXR file.
+pub fn write_exr(path: &Path, width: u32, height: u32, rgba: &[f32]) -> Result<()> {
+    let w = width as usize;
+    write_atomically(path, |tmp| {
+        exr::prelude::write_rgba_file(tmp, w, height as usize, |x, y| {
+            let p = &rgba[4 * (y * w + x)..4 * (y * w + x) + 4];
+            (p[0], p[1], p[2], p[3])
+        })
+        .map_err(|e| anyhow::anyhow!("{e}"))
+    })
+    .with_context(|| format!("writing {}", path.display()))
+}
+
+#[cfg(not(feature = "gpu"))]
+pub fn run(_args: RenderArgs) -> Result<()> {
+    bail!("this `hce` was built without the `gpu` feature; rebuild with default features to render")
+}
+
+#[cfg(feature = "gpu")]
+pub fn run(args: RenderArgs) -> Result<()> {
+    use hce_runtime::gpu::{
+        choose_level, plain_mesh, render::auto_camera, render::bounds, render_gpu_mesh,
+        AdapterKind, ContextOptions, FlatKernel, Framing, GpuContext, GpuMesh, LodParams,
+        RenderParams,
+    };
+
+    let format = output_format(&args.output)?;
+    let (width, height) = parse_size(&args.size)?;
+    let camera = parse_camera(&args.camera)?;
+
+    let mesh = plain_mesh::load_plain_mesh(&args.file)?;
+    let name = args
+        .file
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let (object, dropped) = plain_mesh::to_flat_object(&name, &mesh);
+    if dropped > 0 {
+        eprintln!("note: {dropped} degenerate triangles dropped after welding equal positions");
+    }
+    if object.triangles.is_empty() {
+        bail!(
+            "{}: no non-degenerate triangles to render",
+            args.file.display()
+        );
+    }
+
+    let ctx = GpuContext::new(&ContextOptions {
+        force_software: args.software,
+    })?;
+    println!("adapter: {}", ctx.description);
+    if ctx.description.kind == AdapterKind::Software {
+        println!("note: rendering on a software rasteriser (no hardware GPU in use); expect it to be slow");
+    }
+
+    let (lo, hi) = bounds(&object.mesh.positions).context("mesh has no finite positions")?;
+    let aspect = width as f32 / height as f32;
+    let view = camera.unwrap_or_else(|| auto_camera(lo, hi, aspect));
+    let f = object.triangles.len() as u64;
+    let level = match args.level {
+        Some(level) => {
+            let out = f << (2 * level.min(31));
+            if level > 15 || out > args.max_triangles {
+                bail!(
+                    "--level {level} would make {out} triangles from {f}; the limit is {} \
+                     (raise --max-triangles or lower --level)",
+                    args.max_triangles
+                );
+            }
+            level
+        }
+        None => {
+            let edge = mean_edge_length(&object.mesh.positions, &object.mesh.triangles);
+            let mut level = choose_level(lo, hi, edge, &view, height, &LodParams::default());
+            while level > 0 && f << (2 * level) > args.max_triangles {
+                level -= 1;
+                eprintln!("note: level lowered to {level} to stay under --max-triangles");
+            }
+            level
+        }
+    };
+
+    let kernel = FlatKernel::new(&ctx);
+    let uploaded = kernel.upload(&ctx, &object)?;
+    let mut out = None;
+    kernel.refine_into(&ctx, &uploaded, level, &mut out, false)?;
+    let out = out.context("refinement produced no output")?;
+    println!(
+        "{}: {} coarse triangles refined to level {level}: {} triangles, {} vertices",
+        args.file.display(),
+        f,
+        out.triangle_count,
+        out.vertex_count
+    );
+    let image = render_gpu_mesh(
+        &ctx,
+        &GpuMesh {
+            positions: &out.positions,
+            colours: &out.colours,
+            indices: &out.indices,
+            index_count: out.triangle_count * 3,
+            bounds: (lo, hi),
+        },
+        &RenderParams {
+            width,
+            height,
+            framing: match camera {
+                Some(c) => Framing::Camera(c),
+                None => Framing::Auto,
+            },
+            background: [0.0; 3],
+        },
+    )?;
+    match format {
+        Format::Png => write_png(&args.output, width, height, &image.to_srgb8(args.exposure))?,
+        Format::Exr => write_exr(&args.output, width, height, &image.pixels)?,
+    }
+    let c = image.camera;
+    println!(
+        "wrote {} ({width}x{height}, camera {},{},{}:{},{},{}:{})",
+        args.output.display(),
+        c.eye[0],
+        c.eye[1],
+        c.eye[2],
+        c.target[0],
+        c.target[1],
+        c.target[2],
+        c.fov_y_degrees
+    );
+    Ok(())
+}
+
+fn mean_edge_length(positions: &[f32], triangles: &[u32]) -> f32 {
+    let p = |i: u32| {
+        let i = i as usize * 3;
+        [positions[i], positions[i + 1], positions[i + 2]]
+    };
+    let mut sum = 0f64;
+    for t in triangles.chunks_exact(3) {
+        for e in 0..3 {
+            let (a, b) = (p(t[e]), p(t[(e + 1) % 3]));
+            let d = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+            sum += f64::from(d);
+        }
+    }
+    (sum / triangles.len().max(1) as f64) as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_and_cameras_parse_or_explain() {
+        assert_eq!(parse_size("640x480").unwrap(), (640, 480));
+        assert!(parse_size("640")
+            .unwrap_err()
+            .to_string()
+            .contains("WIDTHxHEIGHT"));
+        assert!(parse_size("0x10").is_err());
+        #[cfg(feature = "gpu")]
+        {
+            let c = parse_camera("3,2,5:0,0,0:35").unwrap().unwrap();
+            assert_eq!(
+                (c.eye, c.target, c.fov_y_degrees),
+                ([3.0, 2.0, 5.0], [0.0; 3], 35.0)
+            );
+            assert_eq!(
+                parse_camera("1,1,1:0,0,0").unwrap().unwrap().fov_y_degrees,
+                40.0
+            );
+            assert!(parse_camera("auto").unwrap().is_none());
+            assert!(parse_camera("1,1:0,0,0").is_err());
+            assert!(parse_camera("1,1,1:1,1,1").is_err());
+            assert!(parse_camera("1,1,1:0,0,0:200").is_err());
+        }
+    }
+
+    #[test]
+    fn png_is_written_atomically_and_reads_back() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.png");
+        let pixels: Vec<u8> = (0..2 * 3 * 4).map(|i| i as u8 * 10).collect();
+        write_png(&path, 2, 3, &pixels).unwrap();
+        let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(names.len(), 1, "temporary file left behind");
+        let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()));
+        let mut reader = dec.read_info().unwrap();
+        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+        reader.next_frame(&mut buf).unwrap();
+        assert_eq!(&buf[..pixels.len()], &pixels[..]);
+    }
+
+    #[test]
+    fn exr_keeps_linear_values_and_row_order() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.exr");
+        // 3x2 image; pixel (x, y) = (x, y, 10 + x + 3y, 1), values above 1 kept as they are.
+        let rgba: Vec<f32> = (0..2)
+            .flat_map(|y| {
+                (0..3).flat_map(move |x| [x as f32, y as f32, 10.0 + (x + 3 * y) as f32, 1.0])
+            })
+            .collect();
+        write_exr(&path, 3, 2, &rgba).unwrap();
+        let image = exr::prelude::read_first_rgba_layer_from_file(
+            &path,
+            |size, _| vec![[0f32; 4]; size.width() * size.height()],
+            |pixels, pos, (r, g, b, a): (f32, f32, f32, f32)| {
+                pixels[pos.y() * 3 + pos.x()] = [r, g, b, a]
+            },
+        )
+        .unwrap();
+        let pixels = image.layer_data.channel_data.pixels;
+        assert_eq!(pixels.as_flattened(), &rgba[..]);
+    }
+}
