@@ -50,3 +50,69 @@ pub fn single_triangle() -> Container {
         }],
     }
 }
+
+/// Two triangles sharing an edge (a unit square split along its diagonal), with different
+/// trees and normal-set sizes: exercises interior edges, neighbours and crease vertices.
+pub fn two_triangles() -> Container {
+    let corners = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    let triangles = vec![0, 1, 2, 0, 2, 3];
+    let hash = geometry_hash(triangles.iter().map(|&v: &u32| corners[v as usize]));
+    let mut w = crate::tree::BitWriter::new();
+    // Both trees are complete and shallow, so pushing cannot fail.
+    let s0 = w
+        .push_tree(&[true, false, false, false, false])
+        .unwrap_or(0) as u32;
+    let s1 = w.push_tree(&[false]).unwrap_or(0) as u32;
+    let (bits, bit_len) = w.finish();
+    let crease = VERTEX_BOUNDARY | (RULE_CREASE << VERTEX_RULE_SHIFT);
+    let corner = VERTEX_BOUNDARY | (RULE_CORNER << VERTEX_RULE_SHIFT);
+    let b = SPOKE_SHARP | SPOKE_BOUNDARY;
+    Container {
+        metadata: Metadata {
+            generator: "hce example".into(),
+            bake_parameters: "{\"levels\":1}".into(),
+            source_hash: hash,
+        },
+        objects: vec![Object {
+            name: "square".into(),
+            kind: ObjectKind::Multiresolution,
+            geometry_hash: hash,
+            mesh: ControlMesh {
+                positions: corners.iter().flatten().copied().collect(),
+                triangles,
+                ring_offsets: vec![0, 3, 5, 8, 10],
+                ring: vec![1, 2, 3, 2, 0, 3, 0, 1, 0, 2],
+                vertex_flags: vec![crease, corner, crease, corner],
+                spoke_flags: vec![b, 0, b, b, b, b, 0, b, b, b],
+                corner_spokes: vec![0, 0, 1, 1, 0, 0],
+                neighbours: vec![NO_NEIGHBOUR, NO_NEIGHBOUR, 1, 0, NO_NEIGHBOUR, NO_NEIGHBOUR],
+                edges: vec![0, 1, 2, 2, 3, 4],
+            },
+            triangles: vec![
+                TriangleRecord {
+                    bits_start: s0,
+                    colour_start: 0,
+                    normal_start: 0,
+                    normal_count: 2,
+                },
+                TriangleRecord {
+                    bits_start: s1,
+                    colour_start: 10,
+                    normal_start: 2,
+                    normal_count: 1,
+                },
+            ],
+            normals: vec![[0.0, 0.0, 1.0], [0.0, 0.6, 0.8], [0.0, 0.0, 1.0]],
+            bits,
+            bit_len,
+            colours: (0..11u8)
+                .map(|k| rgb9e5::encode([1.0, f32::from(k), 0.5]))
+                .collect(),
+        }],
+    }
+}
