@@ -12,6 +12,7 @@
 
 pub mod error;
 pub mod example;
+pub mod gltf;
 pub mod layout;
 pub mod model;
 pub mod read;
