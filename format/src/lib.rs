@@ -26,6 +26,6 @@ pub use layout::{
 };
 pub use model::*;
 pub use read::{read, read_with, ReadOptions};
-pub use tree::{BitWriter, Tree, TreeError, TreeShape};
+pub use tree::{triangle_trees, BitWriter, Tree, TreeError, TreeShape};
 pub use validate::{validate, validate_bytes, Problem};
 pub use write::{write, write_atomically, write_file};

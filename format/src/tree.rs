@@ -16,7 +16,7 @@ pub enum TreeError {
     Truncated { node: u32, bit: u64, bit_len: u64 },
     #[error("node {node} at depth {depth} is subdivided; the maximum depth is 12 (SPEC.md B.2)")]
     TooDeep { node: u32, depth: u32 },
-    #[error("tree runs into bit {limit}, where another triangle's tree starts (SPEC.md A.9)")]
+    #[error("tree overlaps the tree starting at bit {limit}; trees of different triangles must not overlap (SPEC.md A.9)")]
     Overlap { limit: u64 },
     #[error("{flags} flags do not form a complete tree with {subdivided} subdivided nodes, which needs 1 + 4 x {subdivided} (SPEC.md B.2)")]
     Incomplete { flags: usize, subdivided: usize },
@@ -79,6 +79,44 @@ pub fn decode_shape(bits: &[u32], limit: u64, start: u64) -> Result<TreeShape, T
         subdivided,
         depth,
     })
+}
+
+/// Decodes the shape of every triangle's tree of an object, in triangle order. Trees are decoded
+/// in `bits_start` order, each bounded by the next distinct start, so the work is linear in the
+/// stream whatever the records say; a tree that runs into the next one is [`TreeError::Overlap`].
+pub fn triangle_trees(o: &crate::model::Object) -> Vec<Result<TreeShape, TreeError>> {
+    let mut starts: Vec<u64> = o
+        .triangles
+        .iter()
+        .map(|t| u64::from(t.bits_start))
+        .collect();
+    starts.sort_unstable();
+    starts.dedup();
+    let stream_end = o.bit_len.min(o.bits.len() as u64 * 32);
+    let mut shapes = std::collections::HashMap::with_capacity(starts.len());
+    for (i, &s) in starts.iter().enumerate() {
+        let limit = starts
+            .get(i + 1)
+            .copied()
+            .unwrap_or(stream_end)
+            .min(stream_end);
+        let shape = match decode_shape(&o.bits, limit, s) {
+            Err(TreeError::Truncated { .. }) if limit < stream_end => {
+                Err(TreeError::Overlap { limit })
+            }
+            other => other,
+        };
+        shapes.insert(s, shape);
+    }
+    o.triangles
+        .iter()
+        .map(|t| {
+            shapes
+                .get(&u64::from(t.bits_start))
+                .cloned()
+                .unwrap_or(Err(TreeError::Overlap { limit: 0 }))
+        })
+        .collect()
 }
 
 /// A decoded tree inside an object's bitstream: node queries without allocation.

@@ -5,7 +5,6 @@
 use crate::layout::*;
 use crate::model::*;
 use crate::read::{read_from_layout, ReadOptions};
-use crate::tree::{decode_shape, TreeError};
 use std::fmt;
 
 /// Problems stored before the rest are only counted.
@@ -489,34 +488,8 @@ fn validate_shading(at: &str, o: &Object, p: &mut Problems) {
             }
         }
     }
-    // Rule 7: triangle records. Trees are decoded in bits_start order, each bounded by the next
-    // distinct start, which keeps the work linear and rejects overlapping trees.
-    let mut starts: Vec<u64> = o
-        .triangles
-        .iter()
-        .map(|t| u64::from(t.bits_start))
-        .collect();
-    starts.sort_unstable();
-    starts.dedup();
-    let mut shapes = std::collections::HashMap::with_capacity(starts.len());
-    let stream_end = o.bit_len.min(o.bits.len() as u64 * 32);
-    for (i, &s) in starts.iter().enumerate() {
-        let limit = starts
-            .get(i + 1)
-            .copied()
-            .unwrap_or(stream_end)
-            .min(stream_end);
-        let shape = match decode_shape(&o.bits, limit, s) {
-            Err(TreeError::Truncated { node, .. }) if limit < stream_end => Err(format!(
-                "tree overlaps the tree starting at bit {limit} (node {node} would be bit {}); trees of different triangles must not overlap (SPEC.md A.9)",
-                s + u64::from(node)
-            )),
-            Err(TreeError::Truncated { node, .. }) => Err(format!("bitstream ends inside node {node}")),
-            Err(e) => Err(e.to_string()),
-            Ok(shape) => Ok(shape),
-        };
-        shapes.insert(s, shape);
-    }
+    // Rule 7: triangle records; trees decoded in linear time (see `triangle_trees`).
+    let shapes = crate::tree::triangle_trees(o);
     for (t, r) in o.triangles.iter().enumerate() {
         let tat = format!("{at}.triangles[{t}]");
         if r.normal_count == 0 {
@@ -546,8 +519,8 @@ fn validate_shading(at: &str, o: &Object, p: &mut Problems) {
                 ),
             );
         }
-        match shapes.get(&u64::from(r.bits_start)) {
-            Some(Ok(shape)) => {
+        match &shapes[t] {
+            Ok(shape) => {
                 let end = u64::from(r.colour_start) + u64::from(shape.node_count) * n;
                 if end > o.colours.len() as u64 {
                     p.push(
@@ -561,8 +534,7 @@ fn validate_shading(at: &str, o: &Object, p: &mut Problems) {
                     );
                 }
             }
-            Some(Err(msg)) => p.push(&tat, msg.clone()),
-            None => {}
+            Err(e) => p.push(&tat, e.to_string()),
         }
     }
 }

@@ -43,8 +43,8 @@ fn truncated_bitstream_names_the_node() {
     assert_eq!(
         p,
         vec![
-            "objects[0].triangles[0]: bitstream ends inside node 3",
-            "objects[0].triangles[1]: bitstream ends inside node 0",
+            "objects[0].triangles[0]: bitstream ends inside node 3 (bit 3 of 3) (SPEC.md B.2)",
+            "objects[0].triangles[1]: bitstream ends inside node 0 (bit 5 of 3) (SPEC.md B.2)",
         ]
     );
 }
