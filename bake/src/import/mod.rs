@@ -10,6 +10,7 @@ mod gltf;
 mod obj;
 mod texture;
 
+pub(crate) use gltf::read_uri;
 pub use texture::{srgb_to_linear, Texture, WrapMode};
 
 use glam::Mat4;
