@@ -57,6 +57,15 @@ fn hashes_match_the_format_crate_recomputation() {
             .normals
             .as_ref()
             .is_some_and(|n| n.len() == o.positions.len()));
+        // The samples place objects by translation only: world normals equal object normals.
+        let wn = o.world_normals().unwrap();
+        for (a, b) in wn.iter().zip(o.normals.as_ref().unwrap()) {
+            assert!(
+                (0..3).all(|k| (a[k] - b[k]).abs() < 1e-5),
+                "{}: {a:?} {b:?}",
+                o.name
+            );
+        }
     }
 }
 
@@ -138,6 +147,8 @@ fn gltf_lights_transforms_and_warnings() {
     assert_eq!(s.format, SourceFormat::Gltf);
     assert_eq!(s.objects.len(), 1);
     assert_eq!(s.objects[0].world_positions[2], [1.0, 1.0, -2.0]);
+    assert!(s.objects[0].world_normals().is_none());
+    assert!(!s.objects[0].mirrored());
     assert_eq!(s.lights.len(), 1);
     let l = &s.lights[0];
     assert!(

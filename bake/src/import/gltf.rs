@@ -25,13 +25,69 @@ pub(super) fn import(path: &Path, options: &ImportOptions) -> Result<ImportedSce
         path: path.to_path_buf(),
         source,
     })?;
+    precheck(&bytes).map_err(|message| ImportError::Invalid {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    // The checks here and in `check_accessor` cover every panic of the `gltf` crate we know of;
+    // this catches the ones we do not, so that a bad file is an error, never a crash.
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        import_checked(path, &bytes, options)
+    }))
+    .unwrap_or_else(|panic| {
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        Err(ImportError::Invalid {
+            path: path.to_path_buf(),
+            message: format!("the glTF reader failed on this file ({what})"),
+        })
+    })
+}
+
+/// Checks the references that `gltf-json`'s own validation indexes without checking.
+fn precheck(bytes: &[u8]) -> Result<(), String> {
+    // A file that hce-format cannot even parse is left to the `gltf` crate's better message.
+    let Ok(asset) = hce_format::gltf::Asset::parse(bytes) else {
+        return Ok(());
+    };
+    let json = &asset.json;
+    let accessors = json
+        .get("accessors")
+        .and_then(|a| a.as_array())
+        .map_or(0, Vec::len);
+    let meshes = json.get("meshes").and_then(|m| m.as_array());
+    for (m, mesh) in meshes.into_iter().flatten().enumerate() {
+        let prims = mesh.get("primitives").and_then(|p| p.as_array());
+        for (p, prim) in prims.into_iter().flatten().enumerate() {
+            let attributes = prim.get("attributes").and_then(|a| a.as_object());
+            for (name, index) in attributes.into_iter().flatten() {
+                if index.as_u64().is_none_or(|i| i >= accessors as u64) {
+                    return Err(format!(
+                        "meshes[{m}].primitives[{p}].attributes.{name}: {index} is not an \
+                         accessor index (the file has {accessors} accessors)"
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+fn import_checked(
+    path: &Path,
+    bytes: &[u8],
+    options: &ImportOptions,
+) -> Result<ImportedScene, ImportError> {
     let format = if bytes.starts_with(b"glTF") {
         SourceFormat::Glb
     } else {
         SourceFormat::Gltf
     };
     let ::gltf::Gltf { document, blob } =
-        ::gltf::Gltf::from_slice(&bytes).map_err(|source| ImportError::Gltf {
+        ::gltf::Gltf::from_slice(bytes).map_err(|source| ImportError::Gltf {
             path: path.to_path_buf(),
             source,
         })?;
@@ -213,9 +269,56 @@ fn load_buffers(
         .collect()
 }
 
-/// Checks that an accessor lies inside loaded data, so that the `gltf` reader cannot panic.
-fn check_accessor(a: &::gltf::Accessor, buffers: &[Option<Vec<u8>>]) -> Result<(), String> {
+/// The accessor layouts the `gltf` reader handles for each use; it reinterprets bytes by the
+/// expected type (or reaches `unreachable!`), so anything else must be refused beforehand.
+#[derive(Clone, Copy)]
+enum Use {
+    Position,
+    Normal,
+    TexCoord,
+    Index,
+}
+
+impl Use {
+    fn name(self) -> &'static str {
+        match self {
+            Use::Position => "POSITION",
+            Use::Normal => "NORMAL",
+            Use::TexCoord => "TEXCOORD_0",
+            Use::Index => "indices",
+        }
+    }
+
+    fn accepts(self, a: &::gltf::Accessor) -> bool {
+        use ::gltf::accessor::{DataType as D, Dimensions as Dim};
+        match self {
+            Use::Position | Use::Normal => a.data_type() == D::F32 && a.dimensions() == Dim::Vec3,
+            Use::TexCoord => {
+                matches!(a.data_type(), D::F32 | D::U8 | D::U16) && a.dimensions() == Dim::Vec2
+            }
+            Use::Index => {
+                matches!(a.data_type(), D::U8 | D::U16 | D::U32) && a.dimensions() == Dim::Scalar
+            }
+        }
+    }
+}
+
+/// Checks that an accessor has the layout its use needs and lies inside loaded data, so that
+/// the `gltf` reader cannot panic.
+fn check_accessor(
+    a: &::gltf::Accessor,
+    use_: Use,
+    buffers: &[Option<Vec<u8>>],
+) -> Result<(), String> {
     let loc = format!("accessors[{}]", a.index());
+    if !use_.accepts(a) {
+        return Err(format!(
+            "{loc} is {:?} {:?}, which glTF does not allow for {}",
+            a.data_type(),
+            a.dimensions(),
+            use_.name()
+        ));
+    }
     if a.sparse().is_some() {
         return Err(format!("{loc} is sparse, which is not supported"));
     }
@@ -237,14 +340,21 @@ fn check_accessor(a: &::gltf::Accessor, buffers: &[Option<Vec<u8>>]) -> Result<(
         ));
     }
     let size = a.size();
-    let stride = view.stride().unwrap_or(size).max(size);
-    let needed = match a.count() {
-        0 => Some(0),
-        n => (n - 1)
-            .checked_mul(stride)
-            .and_then(|x| x.checked_add(a.offset()))
-            .and_then(|x| x.checked_add(size)),
-    };
+    let stride = view.stride().unwrap_or(size);
+    if stride < size {
+        return Err(format!(
+            "bufferViews[{}].byteStride {stride} is smaller than the {size}-byte elements of {loc}",
+            view.index()
+        ));
+    }
+    // The reader computes `count - 1` unchecked.
+    if a.count() == 0 {
+        return Err(format!("{loc} has count 0"));
+    }
+    let needed = (a.count() - 1)
+        .checked_mul(stride)
+        .and_then(|x| x.checked_add(a.offset()))
+        .and_then(|x| x.checked_add(size));
     if needed.is_none_or(|n| n > view.length()) {
         return Err(format!(
             "{loc}: {} elements do not fit in bufferViews[{}]",
@@ -293,9 +403,12 @@ fn read_mesh_instance(
             warnings.push(format!("{loc} has no POSITION; skipped"));
             continue;
         };
-        let mut used = vec![pos_acc.clone()];
-        used.extend(prim.indices());
-        if let Err(e) = used.iter().try_for_each(|a| check_accessor(a, buffers)) {
+        let mut used = vec![(pos_acc.clone(), Use::Position)];
+        used.extend(prim.indices().map(|a| (a, Use::Index)));
+        if let Err(e) = used
+            .iter()
+            .try_for_each(|(a, u)| check_accessor(a, *u, buffers))
+        {
             warnings.push(format!("{loc}: {e}; skipped"));
             continue;
         }
@@ -338,7 +451,7 @@ fn read_mesh_instance(
         }
         let normals = prim
             .get(&::gltf::Semantic::Normals)
-            .filter(|a| match check_accessor(a, buffers) {
+            .filter(|a| match check_accessor(a, Use::Normal, buffers) {
                 Ok(()) if a.count() == n => true,
                 Ok(()) => {
                     warnings.push(format!(
@@ -355,7 +468,7 @@ fn read_mesh_instance(
             .map(|r| r.collect::<Vec<_>>());
         let uv0 = prim
             .get(&::gltf::Semantic::TexCoords(0))
-            .filter(|a| match check_accessor(a, buffers) {
+            .filter(|a| match check_accessor(a, Use::TexCoord, buffers) {
                 Ok(()) if a.count() == n => true,
                 Ok(()) => {
                     warnings.push(format!(
@@ -370,10 +483,16 @@ fn read_mesh_instance(
             })
             .and_then(|_| reader.read_tex_coords(0))
             .map(|r| r.into_f32().collect::<Vec<_>>());
-        let world_positions = positions
+        let world_positions: Vec<[f32; 3]> = positions
             .iter()
             .map(|&p| world.transform_point3(Vec3::from(p)).to_array())
             .collect();
+        if world_positions.iter().flatten().any(|c| !c.is_finite()) {
+            warnings.push(format!(
+                "{loc}: the node transform makes a position non-finite; skipped"
+            ));
+            continue;
+        }
         let base_name = node
             .name()
             .map(str::to_owned)

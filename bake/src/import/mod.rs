@@ -81,6 +81,8 @@ pub enum ImportError {
         path: PathBuf,
         source: ::gltf::Error,
     },
+    #[error("{path}: invalid glTF: {message}")]
+    Invalid { path: PathBuf, message: String },
     #[error("{path}: not a readable OBJ file: {message}")]
     Obj { path: PathBuf, message: String },
     #[error("{path}: unknown scene format; use .gltf, .glb or .obj")]
@@ -170,6 +172,18 @@ impl SceneObject {
         let uv = self.uv0.as_ref()?;
         let i = &self.indices[3 * t..3 * t + 3];
         Some([0, 1, 2].map(|c| uv[i[c] as usize]))
+    }
+
+    /// Vertex normals in world space (through the inverse transpose of the transform,
+    /// renormalised), if the object has normals; a normal that degenerates stays zero.
+    pub fn world_normals(&self) -> Option<Vec<[f32; 3]>> {
+        let m = glam::Mat3::from_mat4(self.transform).inverse().transpose();
+        let n = self.normals.as_ref()?;
+        Some(
+            n.iter()
+                .map(|&v| (m * glam::Vec3::from(v)).normalize_or_zero().to_array())
+                .collect(),
+        )
     }
 
     /// Whether the transform mirrors space (negative determinant), which flips the winding.
