@@ -72,9 +72,13 @@ fn hashes_match_the_format_crate_recomputation() {
 #[test]
 fn multires_patterns_select_by_name() {
     let opts = ImportOptions {
-        multires: vec!["short_*".into(), "light".into()],
+        multires: vec!["short_*".into(), "light".into(), "teapot".into()],
     };
     let s = import_scene(&sample("cornell-box.glb"), &opts).unwrap();
+    assert_eq!(
+        s.warnings,
+        ["--multires \"teapot\" matches no node or mesh name"]
+    );
     let multires: Vec<&str> = s
         .objects
         .iter()

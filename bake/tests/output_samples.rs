@@ -285,6 +285,13 @@ fn bad_inputs_are_errors_naming_the_object() {
     });
     let e = write_baked_gltf(&scene, &colours, &bytes, &links).unwrap_err();
     assert!(e.to_string().contains("exceed"), "{e}");
+    // Two objects of different meshes may not share one container object.
+    links[1] = Some(ObjectLink {
+        object: 0,
+        first_triangle: 0,
+    });
+    let e = write_baked_gltf(&scene, &colours, &bytes, &links).unwrap_err();
+    assert!(e.to_string().contains("one mesh"), "{e}");
     links[1] = None;
     let e = write_baked_gltf(&scene, &colours, &bytes[..100], &links).unwrap_err();
     assert!(matches!(e, OutputError::Container(_)), "{e}");
@@ -415,4 +422,27 @@ fn rebaking_a_baked_file_replaces_the_extension() {
     );
     check_baked(&scene2, &glb2, &c2, &colours2);
     keep("rebaked.glb", &glb2);
+}
+
+#[test]
+fn primitives_sharing_an_object_must_not_overlap() {
+    let scene = import_scene(&sample("chesstime.glb"), &ImportOptions::default()).unwrap();
+    let board: Vec<usize> = (0..scene.objects.len())
+        .filter(|&i| scene.objects[i].node_name.as_deref() == Some("board"))
+        .collect();
+    assert!(
+        board.len() > 1,
+        "the board has one primitive per rank and colour"
+    );
+    let (c, mut links) = container_for(&scene);
+    let shared = links[board[0]];
+    links[board[1]] = shared;
+    let e = write_baked_gltf(
+        &scene,
+        &constant_colours(&scene),
+        &write(&c).unwrap(),
+        &links,
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("overlap"), "{e}");
 }

@@ -119,7 +119,8 @@ pub enum SourceFormat {
 /// One object: one triangle primitive of one mesh as placed by one node.
 #[derive(Clone, Debug)]
 pub struct SceneObject {
-    /// `node/mesh/primitive` style name, unique within the scene and stable across runs.
+    /// The node's name (else the mesh's, else `node<N>`), with `#<primitive>` appended when
+    /// the mesh has several primitives; stable across runs, not necessarily unique.
     pub name: String,
     /// glTF node index (`None` for OBJ).
     pub node: Option<usize>,

@@ -218,6 +218,44 @@ fn check_inputs(
         )));
     }
     let c = hce_format::read(container)?;
+    // SPEC.md 3.3: primitives sharing a container object belong to one mesh and cover
+    // disjoint triangle ranges of it.
+    let mut by_object: std::collections::BTreeMap<u32, Vec<(u32, u64, usize)>> =
+        std::collections::BTreeMap::new();
+    for (i, (o, link)) in scene.objects.iter().zip(links).enumerate() {
+        if let Some(l) = link {
+            let end = u64::from(l.first_triangle) + o.triangle_count() as u64;
+            by_object
+                .entry(l.object)
+                .or_default()
+                .push((l.first_triangle, end, i));
+        }
+    }
+    for (object, mut ranges) in by_object {
+        ranges.sort_unstable();
+        let first = &scene.objects[ranges[0].2];
+        for pair in ranges.windows(2) {
+            let (a, b) = (&scene.objects[pair[0].2], &scene.objects[pair[1].2]);
+            let err = |message: String| OutputError::Object {
+                index: pair[1].2,
+                name: b.name.clone(),
+                message,
+            };
+            if (b.node, b.mesh) != (first.node, first.mesh) {
+                return Err(err(format!(
+                    "shares container object {object} with {:?}, which is another mesh instance; \
+                     one object may only be shared by primitives of one mesh",
+                    first.name
+                )));
+            }
+            if u64::from(pair[1].0) < pair[0].1 {
+                return Err(err(format!(
+                    "its triangles in container object {object} overlap those of {:?}",
+                    a.name
+                )));
+            }
+        }
+    }
     for (i, o) in scene.objects.iter().enumerate() {
         let err = |message: String| OutputError::Object {
             index: i,
