@@ -672,6 +672,11 @@ fn read_materials(
                     }
                 })
             });
+            if m.emissive_texture().is_some() {
+                warnings.push(format!(
+                    "{loc}: emissiveTexture is not supported; emissiveFactor alone is used"
+                ));
+            }
             let strength = m.emissive_strength().unwrap_or(1.0);
             Material {
                 name: m.name().map(str::to_owned),

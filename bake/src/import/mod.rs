@@ -15,7 +15,7 @@ pub use texture::{srgb_to_linear, Texture, WrapMode};
 
 use glam::Mat4;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, LazyLock};
 
 /// What to import and how to classify it.
 #[derive(Clone, Debug, Default)]
@@ -311,12 +311,12 @@ pub struct ImportedScene {
 
 impl ImportedScene {
     /// The material of an object (the glTF default material when it has none).
-    pub fn material_of(&self, object: &SceneObject) -> Material {
+    pub fn material_of(&self, object: &SceneObject) -> &Material {
+        static DEFAULT: LazyLock<Material> = LazyLock::new(Material::default);
         object
             .material
             .and_then(|m| self.materials.get(m))
-            .cloned()
-            .unwrap_or_default()
+            .unwrap_or(&DEFAULT)
     }
 
     pub fn triangle_count(&self) -> usize {
