@@ -10,6 +10,22 @@
 //! and [`model`] types, and checks it.
 #![forbid(unsafe_code)]
 
+pub mod error;
+pub mod example;
+pub mod gltf;
+pub mod layout;
 pub mod model;
+pub mod read;
+pub mod tree;
+pub mod validate;
+pub mod write;
 
+pub use error::{ReadError, WriteError};
+pub use layout::{
+    read_layout, Layout, SectionEntry, SectionType, MAJOR_VERSION, MAX_DEPTH, MINOR_VERSION,
+};
 pub use model::*;
+pub use read::{read, read_with, ReadOptions};
+pub use tree::{triangle_trees, BitWriter, Tree, TreeError, TreeShape};
+pub use validate::{validate, validate_bytes, Problem};
+pub use write::{write, write_atomically, write_file};

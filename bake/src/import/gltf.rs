@@ -1,0 +1,702 @@
+//! glTF 2.0 reader: the default scene's node hierarchy with global transforms, every triangle
+//! primitive, materials (baseColorFactor and baseColorTexture, emissiveFactor with
+//! KHR_materials_emissive_strength), KHR_lights_punctual lights and the first camera.
+//!
+//! Buffers are loaded one by one so that a missing or short buffer only drops the primitives
+//! that read from it; every accessor is bounds-checked before the `gltf` crate's reader touches
+//! it, because that reader slices without checking.
+
+use super::{
+    ImportError, ImportOptions, ImportedScene, LightKind, Material, Projection, PunctualLight,
+    SceneCamera, SceneObject, SourceFormat, Texture, WrapMode,
+};
+use ::gltf::khr_lights_punctual::Kind;
+use ::gltf::mesh::Mode;
+use glam::{Mat4, Vec3};
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::Arc;
+
+/// Extensions whose content this reader uses (the rest are reported as ignored).
+const SUPPORTED_EXTENSIONS: &[&str] = &["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+
+pub(super) fn import(path: &Path, options: &ImportOptions) -> Result<ImportedScene, ImportError> {
+    let bytes = std::fs::read(path).map_err(|source| ImportError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    precheck(&bytes).map_err(|message| ImportError::Invalid {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    // The checks here and in `check_accessor` cover every panic of the `gltf` crate we know of;
+    // this catches the ones we do not, so that a bad file is an error, never a crash.
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        import_checked(path, &bytes, options)
+    }))
+    .unwrap_or_else(|panic| {
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        Err(ImportError::Invalid {
+            path: path.to_path_buf(),
+            message: format!("the glTF reader failed on this file ({what})"),
+        })
+    })
+}
+
+/// Checks the references that `gltf-json`'s own validation indexes without checking.
+fn precheck(bytes: &[u8]) -> Result<(), String> {
+    // A file that hce-format cannot even parse is left to the `gltf` crate's better message.
+    let Ok(asset) = hce_format::gltf::Asset::parse(bytes) else {
+        return Ok(());
+    };
+    let json = &asset.json;
+    let accessors = json
+        .get("accessors")
+        .and_then(|a| a.as_array())
+        .map_or(0, Vec::len);
+    let meshes = json.get("meshes").and_then(|m| m.as_array());
+    for (m, mesh) in meshes.into_iter().flatten().enumerate() {
+        let prims = mesh.get("primitives").and_then(|p| p.as_array());
+        for (p, prim) in prims.into_iter().flatten().enumerate() {
+            let attributes = prim.get("attributes").and_then(|a| a.as_object());
+            for (name, index) in attributes.into_iter().flatten() {
+                if index.as_u64().is_none_or(|i| i >= accessors as u64) {
+                    return Err(format!(
+                        "meshes[{m}].primitives[{p}].attributes.{name}: {index} is not an \
+                         accessor index (the file has {accessors} accessors)"
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+fn import_checked(
+    path: &Path,
+    bytes: &[u8],
+    options: &ImportOptions,
+) -> Result<ImportedScene, ImportError> {
+    let format = if bytes.starts_with(b"glTF") {
+        SourceFormat::Glb
+    } else {
+        SourceFormat::Gltf
+    };
+    let ::gltf::Gltf { document, blob } =
+        ::gltf::Gltf::from_slice(bytes).map_err(|source| ImportError::Gltf {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    let base = path.parent().unwrap_or_else(|| Path::new("."));
+    let mut warnings = Vec::new();
+
+    for ext in document.extensions_used() {
+        if ext == hce_format::gltf::EXTENSION_NAME {
+            warnings.push(format!(
+                "{ext}: the input already carries baked lighting; it is ignored and replaced"
+            ));
+        } else if !SUPPORTED_EXTENSIONS.contains(&ext) {
+            warnings.push(format!("extension {ext} is not supported and is ignored"));
+        }
+    }
+
+    let buffers = load_buffers(&document, base, blob, &mut warnings);
+    let materials = read_materials(&document, base, &buffers, &mut warnings);
+
+    let mut scene = ImportedScene {
+        path: path.to_path_buf(),
+        format,
+        objects: Vec::new(),
+        materials,
+        lights: Vec::new(),
+        camera: None,
+        warnings: Vec::new(),
+        summary: String::new(),
+    };
+
+    // Roots of the default scene (or the first), or of every parentless node when there is none.
+    let roots: Vec<::gltf::Node> = match document.default_scene().or(document.scenes().next()) {
+        Some(s) => s.nodes().collect(),
+        None => {
+            let mut is_child = vec![false; document.nodes().len()];
+            for n in document.nodes() {
+                for c in n.children() {
+                    is_child[c.index()] = true;
+                }
+            }
+            document.nodes().filter(|n| !is_child[n.index()]).collect()
+        }
+    };
+    // Depth-first in child order, with an explicit stack and a visited set: a malformed file
+    // with a cycle or a shared child is reported, not followed forever.
+    let mut visited = vec![false; document.nodes().len()];
+    let mut stack: Vec<(::gltf::Node, Mat4)> = roots
+        .into_iter()
+        .rev()
+        .map(|n| (n, Mat4::IDENTITY))
+        .collect();
+    while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut visited[node.index()], true) {
+            warnings.push(format!(
+                "nodes[{}] is reached twice in the hierarchy; the second instance is ignored",
+                node.index()
+            ));
+            continue;
+        }
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let world = parent * local;
+        if let Some(mesh) = node.mesh() {
+            read_mesh_instance(
+                &node,
+                &mesh,
+                world,
+                &buffers,
+                options,
+                &mut scene,
+                &mut warnings,
+            );
+        }
+        if let Some(light) = node.light() {
+            scene.lights.push(light_of(&node, &light, world));
+        }
+        if let (Some(cam), None) = (node.camera(), &scene.camera) {
+            scene.camera = Some(SceneCamera {
+                node: node.index(),
+                name: node.name().or(cam.name()).map(str::to_owned),
+                transform: world,
+                projection: match cam.projection() {
+                    ::gltf::camera::Projection::Perspective(p) => Projection::Perspective {
+                        yfov: p.yfov(),
+                        aspect_ratio: p.aspect_ratio(),
+                        znear: p.znear(),
+                        zfar: p.zfar(),
+                    },
+                    ::gltf::camera::Projection::Orthographic(o) => Projection::Orthographic {
+                        xmag: o.xmag(),
+                        ymag: o.ymag(),
+                        znear: o.znear(),
+                        zfar: o.zfar(),
+                    },
+                },
+            });
+        }
+        let children: Vec<_> = node.children().collect();
+        for c in children.into_iter().rev() {
+            stack.push((c, world));
+        }
+    }
+    scene.warnings = warnings;
+    Ok(scene)
+}
+
+fn percent_decode(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        let hex = |c: u8| (c as char).to_digit(16);
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// Reads a URI relative to `base` (a base64 `data:` URI is decoded in place).
+pub(crate) fn read_uri(base: &Path, uri: &str) -> Result<Vec<u8>, String> {
+    if let Some(rest) = uri.strip_prefix("data:") {
+        let (_, payload) = rest
+            .split_once(";base64,")
+            .ok_or("the data URI is not base64")?;
+        return hce_format::gltf::decode_base64(payload).ok_or_else(|| "invalid base64".into());
+    }
+    if uri.contains("://") {
+        return Err("only relative file URIs and data URIs are supported".into());
+    }
+    let p = base.join(percent_decode(uri));
+    std::fs::read(&p).map_err(|e| format!("{}: {e}", p.display()))
+}
+
+/// Every buffer's bytes, `None` where it could not be loaded (with a warning).
+fn load_buffers(
+    document: &::gltf::Document,
+    base: &Path,
+    mut blob: Option<Vec<u8>>,
+    warnings: &mut Vec<String>,
+) -> Vec<Option<Vec<u8>>> {
+    document
+        .buffers()
+        .map(|b| {
+            let data = match b.source() {
+                ::gltf::buffer::Source::Bin => blob
+                    .take()
+                    .ok_or_else(|| "the GLB has no BIN chunk for it".to_string()),
+                ::gltf::buffer::Source::Uri(uri) => {
+                    read_uri(base, uri).map_err(|e| format!("cannot load {uri:?}: {e}"))
+                }
+            };
+            match data {
+                Ok(d) if d.len() >= b.length() => Some(d),
+                Ok(d) => {
+                    warnings.push(format!(
+                        "buffers[{}] has {} bytes but byteLength is {}; primitives reading \
+                         from it are skipped",
+                        b.index(),
+                        d.len(),
+                        b.length()
+                    ));
+                    None
+                }
+                Err(e) => {
+                    warnings.push(format!(
+                        "buffers[{}] is missing ({e}); primitives reading from it are skipped",
+                        b.index()
+                    ));
+                    None
+                }
+            }
+        })
+        .collect()
+}
+
+/// The accessor layouts the `gltf` reader handles for each use; it reinterprets bytes by the
+/// expected type (or reaches `unreachable!`), so anything else must be refused beforehand.
+#[derive(Clone, Copy)]
+enum Use {
+    Position,
+    Normal,
+    TexCoord,
+    Index,
+}
+
+impl Use {
+    fn name(self) -> &'static str {
+        match self {
+            Use::Position => "POSITION",
+            Use::Normal => "NORMAL",
+            Use::TexCoord => "TEXCOORD_0",
+            Use::Index => "indices",
+        }
+    }
+
+    fn accepts(self, a: &::gltf::Accessor) -> bool {
+        use ::gltf::accessor::{DataType as D, Dimensions as Dim};
+        match self {
+            Use::Position | Use::Normal => a.data_type() == D::F32 && a.dimensions() == Dim::Vec3,
+            Use::TexCoord => {
+                matches!(a.data_type(), D::F32 | D::U8 | D::U16) && a.dimensions() == Dim::Vec2
+            }
+            Use::Index => {
+                matches!(a.data_type(), D::U8 | D::U16 | D::U32) && a.dimensions() == Dim::Scalar
+            }
+        }
+    }
+}
+
+/// Checks that an accessor has the layout its use needs and lies inside loaded data, so that
+/// the `gltf` reader cannot panic.
+fn check_accessor(
+    a: &::gltf::Accessor,
+    use_: Use,
+    buffers: &[Option<Vec<u8>>],
+) -> Result<(), String> {
+    let loc = format!("accessors[{}]", a.index());
+    if !use_.accepts(a) {
+        return Err(format!(
+            "{loc} is {:?} {:?}, which glTF does not allow for {}",
+            a.data_type(),
+            a.dimensions(),
+            use_.name()
+        ));
+    }
+    if a.sparse().is_some() {
+        return Err(format!("{loc} is sparse, which is not supported"));
+    }
+    let view = a.view().ok_or_else(|| format!("{loc} has no bufferView"))?;
+    let data = buffers
+        .get(view.buffer().index())
+        .and_then(Option::as_ref)
+        .ok_or_else(|| {
+            format!(
+                "{loc} reads buffers[{}], which is missing",
+                view.buffer().index()
+            )
+        })?;
+    let view_end = view.offset().checked_add(view.length());
+    if view_end.is_none_or(|e| e > data.len()) {
+        return Err(format!(
+            "bufferViews[{}] runs past the end of its buffer",
+            view.index()
+        ));
+    }
+    let size = a.size();
+    let stride = view.stride().unwrap_or(size);
+    if stride < size {
+        return Err(format!(
+            "bufferViews[{}].byteStride {stride} is smaller than the {size}-byte elements of {loc}",
+            view.index()
+        ));
+    }
+    // The reader computes `count - 1` unchecked.
+    if a.count() == 0 {
+        return Err(format!("{loc} has count 0"));
+    }
+    let needed = (a.count() - 1)
+        .checked_mul(stride)
+        .and_then(|x| x.checked_add(a.offset()))
+        .and_then(|x| x.checked_add(size));
+    if needed.is_none_or(|n| n > view.length()) {
+        return Err(format!(
+            "{loc}: {} elements do not fit in bufferViews[{}]",
+            a.count(),
+            view.index()
+        ));
+    }
+    Ok(())
+}
+
+fn multires_extra(node: &::gltf::Node) -> bool {
+    node.extras()
+        .as_ref()
+        .and_then(|raw| serde_json::from_str::<serde_json::Value>(raw.get()).ok())
+        .and_then(|v| v.get("hce")?.get("multires")?.as_bool())
+        .unwrap_or(false)
+}
+
+fn read_mesh_instance(
+    node: &::gltf::Node,
+    mesh: &::gltf::Mesh,
+    world: Mat4,
+    buffers: &[Option<Vec<u8>>],
+    options: &ImportOptions,
+    scene: &mut ImportedScene,
+    warnings: &mut Vec<String>,
+) {
+    let multires = multires_extra(node) || options.selects(&[node.name(), mesh.name()]);
+    let prim_count = mesh.primitives().len();
+    for prim in mesh.primitives() {
+        let loc = format!(
+            "nodes[{}] {:?}: meshes[{}].primitives[{}]",
+            node.index(),
+            node.name().unwrap_or(""),
+            mesh.index(),
+            prim.index()
+        );
+        let mode = prim.mode();
+        if mode != Mode::Triangles {
+            warnings.push(format!(
+                "{loc} has mode {mode:?}; only triangle lists (mode 4) are baked, it is skipped"
+            ));
+            continue;
+        }
+        let Some(pos_acc) = prim.get(&::gltf::Semantic::Positions) else {
+            warnings.push(format!("{loc} has no POSITION; skipped"));
+            continue;
+        };
+        let mut used = vec![(pos_acc.clone(), Use::Position)];
+        used.extend(prim.indices().map(|a| (a, Use::Index)));
+        if let Err(e) = used
+            .iter()
+            .try_for_each(|(a, u)| check_accessor(a, *u, buffers))
+        {
+            warnings.push(format!("{loc}: {e}; skipped"));
+            continue;
+        }
+        let reader = prim.reader(|b| buffers.get(b.index()).and_then(|d| d.as_deref()));
+        let Some(positions) = reader.read_positions().map(|p| p.collect::<Vec<_>>()) else {
+            warnings.push(format!("{loc}: POSITION cannot be read; skipped"));
+            continue;
+        };
+        if positions.iter().flatten().any(|c| !c.is_finite()) {
+            warnings.push(format!("{loc}: POSITION holds a non-finite value; skipped"));
+            continue;
+        }
+        let n = positions.len();
+        let indices: Vec<u32> = match reader.read_indices() {
+            Some(i) => i.into_u32().collect(),
+            None => match u32::try_from(n) {
+                Ok(n) => (0..n).collect(),
+                Err(_) => {
+                    warnings.push(format!("{loc}: too many vertices; skipped"));
+                    continue;
+                }
+            },
+        };
+        if indices.len() % 3 != 0 {
+            warnings.push(format!(
+                "{loc}: {} indices are not whole triangles; skipped",
+                indices.len()
+            ));
+            continue;
+        }
+        if let Some(bad) = indices.iter().find(|&&i| i as usize >= n) {
+            warnings.push(format!(
+                "{loc}: index {bad} is out of range ({n} vertices); skipped"
+            ));
+            continue;
+        }
+        if indices.is_empty() {
+            warnings.push(format!("{loc} has no triangles; skipped"));
+            continue;
+        }
+        let normals = prim
+            .get(&::gltf::Semantic::Normals)
+            .filter(|a| match check_accessor(a, Use::Normal, buffers) {
+                Ok(()) if a.count() == n => true,
+                Ok(()) => {
+                    warnings.push(format!(
+                        "{loc}: NORMAL count differs from POSITION; ignored"
+                    ));
+                    false
+                }
+                Err(e) => {
+                    warnings.push(format!("{loc}: NORMAL ignored: {e}"));
+                    false
+                }
+            })
+            .and_then(|_| reader.read_normals())
+            .map(|r| r.collect::<Vec<_>>());
+        let uv0 = prim
+            .get(&::gltf::Semantic::TexCoords(0))
+            .filter(|a| match check_accessor(a, Use::TexCoord, buffers) {
+                Ok(()) if a.count() == n => true,
+                Ok(()) => {
+                    warnings.push(format!(
+                        "{loc}: TEXCOORD_0 count differs from POSITION; ignored"
+                    ));
+                    false
+                }
+                Err(e) => {
+                    warnings.push(format!("{loc}: TEXCOORD_0 ignored: {e}"));
+                    false
+                }
+            })
+            .and_then(|_| reader.read_tex_coords(0))
+            .map(|r| r.into_f32().collect::<Vec<_>>());
+        let world_positions: Vec<[f32; 3]> = positions
+            .iter()
+            .map(|&p| world.transform_point3(Vec3::from(p)).to_array())
+            .collect();
+        if world_positions.iter().flatten().any(|c| !c.is_finite()) {
+            warnings.push(format!(
+                "{loc}: the node transform makes a position non-finite; skipped"
+            ));
+            continue;
+        }
+        let base_name = node
+            .name()
+            .map(str::to_owned)
+            .or_else(|| mesh.name().map(str::to_owned))
+            .unwrap_or_else(|| format!("node{}", node.index()));
+        let name = if prim_count > 1 {
+            format!("{base_name}#{}", prim.index())
+        } else {
+            base_name
+        };
+        scene.objects.push(SceneObject {
+            name,
+            node: Some(node.index()),
+            node_name: node.name().map(str::to_owned),
+            mesh: mesh.index(),
+            mesh_name: mesh.name().map(str::to_owned),
+            primitive: prim.index(),
+            transform: world,
+            positions,
+            normals,
+            uv0,
+            indices,
+            world_positions,
+            material: prim.material().index(),
+            multires,
+        });
+    }
+}
+
+fn light_of(
+    node: &::gltf::Node,
+    light: &::gltf::khr_lights_punctual::Light,
+    world: Mat4,
+) -> PunctualLight {
+    let kind = match light.kind() {
+        Kind::Point => LightKind::Point,
+        Kind::Directional => LightKind::Directional,
+        Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => LightKind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        },
+    };
+    PunctualLight {
+        name: light.name().or(node.name()).map(str::to_owned),
+        node: node.index(),
+        kind,
+        position: world.transform_point3(Vec3::ZERO).to_array(),
+        direction: world
+            .transform_vector3(Vec3::NEG_Z)
+            .normalize_or_zero()
+            .to_array(),
+        color: light.color(),
+        intensity: light.intensity(),
+        range: light.range(),
+    }
+}
+
+fn wrap_mode(m: ::gltf::texture::WrappingMode) -> WrapMode {
+    match m {
+        ::gltf::texture::WrappingMode::ClampToEdge => WrapMode::ClampToEdge,
+        ::gltf::texture::WrappingMode::MirroredRepeat => WrapMode::MirroredRepeat,
+        ::gltf::texture::WrappingMode::Repeat => WrapMode::Repeat,
+    }
+}
+
+/// Decodes an image into linear RGB, or says why it cannot be.
+fn decode_image(
+    image: &::gltf::Image,
+    base: &Path,
+    buffers: &[Option<Vec<u8>>],
+) -> Result<Texture, String> {
+    use ::gltf::image::Format;
+    if let ::gltf::image::Source::View { view, .. } = image.source() {
+        // `image::Data::from_source` slices the buffer without checking.
+        let ok = buffers
+            .get(view.buffer().index())
+            .and_then(Option::as_ref)
+            .is_some_and(|d| {
+                view.offset()
+                    .checked_add(view.length())
+                    .is_some_and(|e| e <= d.len())
+            });
+        if !ok {
+            return Err(format!(
+                "bufferViews[{}] is missing or out of range",
+                view.index()
+            ));
+        }
+    }
+    let data: Vec<::gltf::buffer::Data> = buffers
+        .iter()
+        .map(|b| ::gltf::buffer::Data(b.clone().unwrap_or_default()))
+        .collect();
+    let img = ::gltf::image::Data::from_source(image.source(), Some(base), &data)
+        .map_err(|e| e.to_string())?;
+    let (channels, wide) = match img.format {
+        Format::R8 => (1, false),
+        Format::R8G8 => (2, false),
+        Format::R8G8B8 => (3, false),
+        Format::R8G8B8A8 => (4, false),
+        Format::R16 => (1, true),
+        Format::R16G16 => (2, true),
+        Format::R16G16B16 => (3, true),
+        Format::R16G16B16A16 => (4, true),
+        f => return Err(format!("pixel format {f:?} is not supported")),
+    };
+    // 16-bit channels keep their high byte: 8 bits are plenty for an average reflectance.
+    let pixels: Vec<u8> = if wide {
+        img.pixels.chunks_exact(2).map(|c| c[1]).collect()
+    } else {
+        img.pixels
+    };
+    // Two-channel images are luminance + alpha: the first channel is the grey level.
+    let (pixels, channels) = if channels == 2 {
+        (pixels.chunks_exact(2).map(|c| c[0]).collect(), 1)
+    } else {
+        (pixels, channels)
+    };
+    Texture::from_srgb8(img.width, img.height, channels, &pixels)
+        .ok_or_else(|| "the decoded image is empty or truncated".into())
+}
+
+fn read_materials(
+    document: &::gltf::Document,
+    base: &Path,
+    buffers: &[Option<Vec<u8>>],
+    warnings: &mut Vec<String>,
+) -> Vec<Material> {
+    let mut decoded: BTreeMap<usize, Option<Arc<Texture>>> = BTreeMap::new();
+    document
+        .materials()
+        .map(|m| {
+            let loc = format!(
+                "materials[{}] {:?}",
+                m.index().unwrap_or(0),
+                m.name().unwrap_or("")
+            );
+            let pbr = m.pbr_metallic_roughness();
+            let f = pbr.base_color_factor();
+            let texture = pbr.base_color_texture().and_then(|info| {
+                if info.tex_coord() != 0 {
+                    warnings.push(format!(
+                        "{loc}: baseColorTexture uses TEXCOORD_{}; only TEXCOORD_0 is read, \
+                         the texture is ignored",
+                        info.tex_coord()
+                    ));
+                    return None;
+                }
+                let tex = info.texture();
+                let image = tex.source();
+                let entry = decoded.entry(image.index()).or_insert_with(|| {
+                    match decode_image(&image, base, buffers) {
+                        Ok(t) => Some(Arc::new(t)),
+                        Err(e) => {
+                            warnings.push(format!(
+                                "images[{}] cannot be decoded ({e}); materials using it take \
+                                 baseColorFactor alone",
+                                image.index()
+                            ));
+                            None
+                        }
+                    }
+                });
+                entry.as_ref().map(|t| {
+                    let sampler = tex.sampler();
+                    let (s, t_mode) = (wrap_mode(sampler.wrap_s()), wrap_mode(sampler.wrap_t()));
+                    if t.wrap_s == s && t.wrap_t == t_mode {
+                        Arc::clone(t)
+                    } else {
+                        let mut t2 = Texture::clone(t);
+                        t2.wrap_s = s;
+                        t2.wrap_t = t_mode;
+                        Arc::new(t2)
+                    }
+                })
+            });
+            if m.emissive_texture().is_some() {
+                warnings.push(format!(
+                    "{loc}: emissiveTexture is not supported; emissiveFactor alone is used"
+                ));
+            }
+            let strength = m.emissive_strength().unwrap_or(1.0);
+            Material {
+                name: m.name().map(str::to_owned),
+                base_color: [f[0], f[1], f[2]],
+                base_color_texture: texture,
+                emission: m.emissive_factor().map(|e| e * strength),
+                double_sided: m.double_sided(),
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn percent_decoding() {
+        assert_eq!(percent_decode("a%20b.bin"), "a b.bin");
+        assert_eq!(percent_decode("100%"), "100%");
+        assert_eq!(percent_decode("%4"), "%4");
+    }
+}

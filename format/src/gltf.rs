@@ -1,0 +1,585 @@
+//! The `EXT_hce_baked_lighting` glTF extension (SPEC.md Section 3): finding the container in a
+//! GLB or `.gltf` asset, reading the per-primitive links, recomputing primitive geometry hashes,
+//! and embedding a container into an asset being written.
+//!
+//! Plain GLB chunk parsing and `serde_json`, without the `gltf` crate, so that hce-format stays
+//! free of geometry dependencies. Every size and index read from the asset is checked; nothing
+//! panics on any input.
+
+use crate::model::geometry_hash;
+use serde_json::{json, Map, Value};
+
+pub const EXTENSION_NAME: &str = "EXT_hce_baked_lighting";
+const GLB_MAGIC: &[u8; 4] = b"glTF";
+const CHUNK_JSON: u32 = 0x4E4F_534A;
+const CHUNK_BIN: u32 = 0x004E_4942;
+
+/// Why an asset cannot be read or extended.
+#[derive(Debug, thiserror::Error, Clone, PartialEq, Eq)]
+pub enum GltfError {
+    #[error("GLB: {0} (glTF 2.0 specification, section 4.4 GLB File Format)")]
+    Glb(String),
+    #[error("glTF JSON: {0}")]
+    Json(String),
+    #[error("{location}: {message} (SPEC.md 3.3)")]
+    Extension { location: String, message: String },
+    #[error("buffers[{index}]: {message}")]
+    Buffer { index: usize, message: String },
+}
+
+fn u32_le(b: &[u8], at: usize) -> Option<u32> {
+    Some(u32::from_le_bytes(
+        b.get(at..at.checked_add(4)?)?.try_into().ok()?,
+    ))
+}
+
+/// A parsed asset: its JSON and, for GLB, its BIN chunk.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Asset {
+    pub json: Value,
+    pub bin: Option<Vec<u8>>,
+}
+
+impl Asset {
+    /// Parses a GLB file.
+    pub fn from_glb(bytes: &[u8]) -> Result<Self, GltfError> {
+        let bad = |m: String| GltfError::Glb(m);
+        if bytes.len() < 12 || &bytes[..4] != GLB_MAGIC {
+            return Err(bad(
+                "missing the 12-byte header starting with \"glTF\"".into()
+            ));
+        }
+        let version = u32_le(bytes, 4).unwrap_or(0);
+        if version != 2 {
+            return Err(bad(format!(
+                "container version {version}, only 2 is supported"
+            )));
+        }
+        let length = u32_le(bytes, 8).unwrap_or(0) as usize;
+        if length != bytes.len() {
+            return Err(bad(format!(
+                "header length {length} but the file has {} bytes",
+                bytes.len()
+            )));
+        }
+        let mut at = 12usize;
+        let mut json = None;
+        let mut bin = None;
+        while at < bytes.len() {
+            let (Some(len), Some(kind)) = (u32_le(bytes, at), u32_le(bytes, at + 4)) else {
+                return Err(bad(format!("chunk header at byte {at} is truncated")));
+            };
+            let start = at + 8;
+            let end = start
+                .checked_add(len as usize)
+                .filter(|&e| e <= bytes.len())
+                .ok_or_else(|| {
+                    bad(format!(
+                        "chunk at byte {at} of {len} bytes runs past the end of the file"
+                    ))
+                })?;
+            let data = &bytes[start..end];
+            match kind {
+                CHUNK_JSON if json.is_none() && at == 12 => json = Some(data),
+                CHUNK_BIN if bin.is_none() && json.is_some() => bin = Some(data.to_vec()),
+                CHUNK_JSON | CHUNK_BIN => {
+                    return Err(bad(format!("unexpected chunk {kind:#x} at byte {at}")))
+                }
+                _ => {} // Unknown chunks are skipped, as the glTF specification requires.
+            }
+            at = end.next_multiple_of(4);
+        }
+        let json = json.ok_or_else(|| bad("no JSON chunk".into()))?;
+        Ok(Self {
+            json: parse_json(json)?,
+            bin,
+        })
+    }
+
+    /// Parses a `.gltf` JSON file (its buffers are resolved later with [`Asset::buffers`]).
+    pub fn from_gltf(bytes: &[u8]) -> Result<Self, GltfError> {
+        Ok(Self {
+            json: parse_json(bytes)?,
+            bin: None,
+        })
+    }
+
+    /// Parses either form, looking at the first bytes.
+    pub fn parse(bytes: &[u8]) -> Result<Self, GltfError> {
+        if bytes.starts_with(GLB_MAGIC) {
+            Self::from_glb(bytes)
+        } else {
+            Self::from_gltf(bytes)
+        }
+    }
+
+    /// Loads every buffer: the GLB BIN chunk for a buffer without `uri`, base64 `data:` URIs
+    /// decoded here, other URIs through `resolve` (relative to the asset, chosen by the caller).
+    pub fn buffers(
+        &self,
+        mut resolve: impl FnMut(&str) -> Result<Vec<u8>, String>,
+    ) -> Result<Vec<Vec<u8>>, GltfError> {
+        let Some(list) = self.json.get("buffers") else {
+            return Ok(Vec::new());
+        };
+        let list = list
+            .as_array()
+            .ok_or_else(|| GltfError::Json("\"buffers\" is not an array".into()))?;
+        let mut out = Vec::new();
+        for (index, b) in list.iter().enumerate() {
+            let bad = |message: String| GltfError::Buffer { index, message };
+            let byte_length = b
+                .get("byteLength")
+                .and_then(Value::as_u64)
+                .ok_or_else(|| bad("missing byteLength".into()))?;
+            let data = match b.get("uri").and_then(Value::as_str) {
+                None if index == 0 => self
+                    .bin
+                    .clone()
+                    .ok_or_else(|| bad("has no uri and the asset has no BIN chunk".into()))?,
+                None => {
+                    return Err(bad(
+                        "has no uri; only buffer 0 may use the GLB BIN chunk".into()
+                    ))
+                }
+                Some(uri) if uri.starts_with("data:") => {
+                    let (_, payload) = uri
+                        .split_once(";base64,")
+                        .ok_or_else(|| bad("data URI is not base64".into()))?;
+                    decode_base64(payload)
+                        .ok_or_else(|| bad("data URI holds invalid base64".into()))?
+                }
+                Some(uri) => resolve(uri).map_err(|e| bad(format!("cannot load {uri:?}: {e}")))?,
+            };
+            // The BIN chunk may be padded by up to 3 bytes (glTF 2.0, 4.4.3.3).
+            if (data.len() as u64) < byte_length {
+                return Err(bad(format!(
+                    "byteLength {byte_length} but only {} bytes are present",
+                    data.len()
+                )));
+            }
+            out.push(data);
+        }
+        Ok(out)
+    }
+}
+
+fn parse_json(bytes: &[u8]) -> Result<Value, GltfError> {
+    let v: Value = serde_json::from_slice(bytes).map_err(|e| GltfError::Json(e.to_string()))?;
+    if !v.is_object() {
+        return Err(GltfError::Json("the top level is not an object".into()));
+    }
+    Ok(v)
+}
+
+/// Decodes standard base64 (with optional padding); `None` on any invalid character.
+pub fn decode_base64(s: &str) -> Option<Vec<u8>> {
+    let s = s.trim_end_matches('=');
+    let mut out = Vec::with_capacity(s.len() / 4 * 3 + 3);
+    let (mut acc, mut n) = (0u32, 0);
+    for c in s.bytes() {
+        let v = match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' => 62,
+            b'/' => 63,
+            _ => return None,
+        };
+        acc = (acc << 6) | u32::from(v);
+        n += 6;
+        if n >= 8 {
+            n -= 8;
+            out.push((acc >> n) as u8);
+        }
+    }
+    Some(out)
+}
+
+/// The root extension object: where the container is.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RootLink {
+    pub buffer_view: usize,
+    pub version: Option<String>,
+}
+
+/// One primitive's extension object (SPEC.md 3.3).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PrimitiveLink {
+    pub mesh: usize,
+    pub primitive: usize,
+    pub object: u32,
+    pub geometry_hash: u64,
+    pub first_triangle: u32,
+}
+
+fn ext_error(location: impl Into<String>, message: impl Into<String>) -> GltfError {
+    GltfError::Extension {
+        location: location.into(),
+        message: message.into(),
+    }
+}
+
+/// The root extension object, or `None` when the asset does not use the extension.
+pub fn root_link(json: &Value) -> Result<Option<RootLink>, GltfError> {
+    let Some(ext) = json.get("extensions").and_then(|e| e.get(EXTENSION_NAME)) else {
+        return Ok(None);
+    };
+    let loc = format!("extensions.{EXTENSION_NAME}");
+    let buffer_view = ext
+        .get("bufferView")
+        .and_then(Value::as_u64)
+        .ok_or_else(|| ext_error(&loc, "bufferView is missing or not a non-negative integer"))?;
+    Ok(Some(RootLink {
+        buffer_view: usize::try_from(buffer_view)
+            .map_err(|_| ext_error(&loc, "bufferView is too large"))?,
+        version: ext
+            .get("version")
+            .and_then(Value::as_str)
+            .map(str::to_owned),
+    }))
+}
+
+/// Every primitive's extension object, in mesh and primitive order.
+pub fn primitive_links(json: &Value) -> Result<Vec<PrimitiveLink>, GltfError> {
+    let mut out = Vec::new();
+    let meshes = json
+        .get("meshes")
+        .and_then(Value::as_array)
+        .map(Vec::as_slice)
+        .unwrap_or(&[]);
+    for (m, mesh) in meshes.iter().enumerate() {
+        let prims = mesh
+            .get("primitives")
+            .and_then(Value::as_array)
+            .map(Vec::as_slice)
+            .unwrap_or(&[]);
+        for (p, prim) in prims.iter().enumerate() {
+            let Some(ext) = prim.get("extensions").and_then(|e| e.get(EXTENSION_NAME)) else {
+                continue;
+            };
+            let loc = format!("meshes[{m}].primitives[{p}].extensions.{EXTENSION_NAME}");
+            let object = ext
+                .get("object")
+                .and_then(Value::as_u64)
+                .and_then(|o| u32::try_from(o).ok())
+                .ok_or_else(|| ext_error(&loc, "object is missing or not an integer in 0..2^32"))?;
+            let hash = ext
+                .get("geometryHash")
+                .and_then(Value::as_str)
+                .filter(|h| {
+                    h.len() == 16 && h.bytes().all(|c| matches!(c, b'0'..=b'9' | b'a'..=b'f'))
+                })
+                .and_then(|h| u64::from_str_radix(h, 16).ok())
+                .ok_or_else(|| {
+                    ext_error(&loc, "geometryHash must be 16 lowercase hexadecimal digits")
+                })?;
+            let first_triangle = match ext.get("firstTriangle") {
+                None => 0,
+                Some(v) => v
+                    .as_u64()
+                    .and_then(|f| u32::try_from(f).ok())
+                    .ok_or_else(|| ext_error(&loc, "firstTriangle is not an integer in 0..2^32"))?,
+            };
+            out.push(PrimitiveLink {
+                mesh: m,
+                primitive: p,
+                object,
+                geometry_hash: hash,
+                first_triangle,
+            });
+        }
+    }
+    Ok(out)
+}
+
+fn index_of(v: &Value, key: &str, loc: &str) -> Result<usize, GltfError> {
+    v.get(key)
+        .and_then(Value::as_u64)
+        .and_then(|i| usize::try_from(i).ok())
+        .ok_or_else(|| GltfError::Json(format!("{loc}.{key} is missing or not an index")))
+}
+
+fn item<'a>(json: &'a Value, array: &str, i: usize) -> Result<&'a Value, GltfError> {
+    json.get(array)
+        .and_then(Value::as_array)
+        .and_then(|a| a.get(i))
+        .ok_or_else(|| GltfError::Json(format!("{array}[{i}] does not exist")))
+}
+
+/// The bytes of a buffer view.
+pub fn buffer_view_bytes<'a>(
+    json: &Value,
+    buffers: &'a [Vec<u8>],
+    view: usize,
+) -> Result<&'a [u8], GltfError> {
+    let loc = format!("bufferViews[{view}]");
+    let v = item(json, "bufferViews", view)?;
+    let buffer = index_of(v, "buffer", &loc)?;
+    let offset = v.get("byteOffset").and_then(Value::as_u64).unwrap_or(0);
+    let length = v
+        .get("byteLength")
+        .and_then(Value::as_u64)
+        .ok_or_else(|| GltfError::Json(format!("{loc}.byteLength is missing")))?;
+    let data = buffers
+        .get(buffer)
+        .ok_or_else(|| GltfError::Json(format!("{loc}.buffer {buffer} does not exist")))?;
+    let end = offset
+        .checked_add(length)
+        .filter(|&e| e <= data.len() as u64)
+        .ok_or_else(|| {
+            GltfError::Json(format!(
+                "{loc}: bytes {offset}+{length} run past buffer {buffer} ({} bytes)",
+                data.len()
+            ))
+        })?;
+    Ok(&data[offset as usize..end as usize])
+}
+
+/// The container bytes of an asset that uses the extension, or `None` if it does not.
+pub fn container_bytes<'a>(
+    json: &Value,
+    buffers: &'a [Vec<u8>],
+) -> Result<Option<&'a [u8]>, GltfError> {
+    match root_link(json)? {
+        None => Ok(None),
+        Some(r) => buffer_view_bytes(json, buffers, r.buffer_view).map(Some),
+    }
+}
+
+/// Reads an accessor as `count` elements of `components` values each, converted to `f64`.
+/// Only what triangle positions and indices need: no sparse accessors, no normalisation.
+fn accessor_values(
+    json: &Value,
+    buffers: &[Vec<u8>],
+    accessor: usize,
+) -> Result<(Vec<f64>, usize), GltfError> {
+    let loc = format!("accessors[{accessor}]");
+    let a = item(json, "accessors", accessor)?;
+    if a.get("sparse").is_some() {
+        return Err(GltfError::Json(format!(
+            "{loc}: sparse accessors are not supported for baked primitives"
+        )));
+    }
+    let count = a
+        .get("count")
+        .and_then(Value::as_u64)
+        .ok_or_else(|| GltfError::Json(format!("{loc}.count is missing")))?;
+    let components = match a.get("type").and_then(Value::as_str) {
+        Some("SCALAR") => 1usize,
+        Some("VEC3") => 3,
+        t => {
+            return Err(GltfError::Json(format!(
+                "{loc}.type {t:?} is not SCALAR or VEC3"
+            )))
+        }
+    };
+    let (size, kind) = match a.get("componentType").and_then(Value::as_u64) {
+        Some(5121) => (1usize, 0),
+        Some(5123) => (2, 1),
+        Some(5125) => (4, 2),
+        Some(5126) => (4, 3),
+        t => {
+            return Err(GltfError::Json(format!(
+                "{loc}.componentType {t:?} is not supported"
+            )))
+        }
+    };
+    let view = index_of(a, "bufferView", &loc)?;
+    let data = buffer_view_bytes(json, buffers, view)?;
+    let stride = item(json, "bufferViews", view)?
+        .get("byteStride")
+        .and_then(Value::as_u64)
+        .unwrap_or((size * components) as u64);
+    let offset = a.get("byteOffset").and_then(Value::as_u64).unwrap_or(0);
+    let element = (size * components) as u64;
+    // The last element must end inside the view; checked before allocating `count` values.
+    let needed = if count == 0 {
+        0
+    } else {
+        (count - 1)
+            .checked_mul(stride)
+            .and_then(|x| x.checked_add(offset))
+            .and_then(|x| x.checked_add(element))
+            .unwrap_or(u64::MAX)
+    };
+    if needed > data.len() as u64 || stride < element {
+        return Err(GltfError::Json(format!(
+            "{loc}: {count} elements of stride {stride} do not fit in bufferViews[{view}]"
+        )));
+    }
+    let mut out = Vec::with_capacity(count as usize * components);
+    for i in 0..count {
+        let base = (offset + i * stride) as usize;
+        for c in 0..components {
+            let at = base + c * size;
+            let b = &data[at..at + size];
+            out.push(match kind {
+                0 => f64::from(b[0]),
+                1 => f64::from(u16::from_le_bytes([b[0], b[1]])),
+                2 => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+                _ => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            });
+        }
+    }
+    Ok((out, count as usize))
+}
+
+/// The geometry hash (SPEC.md 2.5) and triangle count of a triangle primitive, recomputed from
+/// its POSITION accessor and indices.
+pub fn primitive_geometry(
+    json: &Value,
+    buffers: &[Vec<u8>],
+    mesh: usize,
+    primitive: usize,
+) -> Result<(u64, usize), GltfError> {
+    let loc = format!("meshes[{mesh}].primitives[{primitive}]");
+    let prim = item(json, "meshes", mesh)?
+        .get("primitives")
+        .and_then(Value::as_array)
+        .and_then(|p| p.get(primitive))
+        .ok_or_else(|| GltfError::Json(format!("{loc} does not exist")))?;
+    if prim.get("mode").and_then(Value::as_u64).unwrap_or(4) != 4 {
+        return Err(GltfError::Json(format!("{loc}: mode is not 4 (triangles)")));
+    }
+    let position = prim
+        .get("attributes")
+        .and_then(|a| a.get("POSITION"))
+        .and_then(Value::as_u64)
+        .ok_or_else(|| GltfError::Json(format!("{loc} has no POSITION attribute")))?
+        as usize;
+    let (positions, vertex_count) = accessor_values(json, buffers, position)?;
+    let indices: Vec<usize> = match prim.get("indices").and_then(Value::as_u64) {
+        Some(i) => accessor_values(json, buffers, i as usize)?
+            .0
+            .iter()
+            .map(|&x| x as usize)
+            .collect(),
+        None => (0..vertex_count).collect(),
+    };
+    if indices.len() % 3 != 0 {
+        return Err(GltfError::Json(format!(
+            "{loc}: {} indices are not whole triangles",
+            indices.len()
+        )));
+    }
+    if let Some(&bad) = indices.iter().find(|&&i| i >= vertex_count) {
+        return Err(GltfError::Json(format!(
+            "{loc}: index {bad} is out of range ({vertex_count} vertices)"
+        )));
+    }
+    let hash = geometry_hash(indices.iter().map(|&i| {
+        [
+            positions[3 * i] as f32,
+            positions[3 * i + 1] as f32,
+            positions[3 * i + 2] as f32,
+        ]
+    }));
+    Ok((hash, indices.len() / 3))
+}
+
+/// Formats a geometry hash as in the extension JSON.
+pub fn hash_hex(hash: u64) -> String {
+    format!("{hash:016x}")
+}
+
+fn object_mut<'a>(v: &'a mut Value, key: &str) -> Result<&'a mut Map<String, Value>, GltfError> {
+    let root = v
+        .as_object_mut()
+        .ok_or_else(|| GltfError::Json("not an object".into()))?;
+    root.entry(key.to_owned())
+        .or_insert_with(|| json!({}))
+        .as_object_mut()
+        .ok_or_else(|| GltfError::Json(format!("\"{key}\" is not an object")))
+}
+
+fn array_mut<'a>(v: &'a mut Value, key: &str) -> Result<&'a mut Vec<Value>, GltfError> {
+    let root = v
+        .as_object_mut()
+        .ok_or_else(|| GltfError::Json("not an object".into()))?;
+    root.entry(key.to_owned())
+        .or_insert_with(|| json!([]))
+        .as_array_mut()
+        .ok_or_else(|| GltfError::Json(format!("\"{key}\" is not an array")))
+}
+
+/// Appends `container` to the BIN buffer (buffer 0) at a 256-byte aligned offset, adds a buffer
+/// view for it, points the root extension object at it and lists the extension in
+/// `extensionsUsed` (never `extensionsRequired`). Returns the buffer view index. Buffer 0 is
+/// created when the asset has none; its `byteLength` is updated.
+pub fn embed_container(
+    json: &mut Value,
+    bin: &mut Vec<u8>,
+    container: &[u8],
+) -> Result<usize, GltfError> {
+    let offset = bin.len().next_multiple_of(256);
+    bin.resize(offset, 0);
+    bin.extend_from_slice(container);
+    let buffers = array_mut(json, "buffers")?;
+    if buffers.is_empty() {
+        buffers.push(json!({}));
+    }
+    let b0 = buffers[0]
+        .as_object_mut()
+        .ok_or_else(|| GltfError::Json("buffers[0] is not an object".into()))?;
+    if b0.contains_key("uri") {
+        return Err(GltfError::Json(
+            "buffers[0] has a uri; the container goes into the GLB BIN chunk".into(),
+        ));
+    }
+    b0.insert("byteLength".into(), json!(bin.len()));
+    let views = array_mut(json, "bufferViews")?;
+    views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": container.len() }));
+    let view = views.len() - 1;
+    object_mut(json, "extensions")?.insert(
+        EXTENSION_NAME.into(),
+        json!({ "bufferView": view, "version": format!("{}.{}", crate::MAJOR_VERSION, crate::MINOR_VERSION) }),
+    );
+    let used = array_mut(json, "extensionsUsed")?;
+    if !used.iter().any(|e| e == EXTENSION_NAME) {
+        used.push(json!(EXTENSION_NAME));
+    }
+    Ok(view)
+}
+
+/// Writes a primitive's extension object (SPEC.md 3.3).
+pub fn link_primitive(json: &mut Value, link: &PrimitiveLink) -> Result<(), GltfError> {
+    let loc = format!("meshes[{}].primitives[{}]", link.mesh, link.primitive);
+    let prim = json
+        .get_mut("meshes")
+        .and_then(|m| m.get_mut(link.mesh))
+        .and_then(|m| m.get_mut("primitives"))
+        .and_then(|p| p.get_mut(link.primitive))
+        .ok_or_else(|| GltfError::Json(format!("{loc} does not exist")))?;
+    let mut ext = json!({ "object": link.object, "geometryHash": hash_hex(link.geometry_hash) });
+    if link.first_triangle != 0 {
+        ext["firstTriangle"] = json!(link.first_triangle);
+    }
+    object_mut(prim, "extensions")?.insert(EXTENSION_NAME.into(), ext);
+    Ok(())
+}
+
+/// Serialises a GLB: JSON chunk padded with spaces, BIN chunk padded with zeros, both to 4 bytes
+/// (glTF 2.0, 4.4.3). The BIN chunk is omitted when `bin` is empty.
+pub fn write_glb(json: &Value, bin: &[u8]) -> Result<Vec<u8>, GltfError> {
+    let mut text = serde_json::to_vec(json).map_err(|e| GltfError::Json(e.to_string()))?;
+    text.resize(text.len().next_multiple_of(4), b' ');
+    let bin_padded = bin.len().next_multiple_of(4);
+    let total = 12 + 8 + text.len() + if bin.is_empty() { 0 } else { 8 + bin_padded };
+    let total32 = u32::try_from(total)
+        .map_err(|_| GltfError::Glb(format!("{total} bytes exceed the 4 GiB GLB limit")))?;
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(GLB_MAGIC);
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&total32.to_le_bytes());
+    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    out.extend_from_slice(&CHUNK_JSON.to_le_bytes());
+    out.extend_from_slice(&text);
+    if !bin.is_empty() {
+        out.extend_from_slice(&(bin_padded as u32).to_le_bytes());
+        out.extend_from_slice(&CHUNK_BIN.to_le_bytes());
+        out.extend_from_slice(bin);
+        out.resize(total, 0);
+    }
+    Ok(out)
+}

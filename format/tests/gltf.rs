@@ -1,0 +1,146 @@
+//! The glTF extension helpers: embed a container into a GLB, read it back, recompute hashes.
+
+use hce_format::gltf::*;
+use hce_format::{example, read, write};
+use serde_json::json;
+
+/// A GLB with one triangle primitive (positions and u16 indices) and the example container.
+fn triangle_glb() -> Vec<u8> {
+    let mut bin = Vec::new();
+    for p in [[0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        for c in p {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for i in [0u16, 1, 2, 0] {
+        bin.extend_from_slice(&i.to_le_bytes()); // the last one is padding
+    }
+    let mut json = json!({
+        "asset": { "version": "2.0", "generator": "hce tests" },
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 1 }] }],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+              "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0] },
+            { "bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR" }
+        ],
+        "bufferViews": [
+            { "buffer": 0, "byteOffset": 0, "byteLength": 36, "target": 34962 },
+            { "buffer": 0, "byteOffset": 36, "byteLength": 6, "target": 34963 }
+        ],
+        "buffers": [{ "byteLength": 44 }]
+    });
+    let container = write(&example::single_triangle()).unwrap();
+    let view = embed_container(&mut json, &mut bin, &container).unwrap();
+    assert_eq!(view, 2);
+    link_primitive(
+        &mut json,
+        &PrimitiveLink {
+            mesh: 0,
+            primitive: 0,
+            object: 0,
+            geometry_hash: example::single_triangle().objects[0].geometry_hash,
+            first_triangle: 0,
+        },
+    )
+    .unwrap();
+    write_glb(&json, &bin).unwrap()
+}
+
+#[test]
+fn embedded_container_reads_back_with_matching_hash() {
+    let glb = triangle_glb();
+    assert_eq!(glb.len() % 4, 0);
+    let asset = Asset::parse(&glb).unwrap();
+    assert_eq!(asset.json["extensionsUsed"], json!([EXTENSION_NAME]));
+    assert!(asset.json.get("extensionsRequired").is_none());
+    assert_eq!(asset.json["bufferViews"][2]["byteOffset"], json!(256));
+    let buffers = asset.buffers(|_| Err("no external files".into())).unwrap();
+    let bytes = container_bytes(&asset.json, &buffers).unwrap().unwrap();
+    let c = read(bytes).unwrap();
+    assert_eq!(c, example::single_triangle());
+    let links = primitive_links(&asset.json).unwrap();
+    assert_eq!(links.len(), 1);
+    let (hash, triangles) = primitive_geometry(&asset.json, &buffers, 0, 0).unwrap();
+    assert_eq!(triangles, 1);
+    assert_eq!(hash, links[0].geometry_hash);
+    assert_eq!(hash, c.objects[0].geometry_hash);
+}
+
+#[test]
+fn gltf_with_data_uri_is_read() {
+    let glb = triangle_glb();
+    let asset = Asset::parse(&glb).unwrap();
+    let bin = asset.bin.clone().unwrap();
+    let mut json = asset.json.clone();
+    let b64 = encode_base64(&bin);
+    json["buffers"][0]["uri"] = json!(format!("data:application/octet-stream;base64,{b64}"));
+    let text = serde_json::to_vec(&json).unwrap();
+    let asset = Asset::parse(&text).unwrap();
+    let buffers = asset.buffers(|_| Err("no external files".into())).unwrap();
+    let bytes = container_bytes(&asset.json, &buffers).unwrap().unwrap();
+    assert_eq!(read(bytes).unwrap(), example::single_triangle());
+}
+
+fn encode_base64(b: &[u8]) -> String {
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut s = String::new();
+    for chunk in b.chunks(3) {
+        let n = chunk
+            .iter()
+            .enumerate()
+            .fold(0u32, |acc, (i, &x)| acc | u32::from(x) << (16 - 8 * i));
+        for i in 0..=chunk.len() {
+            s.push(A[(n >> (18 - 6 * i) & 63) as usize] as char);
+        }
+    }
+    while s.len() % 4 != 0 {
+        s.push('=');
+    }
+    s
+}
+
+#[test]
+fn truncated_and_corrupted_glb_are_errors() {
+    let glb = triangle_glb();
+    for n in 0..glb.len() {
+        assert!(
+            Asset::from_glb(&glb[..n]).is_err(),
+            "prefix of {n} bytes accepted"
+        );
+    }
+    let asset = Asset::parse(&glb).unwrap();
+    let mut json = asset.json.clone();
+    json["meshes"][0]["primitives"][0]["extensions"][EXTENSION_NAME]["geometryHash"] = json!("XYZ");
+    let e = primitive_links(&json).unwrap_err().to_string();
+    assert!(e.contains("meshes[0].primitives[0].extensions.EXT_hce_baked_lighting: geometryHash must be 16 lowercase hexadecimal digits"), "{e}");
+    let mut json = asset.json.clone();
+    json["bufferViews"][2]["byteLength"] = json!(1u64 << 40);
+    let buffers = asset.buffers(|_| Err("none".into())).unwrap();
+    assert!(container_bytes(&json, &buffers)
+        .unwrap_err()
+        .to_string()
+        .contains("run past buffer 0"));
+}
+
+/// `HCE_WRITE_SAMPLES=DIR cargo test -p hce-format --test gltf` writes the example files, to
+/// seed the fuzzer and to run the Khronos glTF-Validator on (see fuzz/README.md).
+#[test]
+fn sample_files_can_be_written_for_external_tools() {
+    let glb = triangle_glb();
+    assert_eq!(&glb[..4], b"glTF");
+    if let Some(dir) = std::env::var_os("HCE_WRITE_SAMPLES") {
+        let dir = std::path::PathBuf::from(dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        hce_format::write_atomically(&dir.join("triangle.glb"), &glb).unwrap();
+        hce_format::write_file(
+            &dir.join("single_triangle.hce"),
+            &example::single_triangle(),
+        )
+        .unwrap();
+        hce_format::write_file(&dir.join("two_triangles.hce"), &example::two_triangles()).unwrap();
+        println!("wrote samples to {}", dir.display());
+    }
+}
