@@ -1,0 +1,263 @@
+//! Known-answer tests of the radiosity solver: furnace, energy balance, enrichment and
+//! thread-count determinism.
+
+use glam::Vec3;
+use hce_bake::element::{ElemKey, Rng};
+use hce_bake::encode::encode_object;
+use hce_bake::visibility::Occluders;
+use hce_bake::{bake, BakeParams, BakeResult, LightKind, PunctualLight, Scene, SceneObject};
+
+/// Two triangles of the parallelogram `o, o+u, o+u+v, o+v`, facing `u × v`.
+fn quad(o: Vec3, u: Vec3, v: Vec3) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+    let p = [o, o + u, o + u + v, o + v].map(|x| x.to_array()).to_vec();
+    (p, vec![[0, 1, 2], [0, 2, 3]])
+}
+
+fn object(name: &str, parts: &[(Vec3, Vec3, Vec3)], rho: [f32; 3]) -> SceneObject {
+    let (mut pos, mut tris) = (Vec::new(), Vec::new());
+    for &(o, u, v) in parts {
+        let (p, t) = quad(o, u, v);
+        let base = pos.len() as u32;
+        pos.extend(p);
+        tris.extend(t.iter().map(|t| t.map(|i| i + base)));
+    }
+    SceneObject::new(name, pos, tris, rho)
+}
+
+/// The inside of the unit cube, every face facing inwards.
+fn closed_box() -> Vec<(Vec3, Vec3, Vec3)> {
+    vec![
+        (Vec3::ZERO, Vec3::X, Vec3::Y),
+        (Vec3::Z, Vec3::Y, Vec3::X),
+        (Vec3::ZERO, Vec3::Y, Vec3::Z),
+        (Vec3::X, Vec3::Z, Vec3::Y),
+        (Vec3::ZERO, Vec3::Z, Vec3::X),
+        (Vec3::Y, Vec3::X, Vec3::Z),
+    ]
+}
+
+#[test]
+fn furnace_box_reaches_emission_over_one_minus_reflectance() {
+    let rho = 0.5;
+    let scene = Scene {
+        objects: vec![object("box", &closed_box(), [rho; 3]).with_emission([1.0, 0.5, 0.25])],
+        lights: Vec::new(),
+    };
+    let res = bake(&scene, &BakeParams::default()).unwrap();
+    let mut worst = 0.0f32;
+    let mut at = (0, 0, 0);
+    for (ti, t) in res.objects[0].triangles.iter().enumerate() {
+        for (i, c) in t.colours.iter().enumerate() {
+            for (k, e) in [1.0f32, 0.5, 0.25].iter().enumerate() {
+                let expect = e / (1.0 - rho);
+                let err = (c[k] - expect).abs() / expect;
+                if err > worst {
+                    worst = err;
+                    at = (ti, t.nodes[i].0, t.nodes[i].1);
+                }
+            }
+        }
+    }
+    println!(
+        "furnace: worst relative error {worst:.5} at (triangle, level, path) {at:?}, stats {:?}",
+        res.stats
+    );
+    assert!(worst < 0.01, "worst relative error {worst}");
+    assert!(res.stats.links > 0);
+}
+
+/// Leaves of a solved triangle: (corners, radiance for normal 0).
+fn leaves(res: &BakeResult, scene: &Scene) -> Vec<([Vec3; 3], Vec3, usize, usize)> {
+    let mut out = Vec::new();
+    for (oi, o) in res.objects.iter().enumerate() {
+        for (t, sol) in o.triangles.iter().enumerate() {
+            let nn = sol.normals.len();
+            for (i, &(level, path)) in sol.nodes.iter().enumerate() {
+                if !sol.subdivided[i] {
+                    let key = ElemKey {
+                        root: 0,
+                        level,
+                        path,
+                    };
+                    let c = key.corners(scene.objects[oi].corners(t));
+                    out.push((c, Vec3::from(sol.colours[i * nn]), oi, t));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Fraction of cosine-distributed directions from `tri` that leave the scene.
+fn escape_fraction(occ: &Occluders, tri: [Vec3; 3], seed: u64, rays: u32) -> f32 {
+    let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
+    let a = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+    let t = n.cross(a).normalize();
+    let b = n.cross(t);
+    let mut rng = Rng::new(seed, 7, 9);
+    let mut escaped = 0;
+    for i in 0..rays {
+        let p = hce_bake::element::jittered_point(tri, i % 16, 16, &mut rng);
+        let (u1, u2) = (rng.next_f32(), rng.next_f32());
+        let r = u1.sqrt();
+        let phi = 2.0 * std::f32::consts::PI * u2;
+        let d = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
+        escaped += u32::from(occ.ray_clear(p, d.normalize(), f32::INFINITY));
+    }
+    escaped as f32 / rays as f32
+}
+
+#[test]
+fn open_scene_conserves_energy() {
+    // A floor, a back wall and an emissive panel facing down: light escapes at the sides.
+    let floor = object(
+        "floor",
+        &[(Vec3::ZERO, Vec3::X * 2.0, Vec3::Y * 2.0)],
+        [0.6, 0.5, 0.4],
+    );
+    let wall = object(
+        "wall",
+        &[(Vec3::ZERO, Vec3::Y * 2.0, Vec3::Z * 2.0)],
+        [0.7; 3],
+    );
+    let lamp = object(
+        "lamp",
+        &[(Vec3::new(0.5, 0.5, 1.5), Vec3::Y, Vec3::X)],
+        [0.3; 3],
+    )
+    .with_emission([4.0; 3]);
+    let scene = Scene {
+        objects: vec![floor, wall, lamp],
+        lights: Vec::new(),
+    };
+    let res = bake(&scene, &BakeParams::default()).unwrap();
+    let occ = Occluders::new(
+        scene
+            .objects
+            .iter()
+            .flat_map(|o| (0..o.triangles.len()).map(|t| o.corners(t))),
+    );
+    let pi = std::f32::consts::PI as f64;
+    let (mut emitted, mut absorbed, mut escaped) = (0.0f64, 0.0f64, 0.0f64);
+    for (i, (c, l, oi, t)) in leaves(&res, &scene).into_iter().enumerate() {
+        let o = &scene.objects[oi];
+        let area = f64::from((c[1] - c[0]).cross(c[2] - c[0]).length() * 0.5);
+        let le = Vec3::from(o.emission_of(t));
+        let rho = Vec3::from(o.reflectance[t]);
+        let q = (l - le) / rho;
+        emitted += pi * area * f64::from(le.element_sum());
+        absorbed += pi * area * f64::from(((Vec3::ONE - rho) * q).element_sum());
+        let f = escape_fraction(&occ, c, i as u64, 512);
+        escaped += pi * area * f64::from(l.element_sum()) * f64::from(f);
+    }
+    let balance = (emitted - absorbed - escaped) / emitted;
+    println!(
+        "energy: emitted {emitted:.4} absorbed {absorbed:.4} escaped {escaped:.4} \
+         imbalance {balance:.5}; stats {:?}",
+        res.stats
+    );
+    assert!(balance.abs() < 0.01, "imbalance {balance}");
+}
+
+/// A floor whose triangles carry normal sets tilted towards +x and -x, lit from +x.
+fn bumpy_scene() -> Scene {
+    let mut floor = object(
+        "bumpy",
+        &[(Vec3::ZERO, Vec3::X * 4.0, Vec3::Y * 4.0)],
+        [0.8; 3],
+    );
+    floor.multires = true;
+    let tilt = 30f32.to_radians();
+    floor.normal_sets = vec![
+        vec![
+            [0.0, 0.0, 1.0],
+            [tilt.sin(), 0.0, tilt.cos()],
+            [-tilt.sin(), 0.0, tilt.cos()],
+        ];
+        2
+    ];
+    let wall = object(
+        "wall",
+        &[(Vec3::new(-1.0, 0.0, 0.0), Vec3::Y * 4.0, Vec3::Z * 2.0)],
+        [0.5; 3],
+    );
+    Scene {
+        objects: vec![floor, wall],
+        lights: vec![PunctualLight {
+            name: "sun".into(),
+            kind: LightKind::Directional,
+            position: [0.0; 3],
+            // Travelling towards -x and down: it comes from the +x side.
+            direction: [-1.0, 0.0, -1.0],
+            color: [1.0; 3],
+            intensity: 3.0,
+            range: None,
+        }],
+    }
+}
+
+#[test]
+fn normals_facing_the_light_get_brighter_colours() {
+    let scene = bumpy_scene();
+    let res = bake(&scene, &BakeParams::default()).unwrap();
+    for t in &res.objects[0].triangles {
+        assert_eq!(t.normals.len(), 3);
+        for node in t.colours.chunks(3) {
+            let (flat, toward, away) = (node[0][0], node[1][0], node[2][0]);
+            assert!(toward > flat && flat > away, "{node:?}");
+        }
+    }
+    // Direct part alone: E cos / π · ρ with E = 3 / √2 per unit... check the geometric normal
+    // value against the analytic direct term (the wall adds a little indirect light).
+    let direct = 0.8 * 3.0 * (45f32.to_radians().cos()) / std::f32::consts::PI;
+    let c0 = res.objects[0].triangles[0].colours[0][0];
+    assert!(c0 >= direct * 0.99 && c0 < direct * 1.3, "{c0} vs {direct}");
+}
+
+#[test]
+fn one_thread_and_two_threads_give_identical_bytes() {
+    let mut scene = bumpy_scene();
+    scene.objects.push(
+        object(
+            "lamp",
+            &[(Vec3::new(1.0, 1.0, 1.5), Vec3::Y, Vec3::X)],
+            [0.3; 3],
+        )
+        .with_emission([2.0; 3]),
+    );
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let res = pool.install(|| bake(&scene, &BakeParams::default()).unwrap());
+        let mut bytes = Vec::new();
+        for o in &res.objects {
+            let mut obj = hce_format::Object::default();
+            encode_object(&mut obj, &o.triangles).unwrap();
+            bytes.extend(obj.bits.iter().flat_map(|w| w.to_le_bytes()));
+            bytes.extend(obj.colours.iter().flat_map(|w| w.to_le_bytes()));
+            for t in &o.triangles {
+                for c in &t.colours {
+                    bytes.extend(c.iter().flat_map(|x| x.to_bits().to_le_bytes()));
+                }
+            }
+        }
+        (bytes, res.stats.links, res.stats.elements)
+    };
+    let (a, la, ea) = run(1);
+    let (b, lb, eb) = run(2);
+    assert_eq!((la, ea), (lb, eb));
+    assert!(a == b, "outputs differ between 1 and 2 threads");
+    assert!(la > 0 && ea > 3);
+}
+
+#[test]
+fn a_scene_without_light_is_an_error() {
+    let scene = Scene {
+        objects: vec![object("box", &closed_box(), [0.5; 3])],
+        lights: Vec::new(),
+    };
+    let e = bake(&scene, &BakeParams::default()).unwrap_err().to_string();
+    assert!(e.contains("no light source"), "{e}");
+}
