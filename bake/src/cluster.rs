@@ -184,7 +184,10 @@ fn build_range(
             hi = hi.max(v);
         }
         let a = f64::from(area(t));
-        let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero().as_dvec3();
+        let n = (t[1] - t[0])
+            .cross(t[2] - t[0])
+            .normalize_or_zero()
+            .as_dvec3();
         total += a;
         centre += centroid[i as usize].as_dvec3() * a;
         for k in 0..3 {

@@ -24,7 +24,9 @@ pub fn encode_object(object: &mut Object, triangles: &[TriangleSolution]) -> Res
         let nn = tri.normals.len();
         let nodes = tri.subdivided.len();
         if nn == 0 {
-            return Err(err("no normals (the geometric normal must come first)".into()));
+            return Err(err(
+                "no normals (the geometric normal must come first)".into()
+            ));
         }
         if nodes == 0 || tri.colours.len() != nodes * nn {
             return Err(err(format!(

@@ -68,7 +68,10 @@ pub fn point_to_polygon(p: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
 pub fn stratified_points(tri: [Vec3; 3], level: u32) -> Vec<Vec3> {
     let mut tris = vec![tri];
     for _ in 0..level {
-        tris = tris.iter().flat_map(|&t| crate::element::split(t)).collect();
+        tris = tris
+            .iter()
+            .flat_map(|&t| crate::element::split(t))
+            .collect();
     }
     tris.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect()
 }

@@ -309,8 +309,9 @@ impl Ctx<'_> {
                 out.push((k, q));
                 continue;
             }
-            let kids: Vec<(ElemKey, Vec<Vec3>)> =
-                (0..4).map(|c| (k.child(c), self.direct(k.child(c)))).collect();
+            let kids: Vec<(ElemKey, Vec<Vec3>)> = (0..4)
+                .map(|c| (k.child(c), self.direct(k.child(c))))
+                .collect();
             let mut var = 0.0f32;
             for (_, cq) in &kids {
                 for (a, b) in cq.iter().zip(&q) {
@@ -387,13 +388,14 @@ impl Ctx<'_> {
                     let st = self.elem_corners(sk);
                     let sn = self.roots[sk.root as usize].normal;
                     // Receiver entirely behind the source, or source behind every normal.
-                    if rt.iter().all(|&v| sn.dot(v - st[0]) <= 1e-7 * r_area.sqrt()) {
+                    if rt
+                        .iter()
+                        .all(|&v| sn.dot(v - st[0]) <= 1e-7 * r_area.sqrt())
+                    {
                         continue;
                     }
-                    let sees = |n: &Vec3| {
-                        st.iter()
-                            .any(|&s| rt.iter().any(|&v| n.dot(s - v) > 0.0))
-                    };
+                    let sees =
+                        |n: &Vec3| st.iter().any(|&s| rt.iter().any(|&v| n.dot(s - v) > 0.0));
                     if !root.normals.iter().any(sees) {
                         continue;
                     }
@@ -422,7 +424,7 @@ impl Ctx<'_> {
                         }
                         est = fmax * l * r_area * std::f32::consts::PI;
                         let var = (fmax - fmin) * l * r_area * std::f32::consts::PI;
-                        if var > eps_power && self.splittable(recv, r_area) {
+                        if var > eps_power * 0.2 && self.splittable(recv, r_area) {
                             for c in (0..4).rev() {
                                 stack.push((recv.child(c), src));
                             }
@@ -432,8 +434,7 @@ impl Ctx<'_> {
                 }
                 Source::Cluster(c) => {
                     let cluster = &self.clusters.clusters[c as usize];
-                    if self.clusters.holds(c, r) || rt.iter().any(|&v| cluster.contains_point(v))
-                    {
+                    if self.clusters.holds(c, r) || rt.iter().any(|&v| cluster.contains_point(v)) {
                         open(c, &mut stack);
                         continue;
                     }
@@ -518,7 +519,10 @@ impl Ctx<'_> {
                 let pts: Vec<Vec3> = if dist > 3.0 * (r_size + s_size) {
                     vec![rc]
                 } else if dist > r_size + s_size {
-                    split(rt).iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect()
+                    split(rt)
+                        .iter()
+                        .map(|t| (t[0] + t[1] + t[2]) / 3.0)
+                        .collect()
                 } else {
                     stratified_points(rt, 2)
                 };
@@ -788,9 +792,8 @@ pub fn bake(scene: &Scene, params: &BakeParams) -> Result<BakeResult, BakeError>
     for (r, (root, q)) in ctx.roots.iter().zip(&root_q).enumerate() {
         let rho = lum(ctx.reflectance(ElemKey::root(r as u32)));
         let r = root;
-        ref_power += f64::from(r.area)
-            * std::f64::consts::PI
-            * f64::from(lum(r.emission) + rho * lum(q[0]));
+        ref_power +=
+            f64::from(r.area) * std::f64::consts::PI * f64::from(lum(r.emission) + rho * lum(q[0]));
     }
     let eps_power = (ref_power * f64::from(params.bf_epsilon)) as f32;
     let direct: Vec<Vec<(ElemKey, Vec<Vec3>)>> = root_q

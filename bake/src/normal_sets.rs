@@ -161,7 +161,10 @@ mod tests {
         assert_eq!(s.normals.len(), 3);
         // Two opposite representatives on the 60-degree cone leave normals 90 degrees of
         // azimuth away: their angle to the nearest representative is about 60 degrees.
-        assert!(s.worst_angle_deg > 40.0 && s.worst_angle_deg < 61.0, "{s:?}");
+        assert!(
+            s.worst_angle_deg > 40.0 && s.worst_angle_deg < 61.0,
+            "{s:?}"
+        );
         let (sets, rep) = select_normal_sets([([0.0, 0.0, 1.0], &subs[..])], &p);
         assert_eq!(sets[0], s);
         assert_eq!(rep.histogram, vec![0, 0, 0, 1]);

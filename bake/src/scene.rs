@@ -174,8 +174,7 @@ impl Scene {
                     o.triangles.len()
                 )));
             }
-            if o.multires && !o.normal_sets.is_empty() && o.normal_sets.len() != o.triangles.len()
-            {
+            if o.multires && !o.normal_sets.is_empty() && o.normal_sets.len() != o.triangles.len() {
                 return Err(bad(format!(
                     "{} normal sets for {} triangles (give one per triangle or none)",
                     o.normal_sets.len(),
@@ -218,9 +217,10 @@ impl Scene {
                                 crate::MAX_NORMALS_PER_TRIANGLE
                             )));
                         }
-                        if set.iter().any(|n| {
-                            !finite3(*n) || Vec3::from(*n).length_squared() < 1e-12
-                        }) {
+                        if set
+                            .iter()
+                            .any(|n| !finite3(*n) || Vec3::from(*n).length_squared() < 1e-12)
+                        {
                             return Err(bad(format!(
                                 "triangle {t} has a zero or non-finite normal in its set"
                             )));
@@ -241,7 +241,9 @@ impl Scene {
                 return Err(bad("intensity and colour must be non-negative"));
             }
             if l.kind != LightKind::Point && Vec3::from(l.direction).length_squared() < 1e-20 {
-                return Err(bad("a spot or directional light needs a non-zero direction"));
+                return Err(bad(
+                    "a spot or directional light needs a non-zero direction",
+                ));
             }
             if let Some(r) = l.range {
                 if !(r > 0.0) {

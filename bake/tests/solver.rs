@@ -258,6 +258,8 @@ fn a_scene_without_light_is_an_error() {
         objects: vec![object("box", &closed_box(), [0.5; 3])],
         lights: Vec::new(),
     };
-    let e = bake(&scene, &BakeParams::default()).unwrap_err().to_string();
+    let e = bake(&scene, &BakeParams::default())
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("no light source"), "{e}");
 }
