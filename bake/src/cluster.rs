@@ -26,6 +26,10 @@ pub struct Cluster {
     pub area: f32,
     /// Projected front-facing area seen along ±x, ±y, ±z: `Σ aᵢ max(0, ±nᵢ·axis)`.
     pub proj: [f32; 6],
+    /// Normal cone of its triangles: unit axis and half-angle in radians (π when the normals
+    /// do not fit in a cone narrower than a hemisphere).
+    pub cone_axis: Vec3,
+    pub cone_angle: f32,
     /// Its triangles are `order[first .. first + count]`.
     pub first: u32,
     pub count: u32,
@@ -45,6 +49,24 @@ impl Cluster {
             }
         };
         (pick(w.x, 0) + pick(w.y, 1) + pick(w.z, 2)).min(self.area)
+    }
+
+    /// Whether every point within `r_radius` of `r_centre` lies behind every triangle of the
+    /// cluster (so the cluster cannot send it light): the back-face cone test.
+    pub fn faces_away_from(&self, r_centre: Vec3, r_radius: f32) -> bool {
+        if self.cone_angle >= std::f32::consts::FRAC_PI_2 {
+            return false;
+        }
+        let c = (self.lo + self.hi) * 0.5;
+        let v = r_centre - c;
+        let dist = v.length();
+        let reach = self.radius() + r_radius;
+        if dist <= reach {
+            return false;
+        }
+        let beta = (reach / dist).asin();
+        let theta = (self.cone_axis.dot(v / dist)).clamp(-1.0, 1.0).acos();
+        theta >= std::f32::consts::FRAC_PI_2 + self.cone_angle + beta
     }
 
     pub fn radius(&self) -> f32 {
@@ -177,6 +199,17 @@ fn build_range(
     let mut total = 0.0f64;
     let mut centre = glam::DVec3::ZERO;
     let mut proj = [0.0f64; 6];
+    let mut nsum = Vec3::ZERO;
+    for &i in ids.iter() {
+        let t = tris[i as usize];
+        nsum += (t[1] - t[0]).cross(t[2] - t[0]);
+    }
+    let cone_axis = nsum.normalize_or_zero();
+    let mut cone_angle = if cone_axis == Vec3::ZERO {
+        std::f32::consts::PI
+    } else {
+        0.0f32
+    };
     for &i in ids.iter() {
         let t = tris[i as usize];
         for v in t {
@@ -188,6 +221,10 @@ fn build_range(
             .cross(t[2] - t[0])
             .normalize_or_zero()
             .as_dvec3();
+        if cone_axis != Vec3::ZERO {
+            let tn = n.as_vec3();
+            cone_angle = cone_angle.max(tn.dot(cone_axis).clamp(-1.0, 1.0).acos());
+        }
         total += a;
         centre += centroid[i as usize].as_dvec3() * a;
         for k in 0..3 {
@@ -201,6 +238,8 @@ fn build_range(
         centre: (centre / total.max(1e-300)).as_vec3(),
         area: total as f32,
         proj: proj.map(|p| p as f32),
+        cone_axis,
+        cone_angle,
         first,
         count: ids.len() as u32,
         children: [ClusterChild::Root(0); 2],
@@ -244,5 +283,8 @@ mod tests {
         assert_eq!(t.pick(top, 0.999), 9);
         assert_eq!(t.pick(top, 0.0), 0);
         assert!(t.holds(top, 3));
+        // All triangles face +z: a receiver far below them is behind every one.
+        assert!(c.faces_away_from(Vec3::new(50.0, 0.5, -100.0), 1.0));
+        assert!(!c.faces_away_from(Vec3::new(50.0, 0.5, 100.0), 1.0));
     }
 }

@@ -130,7 +130,7 @@ struct Root {
 }
 
 /// A link source.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 enum Source {
     Cluster(u32),
     Elem(ElemKey),
@@ -358,6 +358,22 @@ impl Ctx<'_> {
     ) -> (Vec<RawLink>, Vec<f32>) {
         let mut links = Vec::new();
         let mut ks = Vec::new();
+        let nn = self.nn(r);
+        // Coefficients are a pure function of the pair: reuse those of the previous pass.
+        let prev = &trees[r as usize];
+        let cache: std::collections::HashMap<(ElemKey, Source), usize> = prev
+            .links
+            .iter()
+            .map(|l| {
+                let src = match l.src {
+                    SrcIdx::Cluster(c) => Source::Cluster(c),
+                    SrcIdx::Node { root, node } => {
+                        Source::Elem(trees[root as usize].keys[node as usize])
+                    }
+                };
+                ((prev.keys[l.recv as usize], src), l.k_start as usize)
+            })
+            .collect();
         let top = match self.clusters.top {
             ClusterChild::Cluster(c) => Source::Cluster(c),
             ClusterChild::Root(x) => Source::Elem(ElemKey::root(x)),
@@ -438,6 +454,10 @@ impl Ctx<'_> {
                         open(c, &mut stack);
                         continue;
                     }
+                    let r_radius = rt.iter().map(|v| (*v - rc).length()).fold(0.0, f32::max);
+                    if cluster.faces_away_from(rc, r_radius) {
+                        continue;
+                    }
                     let corners = cluster.corners();
                     let sees = |n: &Vec3| {
                         corners
@@ -485,7 +505,10 @@ impl Ctx<'_> {
                 }
             }
             let k_start = ks.len() as u32;
-            let k = self.link_coefficients(recv, src);
+            let k = match cache.get(&(recv, src)) {
+                Some(&at) => prev.k[at..at + nn].to_vec(),
+                None => self.link_coefficients(recv, src),
+            };
             if k.iter().all(|&v| v <= 0.0) {
                 continue;
             }
@@ -508,7 +531,6 @@ impl Ctx<'_> {
         };
         let mut k = vec![0.0f32; nn];
         let nv = self.params.visibility_rays;
-        let mut rng = Rng::new(recv.id(), src_id, 0x22);
         let visible = match src {
             Source::Elem(sk) => {
                 let st = self.elem_corners(sk);
@@ -533,17 +555,12 @@ impl Ctx<'_> {
                 }
                 let inv = 1.0 / pts.len() as f32;
                 k.iter_mut().for_each(|v| *v *= inv);
-                let mut clear = 0;
-                for i in 0..nv {
+                visible_fraction(nv, |i| {
+                    let mut rng = Rng::new(recv.id(), src_id, u64::from(i));
                     let p = jittered_point(rt, i, nv, &mut rng);
                     let q = jittered_point(st, i, nv, &mut rng);
-                    clear += u32::from(self.occ.segment_clear(p, q));
-                }
-                if nv == 0 {
-                    1.0
-                } else {
-                    clear as f32 / nv as f32
-                }
+                    self.occ.segment_clear(p, q)
+                })
             }
             Source::Cluster(c) => {
                 let cluster = &self.clusters.clusters[c as usize];
@@ -554,19 +571,14 @@ impl Ctx<'_> {
                 for (kj, n) in k.iter_mut().zip(&root.normals) {
                     *kj = (n.dot(w).max(0.0) * proj / (std::f32::consts::PI * d2 + proj)).min(1.0);
                 }
-                let mut clear = 0;
-                for i in 0..nv {
+                visible_fraction(nv, |i| {
+                    let mut rng = Rng::new(recv.id(), src_id, u64::from(i));
                     let p = jittered_point(rt, i, nv, &mut rng);
                     let t = self.clusters.pick(c, rng.next_f32());
                     let tc = self.roots[t as usize].corners;
                     let q = jittered_point(tc, 0, 1, &mut rng);
-                    clear += u32::from(self.occ.segment_clear(p, q));
-                }
-                if nv == 0 {
-                    1.0
-                } else {
-                    clear as f32 / nv as f32
-                }
+                    self.occ.segment_clear(p, q)
+                })
             }
         };
         k.iter_mut().for_each(|v| *v *= visible);
@@ -729,6 +741,33 @@ impl Ctx<'_> {
         }
         (it, change)
     }
+}
+
+/// Fraction of `n` visibility samples that are clear. Four well-spread samples go first; when
+/// they agree (the common fully visible or fully hidden case) they decide alone, otherwise
+/// all `n` are taken. The order depends only on `n`, so the result is deterministic.
+fn visible_fraction(n: u32, mut clear: impl FnMut(u32) -> bool) -> f32 {
+    if n == 0 {
+        return 1.0;
+    }
+    let first: Vec<u32> = if n > 4 {
+        (0..4).map(|k| k * n / 4).collect()
+    } else {
+        (0..n).collect()
+    };
+    let hits: Vec<bool> = first.iter().map(|&i| clear(i)).collect();
+    let seen = hits.iter().filter(|&&h| h).count() as u32;
+    if n <= 4 {
+        return seen as f32 / n as f32;
+    }
+    if seen == 0 || seen == 4 {
+        return seen as f32 / 4.0;
+    }
+    let rest = (0..n)
+        .filter(|i| !first.contains(i))
+        .filter(|&i| clear(i))
+        .count() as u32;
+    (seen + rest) as f32 / n as f32
 }
 
 /// Bakes the scene: direct light, link refinement, solve, repeated `refine_passes` times.
