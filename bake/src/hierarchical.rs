@@ -779,9 +779,13 @@ pub fn bake(scene: &Scene, params: &BakeParams) -> Result<BakeResult, BakeError>
             params.max_level
         )));
     }
-    if !(params.bf_epsilon > 0.0) || !(params.tolerance > 0.0) {
+    let positive = |x: f32| x.is_finite() && x > 0.0;
+    if !positive(params.bf_epsilon)
+        || !positive(params.tolerance)
+        || !positive(params.cluster_opening)
+    {
         return Err(BakeError::InvalidParameter(
-            "bf_epsilon and tolerance must be positive".into(),
+            "bf_epsilon, tolerance and cluster_opening must be positive and finite".into(),
         ));
     }
     let mut stats = BakeStats::default();

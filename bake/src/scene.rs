@@ -246,7 +246,7 @@ impl Scene {
                 ));
             }
             if let Some(r) = l.range {
-                if !(r > 0.0) {
+                if r.is_nan() || r <= 0.0 {
                     return Err(bad("range must be positive when given"));
                 }
             }
