@@ -12,6 +12,7 @@ pub mod element;
 pub mod encode;
 pub mod formfactor;
 pub mod hierarchical;
+pub mod import;
 pub mod normal_sets;
 pub mod scene;
 pub mod visibility;
