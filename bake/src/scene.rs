@@ -264,3 +264,69 @@ impl Scene {
         self.objects.iter().map(|o| o.triangles.len()).sum()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri() -> SceneObject {
+        SceneObject::new(
+            "t",
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            vec![[0, 1, 2]],
+            [0.5; 3],
+        )
+        .with_emission([1.0; 3])
+    }
+
+    fn err(scene: Scene) -> String {
+        scene.validate().unwrap_err().to_string()
+    }
+
+    #[test]
+    fn bad_scenes_get_errors_naming_object_and_triangle() {
+        let mut o = tri();
+        o.triangles[0] = [0, 1, 7];
+        let e = err(Scene {
+            objects: vec![o],
+            lights: vec![],
+        });
+        assert!(
+            e.contains("'t'") && e.contains("triangle 0") && e.contains("vertex 7"),
+            "{e}"
+        );
+        let mut o = tri();
+        o.reflectance[0] = [1.5, 0.0, 0.0];
+        assert!(err(Scene {
+            objects: vec![o],
+            lights: vec![]
+        })
+        .contains("[0, 1]"));
+        let mut o = tri();
+        o.positions[2] = [2.0, 0.0, 0.0];
+        assert!(err(Scene {
+            objects: vec![o],
+            lights: vec![]
+        })
+        .contains("degenerate"));
+        let mut o = tri();
+        o.emission.clear();
+        let mut s = Scene {
+            objects: vec![o],
+            lights: vec![],
+        };
+        assert!(err(s.clone()).contains("no light source"));
+        s.lights.push(PunctualLight {
+            name: "sun".into(),
+            kind: LightKind::Directional,
+            position: [0.0; 3],
+            direction: [0.0; 3],
+            color: [1.0; 3],
+            intensity: 1.0,
+            range: None,
+        });
+        assert!(err(s.clone()).contains("non-zero direction"));
+        s.lights[0].direction = [0.0, 0.0, -1.0];
+        assert!(s.validate().is_ok());
+    }
+}

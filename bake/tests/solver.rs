@@ -263,3 +263,71 @@ fn a_scene_without_light_is_an_error() {
         .to_string();
     assert!(e.contains("no light source"), "{e}");
 }
+
+/// `n × n` grid of quads over a parallelogram (exercises the cluster hierarchy).
+fn grid_object(name: &str, o: Vec3, u: Vec3, v: Vec3, n: u32, rho: [f32; 3]) -> SceneObject {
+    let mut parts = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let a = o + u * (i as f32 / n as f32) + v * (j as f32 / n as f32);
+            parts.push((a, u / n as f32, v / n as f32));
+        }
+    }
+    object(name, &parts, rho)
+}
+
+#[test]
+fn tessellated_open_scene_conserves_energy_through_clusters() {
+    let floor = grid_object(
+        "floor",
+        Vec3::ZERO,
+        Vec3::X * 4.0,
+        Vec3::Y * 4.0,
+        12,
+        [0.6; 3],
+    );
+    let wall = grid_object(
+        "wall",
+        Vec3::ZERO,
+        Vec3::Y * 4.0,
+        Vec3::Z * 2.0,
+        8,
+        [0.7; 3],
+    );
+    let lamp = object(
+        "lamp",
+        &[(Vec3::new(1.5, 1.5, 1.8), Vec3::Y, Vec3::X)],
+        [0.3; 3],
+    )
+    .with_emission([4.0; 3]);
+    let scene = Scene {
+        objects: vec![floor, wall, lamp],
+        lights: Vec::new(),
+    };
+    let res = bake(&scene, &BakeParams::default()).unwrap();
+    let occ = Occluders::new(
+        scene
+            .objects
+            .iter()
+            .flat_map(|o| (0..o.triangles.len()).map(|t| o.corners(t))),
+    );
+    let pi = std::f32::consts::PI as f64;
+    let (mut emitted, mut absorbed, mut escaped) = (0.0f64, 0.0f64, 0.0f64);
+    for (i, (c, l, oi, t)) in leaves(&res, &scene).into_iter().enumerate() {
+        let o = &scene.objects[oi];
+        let area = f64::from((c[1] - c[0]).cross(c[2] - c[0]).length() * 0.5);
+        let le = Vec3::from(o.emission_of(t));
+        let rho = Vec3::from(o.reflectance[t]);
+        emitted += pi * area * f64::from(le.element_sum());
+        absorbed += pi * area * f64::from(((Vec3::ONE - rho) * ((l - le) / rho)).element_sum());
+        let f = escape_fraction(&occ, c, i as u64, 64);
+        escaped += pi * area * f64::from(l.element_sum()) * f64::from(f);
+    }
+    let balance = (emitted - absorbed - escaped) / emitted;
+    println!(
+        "energy (clusters): emitted {emitted:.4} absorbed {absorbed:.4} escaped {escaped:.4} \
+         imbalance {balance:.5}; stats {:?}",
+        res.stats
+    );
+    assert!(balance.abs() < 0.01, "imbalance {balance}");
+}
