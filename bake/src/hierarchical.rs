@@ -507,7 +507,18 @@ impl Ctx<'_> {
             let k_start = ks.len() as u32;
             let k = match cache.get(&(recv, src)) {
                 Some(&at) => prev.k[at..at + nn].to_vec(),
-                None => self.link_coefficients(recv, src),
+                None => {
+                    // A link far below the threshold carries little light: a few rays
+                    // bound its visibility error well enough (the error it can add is a
+                    // fraction of its own small power).
+                    let nv = self.params.visibility_rays;
+                    let rays = if est >= 0.05 * eps_power {
+                        nv
+                    } else {
+                        nv.min(2)
+                    };
+                    self.link_coefficients(recv, src, rays)
+                }
             };
             if k.iter().all(|&v| v <= 0.0) {
                 continue;
@@ -519,7 +530,7 @@ impl Ctx<'_> {
     }
 
     /// Form factor times visibility from receiver `recv` to `src`, per receiver normal.
-    fn link_coefficients(&self, recv: ElemKey, src: Source) -> Vec<f32> {
+    fn link_coefficients(&self, recv: ElemKey, src: Source, nv: u32) -> Vec<f32> {
         let root = &self.roots[recv.root as usize];
         let nn = root.normals.len();
         let rt = self.elem_corners(recv);
@@ -530,7 +541,6 @@ impl Ctx<'_> {
             Source::Elem(k) => k.id(),
         };
         let mut k = vec![0.0f32; nn];
-        let nv = self.params.visibility_rays;
         let visible = match src {
             Source::Elem(sk) => {
                 let st = self.elem_corners(sk);
