@@ -55,7 +55,30 @@ fn sphere(c: Vec3, r: f32, rings: u32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
     (pos, tris)
 }
 
-fn room(target: usize) -> Scene {
+/// Gives every triangle of `obj` a set of `count` normals: its own and tilted copies (what a
+/// bumpy multiresolution surface produces), so that the cost of enrichment shows.
+fn synthetic_normal_sets(obj: &mut SceneObject, count: usize) {
+    obj.normal_sets = (0..obj.triangles.len())
+        .map(|t| {
+            let [a, b, c] = obj.corners(t);
+            let n = (b - a).cross(c - a).normalize();
+            let u = n.any_orthonormal_vector();
+            let v = n.cross(u);
+            (0..count)
+                .map(|k| {
+                    if k == 0 {
+                        return n.to_array();
+                    }
+                    let phi = k as f32 * std::f32::consts::TAU / (count - 1) as f32;
+                    let tilt = 20f32.to_radians();
+                    (n * tilt.cos() + (u * phi.cos() + v * phi.sin()) * tilt.sin()).to_array()
+                })
+                .collect()
+        })
+        .collect();
+}
+
+fn room(target: usize, normals: usize) -> Scene {
     // Walls take about a fifth of the triangles, the sphere the rest.
     let wall_n = (((target / 5) as f32 / 12.0).sqrt().round() as u32).max(1);
     let rings = ((((target * 4 / 5) as f32) / 4.0).sqrt().round() as u32).max(3);
@@ -72,6 +95,9 @@ fn room(target: usize) -> Scene {
     let (sp, st) = sphere(Vec3::new(2.0, 2.0, 1.2), 1.0, rings);
     let mut ball = SceneObject::new("ball", sp, st, [0.7, 0.5, 0.3]);
     ball.multires = true;
+    if normals > 1 {
+        synthetic_normal_sets(&mut ball, normals);
+    }
     Scene {
         objects: vec![walls, ball],
         lights: vec![PunctualLight {
@@ -87,20 +113,26 @@ fn room(target: usize) -> Scene {
 }
 
 fn main() {
-    let sizes: Vec<usize> = std::env::args()
-        .skip(1)
-        .filter_map(|a| a.parse().ok())
-        .collect();
+    // Arguments: triangle counts, and optionally `normals=N` (normals per sphere triangle).
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let normals = args
+        .iter()
+        .find_map(|a| a.strip_prefix("normals=")?.parse().ok())
+        .unwrap_or(1);
+    let sizes: Vec<usize> = args.iter().filter_map(|a| a.parse().ok()).collect();
     let sizes = if sizes.is_empty() {
         vec![1_000, 5_000, 20_000]
     } else {
         sizes
     };
-    println!("threads: {}", rayon::current_num_threads());
+    println!(
+        "threads: {}, normals per sphere triangle: {normals}",
+        rayon::current_num_threads()
+    );
     println!("| triangles | elements | links | iterations | seconds | phases |");
     println!("|---|---|---|---|---|---|");
     for n in sizes {
-        let scene = room(n);
+        let scene = room(n, normals);
         let t = Instant::now();
         let res = bake(&scene, &BakeParams::default()).expect("bake");
         let secs = t.elapsed().as_secs_f64();

@@ -33,6 +33,9 @@ use crate::scene::{LightKind, Scene};
 use crate::visibility::Occluders;
 use crate::BakeError;
 
+/// Most visibility rays per link accepted (beyond it a bake would take days, not hours).
+pub const MAX_VISIBILITY_RAYS: u32 = 4096;
+
 /// Solver parameters (the `hce bake` flags of the same names).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BakeParams {
@@ -787,6 +790,12 @@ pub fn bake(scene: &Scene, params: &BakeParams) -> Result<BakeResult, BakeError>
         return Err(BakeError::InvalidParameter(format!(
             "max_level {} exceeds the supported {MAX_LEVEL}",
             params.max_level
+        )));
+    }
+    if params.visibility_rays > MAX_VISIBILITY_RAYS {
+        return Err(BakeError::InvalidParameter(format!(
+            "visibility_rays {} exceeds {MAX_VISIBILITY_RAYS}",
+            params.visibility_rays
         )));
     }
     let positive = |x: f32| x.is_finite() && x > 0.0;

@@ -474,3 +474,37 @@ fn enrichment_brings_applied_colours_closer_to_a_fine_bake() {
     println!("enrichment: RMS vs fine flat bake: max_normals 7 -> {with:.5}, 0 -> {without:.5}");
     assert!(with < 0.7 * without, "{with} vs {without}");
 }
+
+#[test]
+fn bad_parameters_are_errors() {
+    let scene = Scene {
+        objects: vec![object("box", &closed_box(), [0.5; 3]).with_emission([1.0; 3])],
+        lights: Vec::new(),
+    };
+    for (p, word) in [
+        (
+            BakeParams {
+                max_level: 15,
+                ..Default::default()
+            },
+            "max_level",
+        ),
+        (
+            BakeParams {
+                bf_epsilon: f32::NAN,
+                ..Default::default()
+            },
+            "bf_epsilon",
+        ),
+        (
+            BakeParams {
+                visibility_rays: 1 << 20,
+                ..Default::default()
+            },
+            "visibility_rays",
+        ),
+    ] {
+        let e = bake(&scene, &p).unwrap_err().to_string();
+        assert!(e.contains(word), "{e}");
+    }
+}
