@@ -56,6 +56,39 @@ pub fn encode_object(object: &mut Object, triangles: &[TriangleSolution]) -> Res
     Ok(())
 }
 
+/// Per-vertex fallback colours (glTF `COLOR_0`) for an object: the area-weighted average of
+/// the root colours (normal 0) of the triangles around each vertex, welded by vertex index.
+/// `positions` and `triangles` are the object's mesh; `solution` its baked triangles.
+pub fn vertex_colours(
+    positions: &[[f32; 3]],
+    triangles: &[[u32; 3]],
+    solution: &[TriangleSolution],
+) -> Vec<[f32; 3]> {
+    let mut sum = vec![[0.0f64; 4]; positions.len()];
+    for (t, tri) in triangles.iter().enumerate() {
+        let Some(sol) = solution.get(t) else { break };
+        let p = tri.map(|v| glam::Vec3::from(positions[v as usize]));
+        let area = f64::from((p[1] - p[0]).cross(p[2] - p[0]).length() * 0.5);
+        let c = sol.colours.first().copied().unwrap_or([0.0; 3]);
+        for &v in tri {
+            let s = &mut sum[v as usize];
+            for k in 0..3 {
+                s[k] += area * f64::from(c[k]);
+            }
+            s[3] += area;
+        }
+    }
+    sum.iter()
+        .map(|s| {
+            if s[3] > 0.0 {
+                [0, 1, 2].map(|k| (s[k] / s[3]) as f32)
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect()
+}
+
 fn push_bit(bits: &mut Vec<u32>, len: &mut u64, bit: bool) {
     let i = *len as usize;
     if i / 32 >= bits.len() {
@@ -147,6 +180,28 @@ mod tests {
             let c = rgb9e5::decode(o.colours[rec.colour_start as usize + last]);
             assert_eq!(c, [last as f32, 0.5, 0.25]);
         }
+    }
+
+    #[test]
+    fn vertex_colours_average_incident_triangles_by_area() {
+        let pos = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [3.0, 0.0, 0.0],
+        ];
+        // Triangle 1 has twice the area of triangle 0; they share vertices 1 and 2.
+        let tris = [[0, 1, 2], [1, 3, 2]];
+        let mut a = tri(vec![false], 1);
+        a.colours = vec![[1.0, 0.0, 0.0]];
+        let mut b = tri(vec![false], 1);
+        b.colours = vec![[0.0, 1.0, 0.0]];
+        let c = vertex_colours(&pos, &tris, &[a, b]);
+        assert_eq!(c[0], [1.0, 0.0, 0.0]);
+        assert_eq!(c[3], [0.0, 1.0, 0.0]);
+        // Areas 0.5 and 1.0.
+        let w = 0.5 / 1.5;
+        assert!((c[1][0] - w).abs() < 1e-6 && (c[1][1] - (1.0 - w)).abs() < 1e-6);
     }
 
     #[test]

@@ -63,6 +63,23 @@ pub struct BakeParams {
     pub cluster_opening: f32,
 }
 
+impl BakeParams {
+    /// The parameters as the JSON object text stored in the container's metadata.
+    pub fn to_json(&self) -> String {
+        serde_json::json!({
+            "bf_epsilon": self.bf_epsilon,
+            "min_area_fraction": self.min_area_fraction,
+            "max_level": self.max_level,
+            "visibility_rays": self.visibility_rays,
+            "tolerance": self.tolerance,
+            "max_iterations": self.max_iterations,
+            "refine_passes": self.refine_passes,
+            "cluster_opening": self.cluster_opening,
+        })
+        .to_string()
+    }
+}
+
 impl Default for BakeParams {
     fn default() -> Self {
         BakeParams {
