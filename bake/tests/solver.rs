@@ -508,3 +508,51 @@ fn bad_parameters_are_errors() {
         assert!(e.contains(word), "{e}");
     }
 }
+
+#[test]
+fn point_and_spot_lights_follow_gltf_units() {
+    // A 0.1 m floor patch 2 m under a light of 8 cd: irradiance 8 / 4 = 2 lux, radiance
+    // ρ · 2 / π. A spot aimed away contributes nothing; one aimed at it, the same as a point.
+    let patch = object(
+        "patch",
+        &[(Vec3::new(-0.05, -0.05, 0.0), Vec3::X * 0.1, Vec3::Y * 0.1)],
+        [0.5; 3],
+    );
+    let light = |kind, direction: [f32; 3]| PunctualLight {
+        name: "l".into(),
+        kind,
+        position: [0.0, 0.0, 2.0],
+        direction,
+        color: [1.0; 3],
+        intensity: 8.0,
+        range: None,
+    };
+    let spot = LightKind::Spot {
+        inner_cone_angle: 0.3,
+        outer_cone_angle: 0.5,
+    };
+    let expect = 0.5 * 2.0 / std::f32::consts::PI;
+    for (l, want) in [
+        (light(LightKind::Point, [0.0, 0.0, -1.0]), expect),
+        (light(spot, [0.0, 0.0, -1.0]), expect),
+        (light(spot, [1.0, 0.0, 0.0]), 0.0),
+    ] {
+        let mut lights = vec![l];
+        // The aimed-away spot alone would leave the scene dark, which is an error: add a
+        // second, distant and dim light that cannot reach the patch's front.
+        lights.push(PunctualLight {
+            position: [0.0, 0.0, -10.0],
+            intensity: 1e-3,
+            ..light(LightKind::Point, [0.0; 3])
+        });
+        let scene = Scene {
+            objects: vec![patch.clone()],
+            lights,
+        };
+        let res = bake(&scene, &BakeParams::default()).unwrap();
+        for t in &res.objects[0].triangles {
+            let got = t.colours[0][0];
+            assert!((got - want).abs() <= 0.01 * expect, "{got} vs {want}");
+        }
+    }
+}
