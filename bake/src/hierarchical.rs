@@ -221,6 +221,9 @@ struct Ctx<'a> {
     clusters: ClusterTree,
     occ: Occluders,
     min_area: f32,
+    /// Distances to a plane below this count as lying in it (rounding of coplanar
+    /// geometry), relative to the scene size.
+    plane_eps: f32,
 }
 
 fn lum(v: Vec3) -> f32 {
@@ -424,14 +427,13 @@ impl Ctx<'_> {
                     let st = self.elem_corners(sk);
                     let sn = self.roots[sk.root as usize].normal;
                     // Receiver entirely behind the source, or source behind every normal.
-                    if rt
-                        .iter()
-                        .all(|&v| sn.dot(v - st[0]) <= 1e-7 * r_area.sqrt())
-                    {
+                    if rt.iter().all(|&v| sn.dot(v - st[0]) <= self.plane_eps) {
                         continue;
                     }
-                    let sees =
-                        |n: &Vec3| st.iter().any(|&s| rt.iter().any(|&v| n.dot(s - v) > 0.0));
+                    let sees = |n: &Vec3| {
+                        st.iter()
+                            .any(|&s| rt.iter().any(|&v| n.dot(s - v) > self.plane_eps))
+                    };
                     if !root.normals.iter().any(sees) {
                         continue;
                     }
@@ -482,7 +484,7 @@ impl Ctx<'_> {
                     let sees = |n: &Vec3| {
                         corners
                             .iter()
-                            .any(|&s| rt.iter().any(|&v| n.dot(s - v) > 0.0))
+                            .any(|&s| rt.iter().any(|&v| n.dot(s - v) > self.plane_eps))
                     };
                     if !root.normals.iter().any(sees) {
                         continue;
@@ -853,6 +855,16 @@ pub fn bake(scene: &Scene, params: &BakeParams) -> Result<BakeResult, BakeError>
         clusters: ClusterTree::build(&all_tris),
         occ: Occluders::new(all_tris.iter().copied()),
         min_area: (total_area * f64::from(params.min_area_fraction)) as f32,
+        plane_eps: {
+            let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+            for t in &all_tris {
+                for v in t {
+                    lo = lo.min(*v);
+                    hi = hi.max(*v);
+                }
+            }
+            (hi - lo).length() * 1e-6
+        },
         roots,
     };
     stats.coarse_triangles = ctx.roots.len();
