@@ -135,6 +135,8 @@ fn import_gltf(path: &Path, opts: &ImportOptions) -> Result<Imported, ImportErro
     })?;
     let mut scene = Scene::default();
     let mut warnings = Vec::new();
+    let shared_images = std::sync::Arc::new(images);
+    let images = &*shared_images;
     let Some(root_scene) = doc.default_scene().or_else(|| doc.scenes().next()) else {
         warnings.push(format!("{file}: no scene; nothing imported"));
         return Ok(Imported { scene, warnings });
@@ -187,6 +189,8 @@ fn import_gltf(path: &Path, opts: &ImportOptions) -> Result<Imported, ImportErro
             .and_then(|v| v.get("hce")?.get("multires")?.as_bool())
             .unwrap_or(false);
         let mut obj = SceneObject::new(node_name.clone(), Vec::new(), Vec::new(), [0.0; 3]);
+        // Per triangle: (image index, UVs, baseColorFactor) where a texture applies.
+        let mut textured: Vec<Option<(usize, [[f32; 2]; 3], [f32; 3])>> = Vec::new();
         obj.multires = extras_multires || is_multires(opts, &[&node_name, &mesh_name]);
         // A mirroring transform flips the winding.
         let flip = world.determinant() < 0.0;
@@ -230,10 +234,12 @@ fn import_gltf(path: &Path, opts: &ImportOptions) -> Result<Imported, ImportErro
                     ));
                 }
             }
-            let image = texture
+            let image_index = texture
                 .as_ref()
                 .filter(|i| i.tex_coord() == 0)
-                .and_then(|i| images.get(i.texture().source().index()));
+                .map(|i| i.texture().source().index())
+                .filter(|&i| i < images.len());
+            let image = image_index.map(|i| &images[i]);
             let strength = material.emissive_strength().unwrap_or(1.0);
             let emission = material.emissive_factor().map(|e| e * strength);
             let base = obj.positions.len() as u32;
@@ -255,9 +261,12 @@ fn import_gltf(path: &Path, opts: &ImportOptions) -> Result<Imported, ImportErro
                     continue;
                 }
                 let mut rho = [factor[0], factor[1], factor[2]];
+                let mut tex = None;
                 if let (Some(img), Some(uv)) = (image, &uvs) {
-                    match texture_average(img, t.map(|i| uv[i as usize])) {
+                    let tri_uv = t.map(|i| uv[i as usize]);
+                    match texture_average(img, tri_uv) {
                         Some(avg) => {
+                            tex = image_index.map(|ii| (ii, tri_uv, rho));
                             for k in 0..3 {
                                 rho[k] *= avg[k];
                             }
@@ -265,6 +274,7 @@ fn import_gltf(path: &Path, opts: &ImportOptions) -> Result<Imported, ImportErro
                         None => unreadable_texture = true,
                     }
                 }
+                textured.push(tex);
                 obj.triangles.push(t.map(|i| i + base));
                 obj.reflectance.push(rho.map(|x| x.clamp(0.0, 1.0)));
                 obj.emission.push(emission);
@@ -283,6 +293,32 @@ fn import_gltf(path: &Path, opts: &ImportOptions) -> Result<Imported, ImportErro
                     "{what}: index count is not a multiple of 3; tail ignored"
                 ));
             }
+        }
+        if textured.iter().any(Option::is_some) {
+            // Each element averages the texture over exactly the part of the triangle it
+            // covers; untextured triangles keep their constant reflectance.
+            let images = std::sync::Arc::clone(&shared_images);
+            let constant = obj.reflectance.clone();
+            obj.reflectance_fn =
+                Some(std::sync::Arc::new(
+                    move |t: usize, bary: [[f32; 3]; 3]| match textured.get(t).copied().flatten() {
+                        Some((ii, uv, factor)) => {
+                            let sub = bary.map(|b| {
+                                [
+                                    b[0] * uv[0][0] + b[1] * uv[1][0] + b[2] * uv[2][0],
+                                    b[0] * uv[0][1] + b[1] * uv[1][1] + b[2] * uv[2][1],
+                                ]
+                            });
+                            match texture_average(&images[ii], sub) {
+                                Some(avg) => {
+                                    [0, 1, 2].map(|k| (factor[k] * avg[k]).clamp(0.0, 1.0))
+                                }
+                                None => constant[t],
+                            }
+                        }
+                        None => constant.get(t).copied().unwrap_or([0.0; 3]),
+                    },
+                ));
         }
         if !obj.triangles.is_empty() {
             scene.objects.push(obj);
@@ -452,5 +488,62 @@ mod tests {
             "{:?}",
             im.warnings
         );
+    }
+
+    #[test]
+    fn gltf_texture_is_averaged_per_element() {
+        let dir = tempfile::tempdir().unwrap();
+        // A 2 × 1 texture: left texel red, right texel green.
+        let file = std::fs::File::create(dir.path().join("t.png")).unwrap();
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), 2, 1);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.write_header()
+            .unwrap()
+            .write_image_data(&[255, 0, 0, 0, 255, 0])
+            .unwrap();
+        let pos: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+        let uv: [f32; 6] = [0.0, 0.0, 1.0, 0.0, 0.0, 1.0];
+        let bytes: Vec<u8> = pos
+            .iter()
+            .chain(&uv)
+            .flat_map(|f| f.to_le_bytes())
+            .collect();
+        std::fs::write(dir.path().join("b.bin"), &bytes).unwrap();
+        let json = serde_json::json!({
+            "asset": {"version": "2.0"},
+            "scenes": [{"nodes": [0]}],
+            "nodes": [{"name": "floor", "mesh": 0}],
+            "meshes": [{"primitives": [
+                {"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": 0}
+            ]}],
+            "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}},
+                           "emissiveFactor": [1.0, 1.0, 1.0]}],
+            "textures": [{"source": 0}],
+            "images": [{"uri": "t.png"}],
+            "buffers": [{"uri": "b.bin", "byteLength": 60}],
+            "bufferViews": [{"buffer": 0, "byteLength": 36},
+                            {"buffer": 0, "byteOffset": 36, "byteLength": 24}],
+            "accessors": [
+                {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                 "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]},
+                {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}
+            ]
+        });
+        let path = dir.path().join("s.gltf");
+        std::fs::write(&path, json.to_string()).unwrap();
+        let im = import(&path, &ImportOptions::default()).unwrap();
+        let o = &im.scene.objects[0];
+        let f = o
+            .reflectance_fn
+            .as_ref()
+            .expect("textured object gets a hook");
+        let key = |c| crate::element::ElemKey::root(0).child(c).barycentric();
+        // Left child (u from 0.5 to 1) is green; Top child (u below 0.5) red.
+        assert_eq!(f(0, key(1)), [0.0, 1.0, 0.0]);
+        assert_eq!(f(0, key(0)), [1.0, 0.0, 0.0]);
+        // The triangle's own average mixes both.
+        let r = o.reflectance[0];
+        assert!(r[0] > 0.2 && r[1] > 0.2 && r[2] == 0.0, "{r:?}");
     }
 }
