@@ -127,6 +127,9 @@ fn texture_average(image: &gltf::image::Data, uv: [[f32; 2]; 3]) -> Option<[f32;
     Some(sum.map(|s| s / n as f32))
 }
 
+/// Image index, texture coordinates of the corners and baseColorFactor of a textured triangle.
+type TexturedTriangle = (usize, [[f32; 2]; 3], [f32; 3]);
+
 fn import_gltf(path: &Path, opts: &ImportOptions) -> Result<Imported, ImportError> {
     let file = path.display().to_string();
     let (doc, buffers, images) = gltf::import(path).map_err(|e| ImportError::Read {
@@ -189,8 +192,8 @@ fn import_gltf(path: &Path, opts: &ImportOptions) -> Result<Imported, ImportErro
             .and_then(|v| v.get("hce")?.get("multires")?.as_bool())
             .unwrap_or(false);
         let mut obj = SceneObject::new(node_name.clone(), Vec::new(), Vec::new(), [0.0; 3]);
-        // Per triangle: (image index, UVs, baseColorFactor) where a texture applies.
-        let mut textured: Vec<Option<(usize, [[f32; 2]; 3], [f32; 3])>> = Vec::new();
+        // Per triangle: where a texture applies.
+        let mut textured: Vec<Option<TexturedTriangle>> = Vec::new();
         obj.multires = extras_multires || is_multires(opts, &[&node_name, &mesh_name]);
         // A mirroring transform flips the winding.
         let flip = world.determinant() < 0.0;
