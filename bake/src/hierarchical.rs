@@ -748,11 +748,18 @@ impl Ctx<'_> {
     }
 
     /// Gathers until converged; returns (iterations, final relative change).
-    fn solve(&self, trees: &mut [Tree], cl: &mut Vec<Vec3>, max_iterations: u32) -> (u32, f32) {
+    fn solve(
+        &self,
+        trees: &mut [Tree],
+        cl: &mut Vec<Vec3>,
+        max_iterations: u32,
+        report: &dyn Fn(usize),
+    ) -> (u32, f32) {
         let mut change = f32::INFINITY;
         let mut it = 0;
         while it < max_iterations {
             it += 1;
+            report(it as usize);
             let new: Vec<Vec<Vec3>> = (0..trees.len() as u32)
                 .into_par_iter()
                 .map(|r| self.iterate_root(r, trees, cl))
@@ -804,6 +811,20 @@ fn visible_fraction(n: u32, mut clear: impl FnMut(u32) -> bool) -> f32 {
 
 /// Bakes the scene: direct light, link refinement, solve, repeated `refine_passes` times.
 pub fn bake(scene: &Scene, params: &BakeParams) -> Result<BakeResult, BakeError> {
+    bake_with_progress(scene, params, &|_: &str, _: usize, _: usize| {})
+}
+
+/// Progress callback: `(phase, done, total)`, e.g. `("refine 1", 1200, 20000)` coarse
+/// triangles, or `("solve 2", 3, 200)` iterations (the total is the iteration cap). Called
+/// from worker threads; it only reports and never changes the result.
+pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
+
+/// [`bake`] with a progress report per phase (for progress bars).
+pub fn bake_with_progress(
+    scene: &Scene,
+    params: &BakeParams,
+    progress: Progress<'_>,
+) -> Result<BakeResult, BakeError> {
     scene.validate()?;
     if params.max_level > MAX_LEVEL {
         return Err(BakeError::InvalidParameter(format!(
@@ -887,10 +908,16 @@ pub fn bake(scene: &Scene, params: &BakeParams) -> Result<BakeResult, BakeError>
             f64::from(r.area) * std::f64::consts::PI * f64::from(lum(r.emission) + rho * lum(q[0]));
     }
     let eps_power = (ref_power * f64::from(params.bf_epsilon)) as f32;
+    let counter = std::sync::atomic::AtomicUsize::new(0);
     let direct: Vec<Vec<(ElemKey, Vec<Vec3>)>> = root_q
         .into_par_iter()
         .enumerate()
-        .map(|(r, q)| ctx.direct_tree(r as u32, q, eps_power))
+        .map(|(r, q)| {
+            let out = ctx.direct_tree(r as u32, q, eps_power);
+            let done = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress("direct", done, n_roots as usize);
+            out
+        })
         .collect();
     let mut trees: Vec<Tree> = (0..n_roots)
         .into_par_iter()
@@ -898,16 +925,23 @@ pub fn bake(scene: &Scene, params: &BakeParams) -> Result<BakeResult, BakeError>
         .collect();
     let mut cl = vec![Vec3::ZERO; ctx.clusters.clusters.len()];
     // Without links one pass gives L = Le + ρ H/π.
-    ctx.solve(&mut trees, &mut cl, 1);
+    ctx.solve(&mut trees, &mut cl, 1, &|_| {});
     stats
         .phase_seconds
         .push(("direct".into(), t1.elapsed().as_secs_f64()));
 
     for pass in 0..params.refine_passes.max(1) {
         let t2 = Instant::now();
+        let phase = format!("refine {}", pass + 1);
+        counter.store(0, std::sync::atomic::Ordering::Relaxed);
         let refined: Vec<(Vec<RawLink>, Vec<f32>)> = (0..n_roots)
             .into_par_iter()
-            .map(|r| ctx.refine_root(r, &trees, &cl, eps_power))
+            .map(|r| {
+                let out = ctx.refine_root(r, &trees, &cl, eps_power);
+                let done = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                progress(&phase, done, n_roots as usize);
+                out
+            })
             .collect();
         // Every source element must exist in its tree: collect keys per root in fixed order.
         let mut needed: Vec<Vec<ElemKey>> = vec![Vec::new(); n_roots as usize];
@@ -959,7 +993,11 @@ pub fn bake(scene: &Scene, params: &BakeParams) -> Result<BakeResult, BakeError>
             .phase_seconds
             .push((format!("refine {}", pass + 1), t2.elapsed().as_secs_f64()));
         let t3 = Instant::now();
-        let (it, change) = ctx.solve(&mut trees, &mut cl, params.max_iterations);
+        let phase = format!("solve {}", pass + 1);
+        let cap = params.max_iterations as usize;
+        let (it, change) = ctx.solve(&mut trees, &mut cl, params.max_iterations, &|i| {
+            progress(&phase, i, cap)
+        });
         stats.iterations += it;
         stats.final_change = change;
         stats

@@ -17,7 +17,10 @@ pub mod normal_sets;
 pub mod scene;
 pub mod visibility;
 
-pub use hierarchical::{bake, BakeParams, BakeResult, BakeStats, ObjectSolution, TriangleSolution};
+pub use hierarchical::{
+    bake, bake_with_progress, BakeParams, BakeResult, BakeStats, ObjectSolution, Progress,
+    TriangleSolution,
+};
 pub use scene::{LightKind, PunctualLight, Scene, SceneObject};
 
 /// Most normals a triangle's set may hold (n0 included).

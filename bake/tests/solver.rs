@@ -556,3 +556,31 @@ fn point_and_spot_lights_follow_gltf_units() {
         }
     }
 }
+
+#[test]
+fn progress_reports_every_phase_without_changing_the_result() {
+    use std::sync::Mutex;
+    let scene = bumpy_scene();
+    let seen: Mutex<Vec<(String, usize, usize)>> = Mutex::new(Vec::new());
+    let report = |phase: &str, done: usize, total: usize| {
+        seen.lock().unwrap().push((phase.to_string(), done, total));
+    };
+    let a = hce_bake::bake_with_progress(&scene, &BakeParams::default(), &report).unwrap();
+    let b = bake(&scene, &BakeParams::default()).unwrap();
+    // Timings differ from run to run; everything else must not.
+    assert!(
+        a.objects == b.objects,
+        "progress reporting changed the solution"
+    );
+    assert_eq!(
+        (a.stats.links, a.stats.elements, a.stats.iterations),
+        (b.stats.links, b.stats.elements, b.stats.iterations)
+    );
+    let seen = seen.into_inner().unwrap();
+    let n = scene.triangle_count();
+    for phase in ["direct", "refine 1", "refine 2"] {
+        let max = seen.iter().filter(|s| s.0 == phase).map(|s| s.1).max();
+        assert_eq!(max, Some(n), "{phase}");
+    }
+    assert!(seen.iter().any(|s| s.0 == "solve 2" && s.2 == 200));
+}
