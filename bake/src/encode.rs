@@ -116,10 +116,11 @@ fn check_tree_shape(subdivided: &[bool]) -> Result<(), String> {
 /// A decoded tree (for tests and tools): subdivided flags in breadth-first order.
 pub fn decode_tree(bits: &[u32], bit_len: u64, start: u64) -> Result<Vec<bool>, String> {
     let read = |i: u64| -> Result<bool, String> {
-        if i >= bit_len {
-            return Err(format!("tree runs past the end of the bitstream (bit {i})"));
+        let word = usize::try_from(i / 32).ok().and_then(|w| bits.get(w));
+        match word {
+            Some(w) if i < bit_len => Ok((w >> (i % 32)) & 1 == 1),
+            _ => Err(format!("tree runs past the end of the bitstream (bit {i})")),
         }
-        Ok((bits[(i / 32) as usize] >> (i % 32)) & 1 == 1)
     };
     let mut flags = vec![read(start)?];
     // Nodes still to be read: four per split node seen so far.
@@ -214,5 +215,7 @@ mod tests {
         let e = encode_object(&mut o, &[bad]).unwrap_err().to_string();
         assert!(e.contains("box") && e.contains("triangle 0"), "{e}");
         assert!(decode_tree(&[0b1], 3, 0).is_err());
+        // A bit length larger than the words hold is an error, not a panic.
+        assert!(decode_tree(&[0b1], 1000, 0).is_err());
     }
 }
