@@ -216,6 +216,6 @@ mod tests {
         assert!(e.contains("box") && e.contains("triangle 0"), "{e}");
         assert!(decode_tree(&[0b1], 3, 0).is_err());
         // A bit length larger than the words hold is an error, not a panic.
-        assert!(decode_tree(&[0b1], 1000, 0).is_err());
+        assert!(decode_tree(&[u32::MAX], 1000, 0).is_err());
     }
 }
