@@ -8,6 +8,7 @@
 
 mod gltf;
 mod obj;
+mod solver;
 mod texture;
 
 pub(crate) use gltf::read_uri;
@@ -237,17 +238,8 @@ impl Material {
     }
 }
 
-/// The kind of a KHR_lights_punctual light.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum LightKind {
-    Point,
-    /// Cone angles in radians from the light's direction.
-    Spot {
-        inner_cone_angle: f32,
-        outer_cone_angle: f32,
-    },
-    Directional,
-}
+/// The kind of a KHR_lights_punctual light (the solver's own type).
+pub use crate::scene::LightKind;
 
 /// A punctual light placed in world space. Units are those of KHR_lights_punctual: candela for
 /// point and spot lights, lux for directional lights.

@@ -1,0 +1,290 @@
+//! A binary cluster hierarchy over the scene's coarse triangles, so that hierarchical radiosity
+//! need not link every pair of input triangles (the quadratic initial linking of Hanrahan et
+//! al. 1991): a receiver can gather from a whole cluster at once where the oracle allows, in the
+//! manner of Smits, Arvo & Greenberg, "A clustering algorithm for radiosity in complex
+//! environments" (SIGGRAPH 1994). Clusters only ever act as sources; receivers are elements.
+//!
+//! Built top-down by median split of triangle centroids along the longest axis of their
+//! bounds, with ties broken by triangle index, so the tree is deterministic.
+
+use glam::Vec3;
+
+/// A child of a cluster: another cluster or a root triangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ClusterChild {
+    Cluster(u32),
+    Root(u32),
+}
+
+/// An interior node of the hierarchy (two or more triangles).
+#[derive(Clone, Debug)]
+pub struct Cluster {
+    pub lo: Vec3,
+    pub hi: Vec3,
+    /// Area-weighted centre of its triangles.
+    pub centre: Vec3,
+    pub area: f32,
+    /// Projected front-facing area seen along ±x, ±y, ±z: `Σ aᵢ max(0, ±nᵢ·axis)`.
+    pub proj: [f32; 6],
+    /// Normal cone of its triangles: unit axis and half-angle in radians (π when the normals
+    /// do not fit in a cone narrower than a hemisphere).
+    pub cone_axis: Vec3,
+    pub cone_angle: f32,
+    /// Its triangles are `order[first .. first + count]`.
+    pub first: u32,
+    pub count: u32,
+    pub children: [ClusterChild; 2],
+}
+
+impl Cluster {
+    /// Estimated area of front faces seen from direction `w` (unit, from the viewer towards
+    /// the cluster reversed: the direction light leaves the cluster in). Exact for
+    /// axis-aligned geometry; an overestimate by at most √3 otherwise.
+    pub fn projected_area(&self, w: Vec3) -> f32 {
+        let pick = |c: f32, i: usize| {
+            if c >= 0.0 {
+                c * self.proj[2 * i]
+            } else {
+                -c * self.proj[2 * i + 1]
+            }
+        };
+        (pick(w.x, 0) + pick(w.y, 1) + pick(w.z, 2)).min(self.area)
+    }
+
+    /// Whether every point within `r_radius` of `r_centre` lies behind every triangle of the
+    /// cluster (so the cluster cannot send it light): the back-face cone test.
+    pub fn faces_away_from(&self, r_centre: Vec3, r_radius: f32) -> bool {
+        if self.cone_angle >= std::f32::consts::FRAC_PI_2 {
+            return false;
+        }
+        let c = (self.lo + self.hi) * 0.5;
+        let v = r_centre - c;
+        let dist = v.length();
+        let reach = self.radius() + r_radius;
+        if dist <= reach {
+            return false;
+        }
+        let beta = (reach / dist).asin();
+        let theta = (self.cone_axis.dot(v / dist)).clamp(-1.0, 1.0).acos();
+        theta >= std::f32::consts::FRAC_PI_2 + self.cone_angle + beta
+    }
+
+    pub fn radius(&self) -> f32 {
+        (self.hi - self.lo).length() * 0.5
+    }
+
+    pub fn contains_point(&self, p: Vec3) -> bool {
+        p.cmpge(self.lo).all() && p.cmple(self.hi).all()
+    }
+
+    pub fn corners(&self) -> [Vec3; 8] {
+        let (l, h) = (self.lo, self.hi);
+        [
+            Vec3::new(l.x, l.y, l.z),
+            Vec3::new(h.x, l.y, l.z),
+            Vec3::new(l.x, h.y, l.z),
+            Vec3::new(h.x, h.y, l.z),
+            Vec3::new(l.x, l.y, h.z),
+            Vec3::new(h.x, l.y, h.z),
+            Vec3::new(l.x, h.y, h.z),
+            Vec3::new(h.x, h.y, h.z),
+        ]
+    }
+}
+
+/// The hierarchy and what sampling needs.
+pub struct ClusterTree {
+    pub clusters: Vec<Cluster>,
+    /// The top of the hierarchy (a lone triangle when the scene has one).
+    pub top: ClusterChild,
+    /// Root triangles in leaf order.
+    pub order: Vec<u32>,
+    /// `position[root]`: index of `root` in `order`.
+    pub position: Vec<u32>,
+    /// Prefix sums of areas in `order`, for area-proportional picking.
+    prefix: Vec<f64>,
+}
+
+impl ClusterTree {
+    /// `tris[i]`: corners of root triangle `i`.
+    pub fn build(tris: &[[Vec3; 3]]) -> Self {
+        let mut order: Vec<u32> = (0..tris.len() as u32).collect();
+        let centroid: Vec<Vec3> = tris.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
+        let mut tree = ClusterTree {
+            clusters: Vec::new(),
+            top: ClusterChild::Root(0),
+            order: Vec::new(),
+            position: Vec::new(),
+            prefix: Vec::new(),
+        };
+        if !tris.is_empty() {
+            tree.top = build_range(&mut tree.clusters, tris, &centroid, &mut order, 0);
+        }
+        tree.position = vec![0; tris.len()];
+        for (i, &r) in order.iter().enumerate() {
+            tree.position[r as usize] = i as u32;
+        }
+        tree.prefix = Vec::with_capacity(order.len() + 1);
+        let mut acc = 0.0f64;
+        tree.prefix.push(0.0);
+        for &r in &order {
+            acc += f64::from(area(tris[r as usize]));
+            tree.prefix.push(acc);
+        }
+        tree.order = order;
+        tree
+    }
+
+    /// Whether root triangle `root` lies inside cluster `c`.
+    pub fn holds(&self, c: u32, root: u32) -> bool {
+        let cl = &self.clusters[c as usize];
+        let p = self.position[root as usize];
+        p >= cl.first && p < cl.first + cl.count
+    }
+
+    /// Picks a triangle of cluster `c` with probability proportional to area (`u` in [0, 1)).
+    pub fn pick(&self, c: u32, u: f32) -> u32 {
+        let cl = &self.clusters[c as usize];
+        let (a, b) = (cl.first as usize, (cl.first + cl.count) as usize);
+        let target = self.prefix[a] + f64::from(u) * (self.prefix[b] - self.prefix[a]);
+        // First k in a..b with prefix[k + 1] > target.
+        let (mut lo, mut hi) = (a, b - 1);
+        while lo < hi {
+            let mid = (lo + hi) / 2;
+            if self.prefix[mid + 1] > target {
+                hi = mid;
+            } else {
+                lo = mid + 1;
+            }
+        }
+        self.order[lo]
+    }
+}
+
+fn area(t: [Vec3; 3]) -> f32 {
+    (t[1] - t[0]).cross(t[2] - t[0]).length() * 0.5
+}
+
+fn build_range(
+    clusters: &mut Vec<Cluster>,
+    tris: &[[Vec3; 3]],
+    centroid: &[Vec3],
+    ids: &mut [u32],
+    first: u32,
+) -> ClusterChild {
+    if ids.len() == 1 {
+        return ClusterChild::Root(ids[0]);
+    }
+    let (mut clo, mut chi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    for &i in ids.iter() {
+        clo = clo.min(centroid[i as usize]);
+        chi = chi.max(centroid[i as usize]);
+    }
+    let ext = chi - clo;
+    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
+    ids.sort_unstable_by(|&a, &b| {
+        centroid[a as usize][axis]
+            .total_cmp(&centroid[b as usize][axis])
+            .then(a.cmp(&b))
+    });
+    let mid = ids.len() / 2;
+    let index = clusters.len();
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    let mut total = 0.0f64;
+    let mut centre = glam::DVec3::ZERO;
+    let mut proj = [0.0f64; 6];
+    let mut nsum = Vec3::ZERO;
+    for &i in ids.iter() {
+        let t = tris[i as usize];
+        nsum += (t[1] - t[0]).cross(t[2] - t[0]);
+    }
+    let cone_axis = nsum.normalize_or_zero();
+    let mut cone_angle = if cone_axis == Vec3::ZERO {
+        std::f32::consts::PI
+    } else {
+        0.0f32
+    };
+    for &i in ids.iter() {
+        let t = tris[i as usize];
+        for v in t {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+        let a = f64::from(area(t));
+        let n = (t[1] - t[0])
+            .cross(t[2] - t[0])
+            .normalize_or_zero()
+            .as_dvec3();
+        if cone_axis != Vec3::ZERO {
+            let tn = n.as_vec3();
+            cone_angle = cone_angle.max(tn.dot(cone_axis).clamp(-1.0, 1.0).acos());
+        }
+        total += a;
+        centre += centroid[i as usize].as_dvec3() * a;
+        for k in 0..3 {
+            proj[2 * k] += a * n[k].max(0.0);
+            proj[2 * k + 1] += a * (-n[k]).max(0.0);
+        }
+    }
+    clusters.push(Cluster {
+        lo,
+        hi,
+        centre: (centre / total.max(1e-300)).as_vec3(),
+        area: total as f32,
+        proj: proj.map(|p| p as f32),
+        cone_axis,
+        cone_angle,
+        first,
+        count: ids.len() as u32,
+        children: [ClusterChild::Root(0); 2],
+    });
+    let (left, right) = ids.split_at_mut(mid);
+    let a = build_range(clusters, tris, centroid, left, first);
+    let b = build_range(clusters, tris, centroid, right, first + mid as u32);
+    clusters[index].children = [a, b];
+    ClusterChild::Cluster(index as u32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tree_covers_every_triangle_once_and_picks_by_area() {
+        let mut tris = Vec::new();
+        for i in 0..10 {
+            let x = i as f32;
+            // Triangle i has area (i + 1) / 2, facing +z.
+            tris.push([
+                Vec3::new(x * 10.0, 0.0, 0.0),
+                Vec3::new(x * 10.0 + (i + 1) as f32, 0.0, 0.0),
+                Vec3::new(x * 10.0, 1.0, 0.0),
+            ]);
+        }
+        let t = ClusterTree::build(&tris);
+        let mut seen = t.order.clone();
+        seen.sort();
+        assert_eq!(seen, (0..10).collect::<Vec<_>>());
+        let ClusterChild::Cluster(top) = t.top else {
+            panic!("ten triangles make a cluster")
+        };
+        let c = &t.clusters[top as usize];
+        assert_eq!(c.count, 10);
+        assert!((c.area - 27.5).abs() < 1e-4);
+        assert!((c.projected_area(Vec3::Z) - 27.5).abs() < 1e-4);
+        assert_eq!(c.projected_area(Vec3::NEG_Z), 0.0);
+        // The last triangle holds 10/55 of the area: u just below 1 picks it.
+        assert_eq!(t.pick(top, 0.999), 9);
+        assert_eq!(t.pick(top, 0.0), 0);
+        assert!(t.holds(top, 3));
+        // All triangles face +z: a receiver far below them is behind every one.
+        assert!(c.faces_away_from(Vec3::new(50.0, 0.5, -100.0), 1.0));
+        assert!(!c.faces_away_from(Vec3::new(50.0, 0.5, 100.0), 1.0));
+    }
+}

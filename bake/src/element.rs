@@ -1,0 +1,177 @@
+//! Elements of the radiosity hierarchy: a coarse triangle and its 1-to-4 subdivisions, named
+//! by a key (root triangle, level, path) so that any element's geometry can be computed without
+//! storing it, and deterministic hash-based sampling.
+//!
+//! The split and child order are those of `hce_format::model`: Top `(v0, m01, m20)`, Left
+//! `(m01, v1, m12)`, Center `(m12, m20, m01)`, Right `(m20, m12, v2)`.
+
+use glam::Vec3;
+
+/// Deepest element level a key can name (paths take two bits per level in 28 bits).
+pub const MAX_LEVEL: u32 = 14;
+
+/// Splits a triangle 1-to-4 in the model's child order.
+pub fn split(t: [Vec3; 3]) -> [[Vec3; 3]; 4] {
+    let [v0, v1, v2] = t;
+    let m01 = (v0 + v1) * 0.5;
+    let m12 = (v1 + v2) * 0.5;
+    let m20 = (v2 + v0) * 0.5;
+    [
+        [v0, m01, m20],
+        [m01, v1, m12],
+        [m12, m20, m01],
+        [m20, m12, v2],
+    ]
+}
+
+/// An element: root triangle (scene-global index), level and path (first choice most
+/// significant, as in the model's path numbering).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct ElemKey {
+    pub root: u32,
+    pub level: u32,
+    pub path: u32,
+}
+
+impl ElemKey {
+    pub fn root(root: u32) -> Self {
+        ElemKey {
+            root,
+            level: 0,
+            path: 0,
+        }
+    }
+
+    pub fn child(self, c: u32) -> Self {
+        ElemKey {
+            root: self.root,
+            level: self.level + 1,
+            path: self.path * 4 + c,
+        }
+    }
+
+    pub fn parent(self) -> Option<Self> {
+        (self.level > 0).then(|| ElemKey {
+            root: self.root,
+            level: self.level - 1,
+            path: self.path / 4,
+        })
+    }
+
+    /// Child index taken at depth `d` (0-based) on the way down.
+    pub fn choice(self, d: u32) -> u32 {
+        (self.path >> (2 * (self.level - 1 - d))) & 3
+    }
+
+    /// Whether `self` is `other` or one of its descendants.
+    pub fn within(self, other: Self) -> bool {
+        self.root == other.root
+            && self.level >= other.level
+            && (self.path >> (2 * (self.level - other.level))) == other.path
+    }
+
+    /// A stable 64-bit id for hashing.
+    pub fn id(self) -> u64 {
+        (u64::from(self.root) << 32) | (u64::from(self.level) << 28) | u64::from(self.path)
+    }
+
+    /// Corners of the element inside its root triangle `root_corners`.
+    pub fn corners(self, root_corners: [Vec3; 3]) -> [Vec3; 3] {
+        let mut t = root_corners;
+        for d in 0..self.level {
+            t = split(t)[self.choice(d) as usize];
+        }
+        t
+    }
+
+    /// Barycentric coordinates of the element's corners in its root triangle.
+    pub fn barycentric(self) -> [[f32; 3]; 3] {
+        let c = self.corners([Vec3::X, Vec3::Y, Vec3::Z]);
+        c.map(|v| v.to_array())
+    }
+}
+
+/// SplitMix64 finaliser: a good 64-bit mixing function.
+pub fn mix64(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// Deterministic random stream seeded by the ids of what is sampled, never by thread.
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(a: u64, b: u64, c: u64) -> Self {
+        Rng(mix64(mix64(mix64(a) ^ b) ^ c))
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        mix64(self.0)
+    }
+
+    /// Uniform in `[0, 1)`.
+    pub fn next_f32(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+    }
+}
+
+/// Point `i` of `n` stratified jittered points on triangle `t`: the triangle is split into
+/// `4^k >= n` congruent subtriangles and point `i` is a uniform random point in subtriangle
+/// `i * 4^k / n`.
+pub fn jittered_point(t: [Vec3; 3], i: u32, n: u32, rng: &mut Rng) -> Vec3 {
+    let mut k = 0;
+    while (1u32 << (2 * k)) < n && k < 8 {
+        k += 1;
+    }
+    let cells = 1u64 << (2 * k);
+    let cell = (u64::from(i) * cells / u64::from(n.max(1))) as u32;
+    let mut tri = t;
+    for d in 0..k {
+        tri = split(tri)[((cell >> (2 * (k - 1 - d))) & 3) as usize];
+    }
+    let (mut u, mut v) = (rng.next_f32(), rng.next_f32());
+    if u + v > 1.0 {
+        u = 1.0 - u;
+        v = 1.0 - v;
+    }
+    tri[0] + (tri[1] - tri[0]) * u + (tri[2] - tri[0]) * v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_navigate_like_the_model_paths() {
+        let k = ElemKey::root(7).child(2).child(3).child(1);
+        assert_eq!(k.path, 2 * 16 + 3 * 4 + 1);
+        assert_eq!([k.choice(0), k.choice(1), k.choice(2)], [2, 3, 1]);
+        assert_eq!(k.parent().unwrap(), ElemKey::root(7).child(2).child(3));
+        assert!(k.within(ElemKey::root(7).child(2)));
+        assert!(!k.within(ElemKey::root(7).child(1)));
+        let b = ElemKey::root(0).child(3).barycentric();
+        // Right child (m20, m12, v2).
+        assert_eq!(b[2], [0.0, 0.0, 1.0]);
+        assert_eq!(b[0], [0.5, 0.0, 0.5]);
+    }
+
+    #[test]
+    fn jittered_points_stay_inside_their_cells() {
+        let t = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let mut rng = Rng::new(1, 2, 3);
+        let mut quad = [0; 4];
+        for i in 0..16 {
+            let p = jittered_point(t, i, 16, &mut rng);
+            assert!(p.x >= 0.0 && p.y >= 0.0 && p.x + p.y <= 1.0 + 1e-6);
+            // The first four points lie in the Top child (x + y small... near v0).
+            if i < 4 {
+                assert!(p.x <= 0.5 + 1e-6 && p.y <= 0.5 + 1e-6 && p.x + p.y <= 0.5 + 1e-6);
+            }
+            quad[(i / 4) as usize] += 1;
+        }
+        assert_eq!(quad, [4; 4]);
+    }
+}

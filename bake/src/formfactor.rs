@@ -1,0 +1,157 @@
+//! Form factors: the analytic point-to-polygon form factor (Lambert 1760; in the contour form of
+//! Baum, Rushmeier & Winget, "Improving radiosity solutions through the use of analytically
+//! determined form-factors", SIGGRAPH 1989), clipped to the receiver's hemisphere so that it
+//! stays correct for any receiver normal (the enrichment of Padrón et al. 2010 evaluates the
+//! receiver cosine with normals other than the geometric one), and an area-to-area estimate
+//! that integrates it over stratified receiver points.
+
+use glam::{DVec3, Vec3};
+
+/// Form factor from a differential area at `p` with unit normal `n` to the planar convex
+/// polygon `poly` (counter-clockwise seen from its front), unoccluded. Zero when `p` is behind
+/// the polygon; the part of the polygon below `p`'s tangent plane is clipped away.
+pub fn point_to_polygon(p: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
+    if poly.len() < 3 {
+        return 0.0;
+    }
+    let p = p.as_dvec3();
+    let n = n.as_dvec3();
+    let src_n = (poly[1] - poly[0]).cross(poly[2] - poly[0]).as_dvec3();
+    // One-sided source: seen from behind (or edge-on) it sends nothing.
+    if src_n.dot(p - poly[0].as_dvec3()) <= 0.0 {
+        return 0.0;
+    }
+    // Clip the polygon (relative to p) against the receiver's tangent plane n·x >= 0.
+    let mut clipped: [DVec3; 8] = [DVec3::ZERO; 8];
+    let mut len = 0;
+    let k = poly.len().min(7);
+    for i in 0..k {
+        let a = poly[i].as_dvec3() - p;
+        let b = poly[(i + 1) % k].as_dvec3() - p;
+        let (da, db) = (n.dot(a), n.dot(b));
+        if da >= 0.0 {
+            clipped[len] = a;
+            len += 1;
+        }
+        if (da >= 0.0) != (db >= 0.0) && len < 8 {
+            let t = da / (da - db);
+            clipped[len] = a + (b - a) * t;
+            len += 1;
+        }
+    }
+    if len < 3 {
+        return 0.0;
+    }
+    // F = 1/(2π) Σ γ_i n·(r_i × r_{i+1}) / |r_i × r_{i+1}|, γ_i the angle subtended by edge i.
+    // Counter-clockwise seen from the front means the sum is negative from the front side.
+    let mut sum = 0.0f64;
+    for i in 0..len {
+        let a = clipped[i];
+        let b = clipped[(i + 1) % len];
+        let (la, lb) = (a.length(), b.length());
+        if la < 1e-300 || lb < 1e-300 {
+            continue;
+        }
+        let c = a.cross(b);
+        let lc = c.length();
+        if lc < 1e-300 {
+            continue;
+        }
+        let gamma = (a.dot(b) / (la * lb)).clamp(-1.0, 1.0).acos();
+        sum += gamma * n.dot(c) / lc;
+    }
+    ((-sum / (2.0 * std::f64::consts::PI)).max(0.0)) as f32
+}
+
+/// Stratified sample points of a triangle: the centroids of its `4^level` subtriangles after
+/// `level` rounds of the 1-to-4 split (so the points tile the triangle evenly).
+pub fn stratified_points(tri: [Vec3; 3], level: u32) -> Vec<Vec3> {
+    let mut tris = vec![tri];
+    for _ in 0..level {
+        tris = tris
+            .iter()
+            .flat_map(|&t| crate::element::split(t))
+            .collect();
+    }
+    tris.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect()
+}
+
+/// Area-to-area form factor from triangle `recv` to triangle `src`, unoccluded: the
+/// point-to-polygon form factor averaged over `4^level` stratified receiver points.
+pub fn triangle_to_triangle(recv: [Vec3; 3], src: [Vec3; 3], level: u32) -> f32 {
+    let n = (recv[1] - recv[0]).cross(recv[2] - recv[0]).normalize();
+    let pts = stratified_points(recv, level);
+    let sum: f64 = pts
+        .iter()
+        .map(|&p| f64::from(point_to_polygon(p, n, &src)))
+        .sum();
+    (sum / pts.len() as f64) as f32
+}
+
+/// Area-to-area form factor between two triangulated patches (area-weighted over the receiver
+/// triangles, summed over the source triangles).
+pub fn patch_to_patch(recv: &[[Vec3; 3]], src: &[[Vec3; 3]], level: u32) -> f32 {
+    let area = |t: &[Vec3; 3]| f64::from((t[1] - t[0]).cross(t[2] - t[0]).length() * 0.5);
+    let total: f64 = recv.iter().map(area).sum();
+    let mut f = 0.0f64;
+    for r in recv {
+        for s in src {
+            f += area(r) * f64::from(triangle_to_triangle(*r, *s, level));
+        }
+    }
+    (f / total) as f32
+}
+
+/// Cheap unoccluded estimate used by the refinement oracle: the disc approximation
+/// `A_s cosθ_r cosθ_s / (π d² + A_s)`, bounded by 1 even for nearby elements.
+pub fn disc_estimate(cos_r: f32, cos_s: f32, src_area: f32, dist2: f32) -> f32 {
+    (src_area * cos_r.max(0.0) * cos_s.max(0.0) / (std::f32::consts::PI * dist2 + src_area))
+        .min(1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square(o: Vec3, u: Vec3, v: Vec3) -> Vec<[Vec3; 3]> {
+        // Counter-clockwise seen from u × v.
+        vec![[o, o + u, o + u + v], [o, o + u + v, o + v]]
+    }
+
+    #[test]
+    fn perpendicular_unit_squares_sharing_an_edge() {
+        // Floor in z = 0 facing +z; wall in x = 0 facing +x, sharing the edge along y.
+        let floor = square(Vec3::ZERO, Vec3::X, Vec3::Y);
+        let wall = square(Vec3::ZERO, Vec3::Y, Vec3::Z);
+        let f = patch_to_patch(&floor, &wall, 5);
+        assert!((f - 0.20004).abs() / 0.20004 < 0.01, "F = {f}");
+    }
+
+    #[test]
+    fn parallel_unit_squares_one_apart() {
+        let bottom = square(Vec3::ZERO, Vec3::X, Vec3::Y);
+        // Facing down: counter-clockwise seen from below.
+        let top = square(Vec3::Z, Vec3::Y, Vec3::X);
+        let f = patch_to_patch(&bottom, &top, 4);
+        assert!((f - 0.19982).abs() / 0.19982 < 0.01, "F = {f}");
+    }
+
+    #[test]
+    fn hemisphere_clipping_and_back_faces() {
+        // A huge polygon above p covers the whole hemisphere: F -> 1.
+        let big = [
+            Vec3::new(-1e4, -1e4, 1.0),
+            Vec3::new(-1e4, 1e4, 1.0),
+            Vec3::new(1e4, 1e4, 1.0),
+            Vec3::new(1e4, -1e4, 1.0),
+        ];
+        let f = point_to_polygon(Vec3::ZERO, Vec3::Z, &big);
+        assert!((f - 1.0).abs() < 1e-3, "{f}");
+        // Tilted 90 degrees the receiver sees half of it, with half of the cosine weight.
+        let f = point_to_polygon(Vec3::ZERO, Vec3::X, &big);
+        assert!((f - 0.5).abs() < 1e-3, "{f}");
+        // From behind the polygon nothing arrives.
+        let f = point_to_polygon(Vec3::new(0.0, 0.0, 2.0), Vec3::NEG_Z, &big);
+        assert_eq!(f, 0.0);
+    }
+}

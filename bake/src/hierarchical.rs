@@ -1,0 +1,1028 @@
+//! Stage 2: enriched hierarchical radiosity.
+//!
+//! Hanrahan, Salzman & Aupperle, "A rapid hierarchical radiosity algorithm" (SIGGRAPH 1991):
+//! elements are coarse triangles split 1-to-4 (children Top, Left, Center, Right as in
+//! `hce_format::model`); a link between a receiver and a source is refined, splitting the
+//! larger of the two, while its brightness-weighted estimate (form factor × source radiance ×
+//! receiver area, as power) exceeds `bf_epsilon` times the scene's reference power; the system
+//! is solved by gathering over links and push-pull, and links are refined again against the
+//! solution. Instead of linking every pair of input triangles up front, receivers start from
+//! the top of a cluster hierarchy ([`crate::cluster`], after Smits et al. 1994) and open
+//! clusters by the same oracle, which culls pairs that face away or lie behind each other.
+//!
+//! Enrichment (Padrón et al. 2010): every element of a multiresolution object stores one
+//! radiance per normal of its root triangle's set; gathering evaluates the receiver cosine
+//! with each normal, while an element acting as a source radiates with its geometric normal
+//! (the value for n0). Punctual lights add direct illumination through shadow rays.
+//!
+//! Quantities are outgoing radiance `L` (see [`crate::scene`]); a receiver gathers
+//! `Q = Σ F·L_src + H_direct / π` and a leaf has `L = L_e + ρ·Q`.
+//!
+//! Determinism: work is split per root triangle, every random number is seeded from element
+//! ids, and every sum runs in a fixed order, so the result does not depend on the thread count.
+
+use std::time::Instant;
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::cluster::{ClusterChild, ClusterTree};
+use crate::element::{jittered_point, split, ElemKey, Rng, MAX_LEVEL};
+use crate::formfactor::{disc_estimate, point_to_polygon, stratified_points};
+use crate::scene::{LightKind, Scene};
+use crate::visibility::Occluders;
+use crate::BakeError;
+
+/// Most visibility rays per link accepted (beyond it a bake would take days, not hours).
+pub const MAX_VISIBILITY_RAYS: u32 = 4096;
+
+/// Solver parameters (the `hce bake` flags of the same names).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakeParams {
+    /// Refinement threshold: a link is refined while its estimated transported power exceeds
+    /// this fraction of the scene's reference power (emitted plus directly received). Default
+    /// 1e-4.
+    pub bf_epsilon: f32,
+    /// Elements are not split below this fraction of the total scene area. Default 1e-5.
+    pub min_area_fraction: f32,
+    /// Deepest element level below a coarse triangle. Default 4.
+    pub max_level: u32,
+    /// Jittered rays per link (and per element and light) for visibility; 0 disables
+    /// occlusion. Default 8.
+    pub visibility_rays: u32,
+    /// Iterate gather and push-pull until the relative change of the solution drops below
+    /// this. Default 1e-4.
+    pub tolerance: f32,
+    /// Upper bound on gather iterations per solve. Default 200.
+    pub max_iterations: u32,
+    /// Link refinement passes, each followed by a solve (the first refines against emission
+    /// and direct light). Default 2.
+    pub refine_passes: u32,
+    /// A cluster acts as one source only while its bounding radius is below this fraction of
+    /// its distance to the receiver (the Barnes-Hut opening criterion). Default 0.5.
+    pub cluster_opening: f32,
+}
+
+impl BakeParams {
+    /// The parameters as the JSON object text stored in the container's metadata.
+    pub fn to_json(&self) -> String {
+        serde_json::json!({
+            "bf_epsilon": self.bf_epsilon,
+            "min_area_fraction": self.min_area_fraction,
+            "max_level": self.max_level,
+            "visibility_rays": self.visibility_rays,
+            "tolerance": self.tolerance,
+            "max_iterations": self.max_iterations,
+            "refine_passes": self.refine_passes,
+            "cluster_opening": self.cluster_opening,
+        })
+        .to_string()
+    }
+}
+
+impl Default for BakeParams {
+    fn default() -> Self {
+        BakeParams {
+            bf_epsilon: 1e-4,
+            min_area_fraction: 1e-5,
+            max_level: 4,
+            visibility_rays: 8,
+            tolerance: 1e-4,
+            max_iterations: 200,
+            refine_passes: 2,
+            cluster_opening: 0.5,
+        }
+    }
+}
+
+/// The solution for one coarse triangle: its element tree in breadth-first order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TriangleSolution {
+    /// Normals colours are stored for, the geometric normal first.
+    pub normals: Vec<[f32; 3]>,
+    /// `(level, path)` of every node, breadth-first (children Top, Left, Center, Right).
+    pub nodes: Vec<(u32, u32)>,
+    /// Per node: whether it is split into four children.
+    pub subdivided: Vec<bool>,
+    /// Outgoing radiance per node and normal, node-major: `colours[k * normals.len() + j]`.
+    /// Interior nodes hold the area-weighted average of their children.
+    pub colours: Vec<[f32; 3]>,
+}
+
+/// The solution for one scene object.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ObjectSolution {
+    pub name: String,
+    pub multires: bool,
+    pub triangles: Vec<TriangleSolution>,
+}
+
+/// Figures for the summary.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BakeStats {
+    pub coarse_triangles: usize,
+    pub elements: usize,
+    pub links: usize,
+    /// Gather iterations summed over all solves.
+    pub iterations: u32,
+    /// Relative change at the end of the last solve.
+    pub final_change: f32,
+    /// Wall-clock seconds per phase: (name, seconds).
+    pub phase_seconds: Vec<(String, f64)>,
+}
+
+/// What [`bake`] returns.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakeResult {
+    pub objects: Vec<ObjectSolution>,
+    pub stats: BakeStats,
+}
+
+/// A coarse triangle as the solver sees it.
+struct Root {
+    corners: [Vec3; 3],
+    normal: Vec3,
+    area: f32,
+    normals: Vec<Vec3>,
+    emission: Vec3,
+    object: usize,
+    triangle: usize,
+}
+
+/// A link source.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Source {
+    Cluster(u32),
+    Elem(ElemKey),
+}
+
+/// A link as refinement produces it; `k[nn]` form factors (visibility included) per normal.
+struct RawLink {
+    recv: ElemKey,
+    src: Source,
+    k_start: u32,
+}
+
+/// A resolved link inside a root's tree.
+struct Link {
+    recv: u32,
+    src: SrcIdx,
+    k_start: u32,
+}
+
+#[derive(Clone, Copy)]
+enum SrcIdx {
+    Cluster(u32),
+    Node { root: u32, node: u32 },
+}
+
+/// One root's element tree in breadth-first order, with its links and solution.
+struct Tree {
+    keys: Vec<ElemKey>,
+    /// Index of the first of four children, or `u32::MAX` for a leaf.
+    child: Vec<u32>,
+    area: Vec<f32>,
+    /// Reflectance per node (used at leaves).
+    rho: Vec<Vec3>,
+    /// Direct-light `H / π` per node and normal (non-zero at direct-pass leaves only).
+    direct: Vec<Vec3>,
+    links: Vec<Link>,
+    k: Vec<f32>,
+    /// Radiance per node and normal.
+    l: Vec<Vec3>,
+}
+
+impl Tree {
+    fn index_of(&self, key: ElemKey) -> Option<u32> {
+        self.keys
+            .binary_search_by(|k| (k.level, k.path).cmp(&(key.level, key.path)))
+            .ok()
+            .map(|i| i as u32)
+    }
+
+    /// The deepest existing node on the way to `key`.
+    fn deepest_toward(&self, key: ElemKey) -> u32 {
+        let mut i = 0u32;
+        for d in 0..key.level {
+            let c = self.child[i as usize];
+            if c == u32::MAX {
+                break;
+            }
+            i = c + key.choice(d);
+        }
+        i
+    }
+}
+
+struct Ctx<'a> {
+    scene: &'a Scene,
+    params: &'a BakeParams,
+    roots: Vec<Root>,
+    clusters: ClusterTree,
+    occ: Occluders,
+    min_area: f32,
+    /// Distances to a plane below this count as lying in it (rounding of coplanar
+    /// geometry), relative to the scene size.
+    plane_eps: f32,
+}
+
+fn lum(v: Vec3) -> f32 {
+    v.max_element()
+}
+
+impl Ctx<'_> {
+    fn nn(&self, r: u32) -> usize {
+        self.roots[r as usize].normals.len()
+    }
+
+    fn elem_corners(&self, k: ElemKey) -> [Vec3; 3] {
+        k.corners(self.roots[k.root as usize].corners)
+    }
+
+    fn splittable(&self, k: ElemKey, area: f32) -> bool {
+        k.level < self.params.max_level.min(MAX_LEVEL) && area * 0.25 >= self.min_area
+    }
+
+    fn reflectance(&self, k: ElemKey) -> Vec3 {
+        let root = &self.roots[k.root as usize];
+        let obj = &self.scene.objects[root.object];
+        let r = match &obj.reflectance_fn {
+            Some(f) => f(root.triangle, k.barycentric()),
+            None => obj.reflectance[root.triangle],
+        };
+        Vec3::from(r).clamp(Vec3::ZERO, Vec3::ONE)
+    }
+
+    /// Direct irradiance / π per normal at element `k` from every punctual light.
+    fn direct(&self, k: ElemKey) -> Vec<Vec3> {
+        let root = &self.roots[k.root as usize];
+        let nn = root.normals.len();
+        let mut q = vec![Vec3::ZERO; nn];
+        if self.scene.lights.is_empty() {
+            return q;
+        }
+        let tri = self.elem_corners(k);
+        let nv = self.params.visibility_rays;
+        let samples = nv.max(1);
+        for (li, light) in self.scene.lights.iter().enumerate() {
+            let mut rng = Rng::new(k.id(), li as u64, 0x11);
+            let colour = Vec3::from(light.color) * light.intensity;
+            let mut acc = vec![Vec3::ZERO; nn];
+            for i in 0..samples {
+                let p = if nv == 0 {
+                    (tri[0] + tri[1] + tri[2]) / 3.0
+                } else {
+                    jittered_point(tri, i, samples, &mut rng)
+                };
+                let (w, dist, scale) = match light.kind {
+                    LightKind::Directional => {
+                        let w = -Vec3::from(light.direction).normalize();
+                        (w, f32::INFINITY, 1.0)
+                    }
+                    LightKind::Point | LightKind::Spot { .. } => {
+                        let d = Vec3::from(light.position) - p;
+                        let dist = d.length();
+                        if dist <= 1e-12 {
+                            continue;
+                        }
+                        let w = d / dist;
+                        let mut s = 1.0 / (dist * dist);
+                        if let Some(range) = light.range {
+                            s *= (1.0 - (dist / range).powi(4)).clamp(0.0, 1.0);
+                        }
+                        if let LightKind::Spot {
+                            inner_cone_angle,
+                            outer_cone_angle,
+                        } = light.kind
+                        {
+                            let axis = Vec3::from(light.direction).normalize();
+                            let cd = (-w).dot(axis);
+                            let (ci, co) = (inner_cone_angle.cos(), outer_cone_angle.cos());
+                            let t = ((cd - co) / (ci - co).max(1e-4)).clamp(0.0, 1.0);
+                            s *= t * t;
+                        }
+                        (w, dist, s)
+                    }
+                };
+                if scale <= 0.0 || root.normals.iter().all(|n| n.dot(w) <= 0.0) {
+                    continue;
+                }
+                if nv > 0 && !self.occ.ray_clear(p, w, dist * (1.0 - 1e-5)) {
+                    continue;
+                }
+                for (a, n) in acc.iter_mut().zip(&root.normals) {
+                    *a += colour * (scale * n.dot(w).max(0.0));
+                }
+            }
+            for (qj, a) in q.iter_mut().zip(&acc) {
+                *qj += *a / (samples as f32 * std::f32::consts::PI);
+            }
+        }
+        q
+    }
+
+    /// Direct-light refinement of root `r`: splits where the direct light varies by more than
+    /// the oracle allows (shadow boundaries, spot edges). Returns the leaves and their values.
+    fn direct_tree(&self, r: u32, root_q: Vec<Vec3>, eps_power: f32) -> Vec<(ElemKey, Vec<Vec3>)> {
+        let mut out = Vec::new();
+        let mut stack = vec![(ElemKey::root(r), root_q)];
+        while let Some((k, q)) = stack.pop() {
+            let area = self.roots[r as usize].area / 4f32.powi(k.level as i32);
+            if self.scene.lights.is_empty() || !self.splittable(k, area) {
+                out.push((k, q));
+                continue;
+            }
+            let kids: Vec<(ElemKey, Vec<Vec3>)> = (0..4)
+                .map(|c| (k.child(c), self.direct(k.child(c))))
+                .collect();
+            let mut var = 0.0f32;
+            for (_, cq) in &kids {
+                for (a, b) in cq.iter().zip(&q) {
+                    var = var.max(lum((*a - *b).abs()));
+                }
+            }
+            let rho = lum(self.reflectance(k));
+            if var * rho * area * std::f32::consts::PI > eps_power {
+                // Children in reverse so that they pop in order.
+                stack.extend(kids.into_iter().rev());
+            } else {
+                let mut mean = vec![Vec3::ZERO; q.len()];
+                for (_, cq) in &kids {
+                    for (m, v) in mean.iter_mut().zip(cq) {
+                        *m += *v * 0.25;
+                    }
+                }
+                out.push((k, mean));
+            }
+        }
+        out.sort_by_key(|(k, _)| (k.level, k.path));
+        out
+    }
+
+    /// Radiance (normal 0) of a source in the previous solution.
+    fn src_radiance(&self, trees: &[Tree], cl: &[Vec3], s: Source) -> Vec3 {
+        match s {
+            Source::Cluster(c) => cl[c as usize],
+            Source::Elem(k) => {
+                let t = &trees[k.root as usize];
+                let i = t.deepest_toward(k);
+                t.l[i as usize * self.nn(k.root)]
+            }
+        }
+    }
+
+    /// Refines the links arriving at root `r` against the previous solution.
+    fn refine_root(
+        &self,
+        r: u32,
+        trees: &[Tree],
+        cl: &[Vec3],
+        eps_power: f32,
+    ) -> (Vec<RawLink>, Vec<f32>) {
+        let mut links = Vec::new();
+        let mut ks = Vec::new();
+        let nn = self.nn(r);
+        // Coefficients are a pure function of the pair: reuse those of the previous pass.
+        let prev = &trees[r as usize];
+        let cache: std::collections::HashMap<(ElemKey, Source), usize> = prev
+            .links
+            .iter()
+            .map(|l| {
+                let src = match l.src {
+                    SrcIdx::Cluster(c) => Source::Cluster(c),
+                    SrcIdx::Node { root, node } => {
+                        Source::Elem(trees[root as usize].keys[node as usize])
+                    }
+                };
+                ((prev.keys[l.recv as usize], src), l.k_start as usize)
+            })
+            .collect();
+        let top = match self.clusters.top {
+            ClusterChild::Cluster(c) => Source::Cluster(c),
+            ClusterChild::Root(x) => Source::Elem(ElemKey::root(x)),
+        };
+        let mut stack = vec![(ElemKey::root(r), top)];
+        let root = &self.roots[r as usize];
+        while let Some((recv, src)) = stack.pop() {
+            let rt = self.elem_corners(recv);
+            let r_area = root.area / 4f32.powi(recv.level as i32);
+            let rc = (rt[0] + rt[1] + rt[2]) / 3.0;
+            let open = |c: u32, stack: &mut Vec<(ElemKey, Source)>| {
+                for ch in self.clusters.clusters[c as usize].children.iter().rev() {
+                    let s = match *ch {
+                        ClusterChild::Cluster(c) => Source::Cluster(c),
+                        ClusterChild::Root(x) => Source::Elem(ElemKey::root(x)),
+                    };
+                    stack.push((recv, s));
+                }
+            };
+            let est;
+            let s_area;
+            let s_splittable;
+            match src {
+                Source::Elem(sk) => {
+                    if sk.root == r {
+                        continue; // A planar triangle does not see itself.
+                    }
+                    let st = self.elem_corners(sk);
+                    let sn = self.roots[sk.root as usize].normal;
+                    // Receiver entirely behind the source, or source behind every normal.
+                    if rt.iter().all(|&v| sn.dot(v - st[0]) <= self.plane_eps) {
+                        continue;
+                    }
+                    let sees = |n: &Vec3| {
+                        st.iter()
+                            .any(|&s| rt.iter().any(|&v| n.dot(s - v) > self.plane_eps))
+                    };
+                    if !root.normals.iter().any(sees) {
+                        continue;
+                    }
+                    s_area = self.roots[sk.root as usize].area / 4f32.powi(sk.level as i32);
+                    s_splittable = self.splittable(sk, s_area);
+                    let sc = (st[0] + st[1] + st[2]) / 3.0;
+                    let d2 = (sc - rc).length_squared();
+                    let l = lum(self.src_radiance(trees, cl, src));
+                    let far = d2 > 36.0 * (r_area + s_area);
+                    if far {
+                        let w = (sc - rc) / d2.sqrt();
+                        let cos_r = root.normals.iter().map(|n| n.dot(w)).fold(0.0, f32::max);
+                        let f = disc_estimate(cos_r, (-w).dot(sn), s_area, d2);
+                        est = f * l * r_area * std::f32::consts::PI;
+                    } else {
+                        // Near pairs: the point form factor at the centre and near each
+                        // corner of the receiver bounds both its size and its variation.
+                        let (mut fmax, mut fmin) = (0.0f32, f32::MAX);
+                        for p in [rc, rt[0], rt[1], rt[2]] {
+                            let p = p + (rc - p) * 0.1;
+                            for n in &root.normals {
+                                let f = point_to_polygon(p, *n, &st);
+                                fmax = fmax.max(f);
+                                fmin = fmin.min(f);
+                            }
+                        }
+                        est = fmax * l * r_area * std::f32::consts::PI;
+                        let var = (fmax - fmin) * l * r_area * std::f32::consts::PI;
+                        if var > eps_power * 0.2 && self.splittable(recv, r_area) {
+                            for c in (0..4).rev() {
+                                stack.push((recv.child(c), src));
+                            }
+                            continue;
+                        }
+                    }
+                }
+                Source::Cluster(c) => {
+                    let cluster = &self.clusters.clusters[c as usize];
+                    if self.clusters.holds(c, r) || rt.iter().any(|&v| cluster.contains_point(v)) {
+                        open(c, &mut stack);
+                        continue;
+                    }
+                    let r_radius = rt.iter().map(|v| (*v - rc).length()).fold(0.0, f32::max);
+                    if cluster.faces_away_from(rc, r_radius) {
+                        continue;
+                    }
+                    let corners = cluster.corners();
+                    let sees = |n: &Vec3| {
+                        corners
+                            .iter()
+                            .any(|&s| rt.iter().any(|&v| n.dot(s - v) > self.plane_eps))
+                    };
+                    if !root.normals.iter().any(sees) {
+                        continue;
+                    }
+                    s_area = cluster.area;
+                    s_splittable = true;
+                    let d = cluster.centre - rc;
+                    let d2 = d.length_squared().max(1e-20);
+                    let dist = d2.sqrt();
+                    let w = d / dist;
+                    if cluster.radius() >= dist * self.params.cluster_opening {
+                        open(c, &mut stack);
+                        continue;
+                    }
+                    let proj = cluster.projected_area(-w);
+                    let f = proj / (std::f32::consts::PI * d2 + proj);
+                    let l = lum(self.src_radiance(trees, cl, src));
+                    est = f * l * r_area * std::f32::consts::PI;
+                }
+            }
+            if est > eps_power {
+                let r_split = self.splittable(recv, r_area);
+                let split_recv = r_split && (r_area >= s_area || !s_splittable);
+                if split_recv {
+                    for c in (0..4).rev() {
+                        stack.push((recv.child(c), src));
+                    }
+                    continue;
+                }
+                if s_splittable {
+                    match src {
+                        Source::Cluster(c) => open(c, &mut stack),
+                        Source::Elem(sk) => {
+                            for c in (0..4).rev() {
+                                stack.push((recv, Source::Elem(sk.child(c))));
+                            }
+                        }
+                    }
+                    continue;
+                }
+            }
+            let k_start = ks.len() as u32;
+            let k = match cache.get(&(recv, src)) {
+                Some(&at) => prev.k[at..at + nn].to_vec(),
+                None => {
+                    // A link far below the threshold carries little light: a few rays
+                    // bound its visibility error well enough (the error it can add is a
+                    // fraction of its own small power).
+                    let nv = self.params.visibility_rays;
+                    let rays = if est >= 0.05 * eps_power {
+                        nv
+                    } else {
+                        nv.min(2)
+                    };
+                    self.link_coefficients(recv, src, rays)
+                }
+            };
+            if k.iter().all(|&v| v <= 0.0) {
+                continue;
+            }
+            ks.extend(k);
+            links.push(RawLink { recv, src, k_start });
+        }
+        (links, ks)
+    }
+
+    /// Form factor times visibility from receiver `recv` to `src`, per receiver normal.
+    fn link_coefficients(&self, recv: ElemKey, src: Source, nv: u32) -> Vec<f32> {
+        let root = &self.roots[recv.root as usize];
+        let nn = root.normals.len();
+        let rt = self.elem_corners(recv);
+        let rc = (rt[0] + rt[1] + rt[2]) / 3.0;
+        let r_size = (rt[1] - rt[0]).length().max((rt[2] - rt[0]).length());
+        let src_id = match src {
+            Source::Cluster(c) => 0x8000_0000_0000_0000 | u64::from(c),
+            Source::Elem(k) => k.id(),
+        };
+        let mut k = vec![0.0f32; nn];
+        let visible = match src {
+            Source::Elem(sk) => {
+                let st = self.elem_corners(sk);
+                let sc = (st[0] + st[1] + st[2]) / 3.0;
+                let s_size = (st[1] - st[0]).length().max((st[2] - st[0]).length());
+                // Far pairs: the centroid suffices; near pairs: four stratified points.
+                let dist = (sc - rc).length();
+                let pts: Vec<Vec3> = if dist > 3.0 * (r_size + s_size) {
+                    vec![rc]
+                } else if dist > r_size + s_size {
+                    split(rt)
+                        .iter()
+                        .map(|t| (t[0] + t[1] + t[2]) / 3.0)
+                        .collect()
+                } else {
+                    stratified_points(rt, 2)
+                };
+                for p in &pts {
+                    for (kj, n) in k.iter_mut().zip(&root.normals) {
+                        *kj += point_to_polygon(*p, *n, &st);
+                    }
+                }
+                let inv = 1.0 / pts.len() as f32;
+                k.iter_mut().for_each(|v| *v *= inv);
+                visible_fraction(nv, |i| {
+                    let mut rng = Rng::new(recv.id(), src_id, u64::from(i));
+                    let p = jittered_point(rt, i, nv, &mut rng);
+                    let q = jittered_point(st, i, nv, &mut rng);
+                    self.occ.segment_clear(p, q)
+                })
+            }
+            Source::Cluster(c) => {
+                let cluster = &self.clusters.clusters[c as usize];
+                let d = cluster.centre - rc;
+                let d2 = d.length_squared();
+                let w = d / d2.sqrt();
+                let proj = cluster.projected_area(-w);
+                for (kj, n) in k.iter_mut().zip(&root.normals) {
+                    *kj = (n.dot(w).max(0.0) * proj / (std::f32::consts::PI * d2 + proj)).min(1.0);
+                }
+                visible_fraction(nv, |i| {
+                    let mut rng = Rng::new(recv.id(), src_id, u64::from(i));
+                    let p = jittered_point(rt, i, nv, &mut rng);
+                    let t = self.clusters.pick(c, rng.next_f32());
+                    let tc = self.roots[t as usize].corners;
+                    let q = jittered_point(tc, 0, 1, &mut rng);
+                    self.occ.segment_clear(p, q)
+                })
+            }
+        };
+        k.iter_mut().for_each(|v| *v *= visible);
+        k
+    }
+
+    /// Builds root `r`'s tree from the keys that must exist.
+    fn build_tree(&self, r: u32, mut keys: Vec<ElemKey>, direct: &[(ElemKey, Vec<Vec3>)]) -> Tree {
+        let nn = self.nn(r);
+        keys.push(ElemKey::root(r));
+        keys.extend(direct.iter().map(|(k, _)| *k));
+        // Close under ancestors, then give every split node all four children.
+        let mut all: Vec<ElemKey> = Vec::with_capacity(keys.len() * 2);
+        for k in keys {
+            let mut k = Some(k);
+            while let Some(x) = k {
+                all.push(x);
+                k = x.parent();
+            }
+        }
+        all.sort_by_key(|k| (k.level, k.path));
+        all.dedup();
+        let parents: Vec<ElemKey> = all.iter().filter_map(|k| k.parent()).collect();
+        for p in parents {
+            for c in 0..4 {
+                all.push(p.child(c));
+            }
+        }
+        all.sort_by_key(|k| (k.level, k.path));
+        all.dedup();
+        let n = all.len();
+        let mut tree = Tree {
+            child: vec![u32::MAX; n],
+            area: all
+                .iter()
+                .map(|k| self.roots[r as usize].area / 4f32.powi(k.level as i32))
+                .collect(),
+            rho: vec![Vec3::ZERO; n],
+            direct: vec![Vec3::ZERO; n * nn],
+            links: Vec::new(),
+            k: Vec::new(),
+            l: vec![Vec3::ZERO; n * nn],
+            keys: all,
+        };
+        for i in 1..n {
+            let p = tree.keys[i].parent().expect("non-root has a parent");
+            let pi = tree.index_of(p).expect("ancestors are present") as usize;
+            if tree.keys[i].path % 4 == 0 {
+                tree.child[pi] = i as u32;
+            }
+        }
+        for i in 0..n {
+            if tree.child[i] == u32::MAX {
+                tree.rho[i] = self.reflectance(tree.keys[i]);
+            }
+        }
+        for (k, q) in direct {
+            let i = tree.index_of(*k).expect("direct keys are present") as usize;
+            tree.direct[i * nn..(i + 1) * nn].copy_from_slice(q);
+        }
+        tree
+    }
+
+    /// One gather + push-pull for root `r`; returns the new radiance array.
+    fn iterate_root(&self, r: u32, trees: &[Tree], cl: &[Vec3]) -> Vec<Vec3> {
+        let t = &trees[r as usize];
+        let nn = self.nn(r);
+        let n = t.keys.len();
+        let mut q = t.direct.clone();
+        for link in &t.links {
+            let ls = match link.src {
+                SrcIdx::Cluster(c) => cl[c as usize],
+                SrcIdx::Node { root, node } => {
+                    trees[root as usize].l[node as usize * self.nn(root)]
+                }
+            };
+            let base = link.recv as usize * nn;
+            for j in 0..nn {
+                q[base + j] += ls * t.k[link.k_start as usize + j];
+            }
+        }
+        // Push: every node receives what its ancestors gathered (breadth-first order puts
+        // parents first).
+        for i in 0..n {
+            let c = t.child[i];
+            if c != u32::MAX {
+                for ch in c as usize..c as usize + 4 {
+                    for j in 0..nn {
+                        let v = q[i * nn + j];
+                        q[ch * nn + j] += v;
+                    }
+                }
+            }
+        }
+        let le = self.roots[r as usize].emission;
+        let mut l = vec![Vec3::ZERO; n * nn];
+        // Pull: leaves reflect, interior nodes average their children by area.
+        for i in (0..n).rev() {
+            let c = t.child[i];
+            if c == u32::MAX {
+                for j in 0..nn {
+                    l[i * nn + j] = le + t.rho[i] * q[i * nn + j];
+                }
+            } else {
+                let c = c as usize;
+                let a: f32 = (c..c + 4).map(|ch| t.area[ch]).sum();
+                for j in 0..nn {
+                    let mut s = Vec3::ZERO;
+                    for ch in c..c + 4 {
+                        s += l[ch * nn + j] * t.area[ch];
+                    }
+                    l[i * nn + j] = s / a;
+                }
+            }
+        }
+        l
+    }
+
+    /// Cluster radiances (normal 0), area-weighted, bottom-up.
+    fn cluster_radiance(&self, trees: &[Tree]) -> Vec<Vec3> {
+        let cs = &self.clusters.clusters;
+        let mut out = vec![Vec3::ZERO; cs.len()];
+        // Children are created after their parent, so reverse order is bottom-up.
+        for c in (0..cs.len()).rev() {
+            let mut s = Vec3::ZERO;
+            for ch in cs[c].children {
+                s += match ch {
+                    ClusterChild::Cluster(x) => out[x as usize] * cs[x as usize].area,
+                    ClusterChild::Root(x) => trees[x as usize].l[0] * self.roots[x as usize].area,
+                };
+            }
+            out[c] = s / cs[c].area.max(1e-30);
+        }
+        out
+    }
+
+    /// Gathers until converged; returns (iterations, final relative change).
+    fn solve(
+        &self,
+        trees: &mut [Tree],
+        cl: &mut Vec<Vec3>,
+        max_iterations: u32,
+        report: &dyn Fn(usize),
+    ) -> (u32, f32) {
+        let mut change = f32::INFINITY;
+        let mut it = 0;
+        while it < max_iterations {
+            it += 1;
+            report(it as usize);
+            let new: Vec<Vec<Vec3>> = (0..trees.len() as u32)
+                .into_par_iter()
+                .map(|r| self.iterate_root(r, trees, cl))
+                .collect();
+            let (mut num, mut den) = (0.0f64, 0.0f64);
+            for (t, l) in trees.iter_mut().zip(new) {
+                for (a, b) in t.l.iter().zip(&l) {
+                    num += f64::from((*a - *b).abs().element_sum());
+                    den += f64::from(b.abs().element_sum());
+                }
+                t.l = l;
+            }
+            *cl = self.cluster_radiance(trees);
+            change = if den > 0.0 { (num / den) as f32 } else { 0.0 };
+            if change < self.params.tolerance {
+                break;
+            }
+        }
+        (it, change)
+    }
+}
+
+/// Fraction of `n` visibility samples that are clear. Four well-spread samples go first; when
+/// they agree (the common fully visible or fully hidden case) they decide alone, otherwise
+/// all `n` are taken. The order depends only on `n`, so the result is deterministic.
+fn visible_fraction(n: u32, mut clear: impl FnMut(u32) -> bool) -> f32 {
+    if n == 0 {
+        return 1.0;
+    }
+    let first: Vec<u32> = if n > 4 {
+        (0..4).map(|k| k * n / 4).collect()
+    } else {
+        (0..n).collect()
+    };
+    let hits: Vec<bool> = first.iter().map(|&i| clear(i)).collect();
+    let seen = hits.iter().filter(|&&h| h).count() as u32;
+    if n <= 4 {
+        return seen as f32 / n as f32;
+    }
+    if seen == 0 || seen == 4 {
+        return seen as f32 / 4.0;
+    }
+    let rest = (0..n)
+        .filter(|i| !first.contains(i))
+        .filter(|&i| clear(i))
+        .count() as u32;
+    (seen + rest) as f32 / n as f32
+}
+
+/// Bakes the scene: direct light, link refinement, solve, repeated `refine_passes` times.
+pub fn bake(scene: &Scene, params: &BakeParams) -> Result<BakeResult, BakeError> {
+    bake_with_progress(scene, params, &|_: &str, _: usize, _: usize| {})
+}
+
+/// Progress callback: `(phase, done, total)`, e.g. `("refine 1", 1200, 20000)` coarse
+/// triangles, or `("solve 2", 3, 200)` iterations (the total is the iteration cap). Called
+/// from worker threads; it only reports and never changes the result.
+pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
+
+/// [`bake`] with a progress report per phase (for progress bars).
+pub fn bake_with_progress(
+    scene: &Scene,
+    params: &BakeParams,
+    progress: Progress<'_>,
+) -> Result<BakeResult, BakeError> {
+    scene.validate()?;
+    if params.max_level > MAX_LEVEL {
+        return Err(BakeError::InvalidParameter(format!(
+            "max_level {} exceeds the supported {MAX_LEVEL}",
+            params.max_level
+        )));
+    }
+    if params.visibility_rays > MAX_VISIBILITY_RAYS {
+        return Err(BakeError::InvalidParameter(format!(
+            "visibility_rays {} exceeds {MAX_VISIBILITY_RAYS}",
+            params.visibility_rays
+        )));
+    }
+    let positive = |x: f32| x.is_finite() && x > 0.0;
+    if !positive(params.bf_epsilon)
+        || !positive(params.tolerance)
+        || !positive(params.cluster_opening)
+    {
+        return Err(BakeError::InvalidParameter(
+            "bf_epsilon, tolerance and cluster_opening must be positive and finite".into(),
+        ));
+    }
+    let mut stats = BakeStats::default();
+    let t0 = Instant::now();
+    let mut roots = Vec::new();
+    for (oi, o) in scene.objects.iter().enumerate() {
+        for t in 0..o.triangles.len() {
+            let corners = o.corners(t);
+            let c = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+            roots.push(Root {
+                corners,
+                normal: c.normalize(),
+                area: c.length() * 0.5,
+                normals: o.normals_of(t),
+                emission: Vec3::from(o.emission_of(t)),
+                object: oi,
+                triangle: t,
+            });
+        }
+    }
+    if roots.len() >= u32::MAX as usize {
+        return Err(BakeError::InvalidParameter("too many triangles".into()));
+    }
+    let all_tris: Vec<[Vec3; 3]> = roots.iter().map(|r| r.corners).collect();
+    let total_area: f64 = roots.iter().map(|r| f64::from(r.area)).sum();
+    let ctx = Ctx {
+        scene,
+        params,
+        clusters: ClusterTree::build(&all_tris),
+        occ: Occluders::new(all_tris.iter().copied()),
+        min_area: (total_area * f64::from(params.min_area_fraction)) as f32,
+        plane_eps: {
+            let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+            for t in &all_tris {
+                for v in t {
+                    lo = lo.min(*v);
+                    hi = hi.max(*v);
+                }
+            }
+            (hi - lo).length() * 1e-6
+        },
+        roots,
+    };
+    stats.coarse_triangles = ctx.roots.len();
+    stats
+        .phase_seconds
+        .push(("setup".into(), t0.elapsed().as_secs_f64()));
+
+    // Direct light, first at the roots to fix the reference power, then refined.
+    let t1 = Instant::now();
+    let n_roots = ctx.roots.len() as u32;
+    let root_q: Vec<Vec<Vec3>> = (0..n_roots)
+        .into_par_iter()
+        .map(|r| ctx.direct(ElemKey::root(r)))
+        .collect();
+    let mut ref_power = 0.0f64;
+    for (r, (root, q)) in ctx.roots.iter().zip(&root_q).enumerate() {
+        let rho = lum(ctx.reflectance(ElemKey::root(r as u32)));
+        let r = root;
+        ref_power +=
+            f64::from(r.area) * std::f64::consts::PI * f64::from(lum(r.emission) + rho * lum(q[0]));
+    }
+    let eps_power = (ref_power * f64::from(params.bf_epsilon)) as f32;
+    let counter = std::sync::atomic::AtomicUsize::new(0);
+    let direct: Vec<Vec<(ElemKey, Vec<Vec3>)>> = root_q
+        .into_par_iter()
+        .enumerate()
+        .map(|(r, q)| {
+            let out = ctx.direct_tree(r as u32, q, eps_power);
+            let done = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress("direct", done, n_roots as usize);
+            out
+        })
+        .collect();
+    let mut trees: Vec<Tree> = (0..n_roots)
+        .into_par_iter()
+        .map(|r| ctx.build_tree(r, Vec::new(), &direct[r as usize]))
+        .collect();
+    let mut cl = vec![Vec3::ZERO; ctx.clusters.clusters.len()];
+    // Without links one pass gives L = Le + ρ H/π.
+    ctx.solve(&mut trees, &mut cl, 1, &|_| {});
+    stats
+        .phase_seconds
+        .push(("direct".into(), t1.elapsed().as_secs_f64()));
+
+    for pass in 0..params.refine_passes.max(1) {
+        let t2 = Instant::now();
+        let phase = format!("refine {}", pass + 1);
+        counter.store(0, std::sync::atomic::Ordering::Relaxed);
+        let refined: Vec<(Vec<RawLink>, Vec<f32>)> = (0..n_roots)
+            .into_par_iter()
+            .map(|r| {
+                let out = ctx.refine_root(r, &trees, &cl, eps_power);
+                let done = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                progress(&phase, done, n_roots as usize);
+                out
+            })
+            .collect();
+        // Every source element must exist in its tree: collect keys per root in fixed order.
+        let mut needed: Vec<Vec<ElemKey>> = vec![Vec::new(); n_roots as usize];
+        for (links, _) in &refined {
+            for l in links {
+                needed[l.recv.root as usize].push(l.recv);
+                if let Source::Elem(k) = l.src {
+                    needed[k.root as usize].push(k);
+                }
+            }
+        }
+        let mut new_trees: Vec<Tree> = needed
+            .into_par_iter()
+            .enumerate()
+            .map(|(r, keys)| ctx.build_tree(r as u32, keys, &direct[r]))
+            .collect();
+        stats.links = 0;
+        for (r, (links, ks)) in refined.into_iter().enumerate() {
+            stats.links += links.len();
+            let resolved: Vec<Link> = links
+                .iter()
+                .map(|l| Link {
+                    recv: new_trees[r].index_of(l.recv).expect("receiver present"),
+                    src: match l.src {
+                        Source::Cluster(c) => SrcIdx::Cluster(c),
+                        Source::Elem(k) => SrcIdx::Node {
+                            root: k.root,
+                            node: new_trees[k.root as usize]
+                                .index_of(k)
+                                .expect("source present"),
+                        },
+                    },
+                    k_start: l.k_start,
+                })
+                .collect();
+            new_trees[r].links = resolved;
+            new_trees[r].k = ks;
+        }
+        // Start from the previous solution where it exists so that the solve converges fast.
+        for (nt, ot) in new_trees.iter_mut().zip(&trees) {
+            let nn = nt.l.len() / nt.keys.len();
+            for i in 0..nt.keys.len() {
+                let j = ot.deepest_toward(nt.keys[i]) as usize;
+                nt.l[i * nn..(i + 1) * nn].copy_from_slice(&ot.l[j * nn..(j + 1) * nn]);
+            }
+        }
+        trees = new_trees;
+        stats
+            .phase_seconds
+            .push((format!("refine {}", pass + 1), t2.elapsed().as_secs_f64()));
+        let t3 = Instant::now();
+        let phase = format!("solve {}", pass + 1);
+        let cap = params.max_iterations as usize;
+        let (it, change) = ctx.solve(&mut trees, &mut cl, params.max_iterations, &|i| {
+            progress(&phase, i, cap)
+        });
+        stats.iterations += it;
+        stats.final_change = change;
+        stats
+            .phase_seconds
+            .push((format!("solve {}", pass + 1), t3.elapsed().as_secs_f64()));
+    }
+
+    stats.elements = trees.iter().map(|t| t.keys.len()).sum();
+    let mut objects: Vec<ObjectSolution> = scene
+        .objects
+        .iter()
+        .map(|o| ObjectSolution {
+            name: o.name.clone(),
+            multires: o.multires,
+            triangles: Vec::with_capacity(o.triangles.len()),
+        })
+        .collect();
+    for (r, t) in trees.iter().enumerate() {
+        let root = &ctx.roots[r];
+        objects[root.object].triangles.push(TriangleSolution {
+            normals: root.normals.iter().map(|n| n.to_array()).collect(),
+            nodes: t.keys.iter().map(|k| (k.level, k.path)).collect(),
+            subdivided: t.child.iter().map(|&c| c != u32::MAX).collect(),
+            colours: t.l.iter().map(|v| v.to_array()).collect(),
+        });
+    }
+    Ok(BakeResult { objects, stats })
+}

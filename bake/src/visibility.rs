@@ -1,0 +1,104 @@
+//! Ray-cast visibility through a BVH of every triangle of the scene, built with `obvhs`
+//! (a compressed wide BVH8, Ylitie et al. 2017, from a PLOC BVH2, Meister & Bittner 2018).
+
+use std::time::Duration;
+
+use glam::{Vec3, Vec3A};
+use obvhs::{
+    cwbvh::{builder::build_cwbvh_from_tris, CwBvh},
+    ray::Ray,
+    triangle::Triangle,
+    BvhBuildParams,
+};
+
+/// The scene's occluders.
+pub struct Occluders {
+    tris: Vec<Triangle>,
+    bvh: Option<CwBvh>,
+    /// Distance kept clear at both ends of a segment so that the surfaces it joins do not
+    /// occlude it (relative to the scene size).
+    eps: f32,
+}
+
+impl Occluders {
+    pub fn new(triangles: impl IntoIterator<Item = [Vec3; 3]>) -> Self {
+        let tris: Vec<Triangle> = triangles
+            .into_iter()
+            .map(|[a, b, c]| Triangle {
+                v0: a.into(),
+                v1: b.into(),
+                v2: c.into(),
+            })
+            .collect();
+        let (mut lo, mut hi) = (Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN));
+        for t in &tris {
+            for v in [t.v0, t.v1, t.v2] {
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+        let diag = if tris.is_empty() {
+            1.0
+        } else {
+            (hi - lo).length()
+        };
+        let bvh = (!tris.is_empty()).then(|| {
+            build_cwbvh_from_tris(
+                &tris,
+                BvhBuildParams::medium_build(),
+                &mut Duration::default(),
+            )
+        });
+        Occluders {
+            tris,
+            bvh,
+            eps: diag.max(1e-6) * 1e-5,
+        }
+    }
+
+    /// Whether the open segment from `a` to `b` crosses no triangle.
+    pub fn segment_clear(&self, a: Vec3, b: Vec3) -> bool {
+        let d = b - a;
+        let len = d.length();
+        if len <= 2.0 * self.eps {
+            return true;
+        }
+        self.ray_clear(a, d / len, len - self.eps)
+    }
+
+    /// Whether the ray from `origin` along unit `dir` meets no triangle before `max_t`.
+    pub fn ray_clear(&self, origin: Vec3, dir: Vec3, max_t: f32) -> bool {
+        let Some(bvh) = &self.bvh else { return true };
+        let ray = Ray::new(origin.into(), dir.into(), self.eps, max_t);
+        bvh.ray_traverse_miss(ray, |r, id| {
+            self.tris[bvh.primitive_indices[id] as usize].intersect(r)
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_wall_blocks_only_segments_through_it() {
+        let wall = [
+            [
+                Vec3::new(1.0, -1.0, -1.0),
+                Vec3::new(1.0, 1.0, -1.0),
+                Vec3::new(1.0, 1.0, 1.0),
+            ],
+            [
+                Vec3::new(1.0, -1.0, -1.0),
+                Vec3::new(1.0, 1.0, 1.0),
+                Vec3::new(1.0, -1.0, 1.0),
+            ],
+        ];
+        let occ = Occluders::new(wall);
+        assert!(!occ.segment_clear(Vec3::ZERO, Vec3::new(2.0, 0.1, 0.2)));
+        assert!(occ.segment_clear(Vec3::ZERO, Vec3::new(0.9, 0.1, 0.2)));
+        assert!(occ.segment_clear(Vec3::ZERO, Vec3::new(2.0, 3.0, 0.0)));
+        // A segment ending on the wall is not blocked by it.
+        assert!(occ.segment_clear(Vec3::ZERO, Vec3::new(1.0, 0.5, 0.5)));
+    }
+}
