@@ -2,6 +2,10 @@
 
 use clap::{Parser, Subcommand};
 
+mod cmd {
+    pub mod subdivide;
+}
+
 #[derive(Parser)]
 #[command(name = "hce", version, about, long_about = None)]
 struct Cli {
@@ -10,9 +14,14 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// Loop-subdivide a mesh on the CPU (OBJ, glTF or GLB in and out).
+    Subdivide(cmd::subdivide::SubdivideArgs),
+}
 
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
-    match cli.command {}
+    match cli.command {
+        Command::Subdivide(args) => cmd::subdivide::run(args),
+    }
 }
