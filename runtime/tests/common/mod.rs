@@ -56,6 +56,13 @@ pub fn relative_hausdorff(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
     directed(a, b, diag).max(directed(b, a, diag)) / diag
 }
 
+/// Max over `a` of the distance to the nearest point of `b`, relative to `b`'s bounding-box
+/// diagonal (for a sample `a` of a larger set).
+pub fn relative_directed(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
+    let diag = bbox_diagonal(b);
+    directed(a, b, diag) / diag
+}
+
 /// Max over `a` of the distance to the nearest point of `b`, via a uniform grid whose cell is
 /// far larger than the tolerance we test (so the 27 neighbouring cells always suffice when
 /// the sets match; a larger mismatch shows up as a large, still correct, lower bound).
