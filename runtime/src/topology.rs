@@ -626,7 +626,7 @@ mod tests {
         assert!(topo.mesh.neighbours.iter().all(|&n| n == NO_NEIGHBOUR));
         // Vertices 0 and 1 are each split into three fans.
         assert_eq!(topo.report.split_vertices, 2);
-        assert_eq!(topo.mesh.vertex_count(), 7);
+        assert_eq!(topo.mesh.vertex_count(), 9);
         let err = build_control_mesh(
             &p,
             &t,
