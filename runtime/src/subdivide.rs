@@ -324,6 +324,21 @@ impl Patch {
                                 even_crease(v, self.at(n, i + 1, j - 1), self.at(n, i - 1, j + 1))
                             } else if iu == 0 && tri.sharp[2] {
                                 even_crease(v, self.at(n, i, j - 1), self.at(n, i, j + 1))
+                            } else if iu >= 1 && ju >= 1 && iu + ju < n {
+                                // Interior: all six neighbours are grid points (same order).
+                                let g = &self.grid;
+                                let (row, below, above) = (
+                                    grid_index(n, 0, ju),
+                                    grid_index(n, 0, ju - 1),
+                                    grid_index(n, 0, ju + 1),
+                                );
+                                let mut s = mid(v, g[row + iu + 1]);
+                                s = add(s, mid(v, g[above + iu]));
+                                s = add(s, mid(v, g[above + iu - 1]));
+                                s = add(s, mid(v, g[row + iu - 1]));
+                                s = add(s, mid(v, g[below + iu]));
+                                s = add(s, mid(v, g[below + iu + 1]));
+                                even_smooth(v, s, 6, cf6)
                             } else {
                                 let mut s = mid(v, self.at(n, i + 1, j));
                                 s = add(s, mid(v, self.at(n, i, j + 1)));
@@ -340,6 +355,15 @@ impl Patch {
                         let b = self.at(n, i + 1, j);
                         if j == 0 && tri.sharp[0] {
                             mid(a, b)
+                        } else if j >= 1 {
+                            let (iu, ju) = (i as usize, j as usize);
+                            let g = &self.grid;
+                            odd_smooth(
+                                a,
+                                b,
+                                g[grid_index(n, iu, ju + 1)],
+                                g[grid_index(n, iu + 1, ju - 1)],
+                            )
                         } else {
                             odd_smooth(a, b, self.at(n, i, j + 1), self.at(n, i + 1, j - 1))
                         }
@@ -349,6 +373,15 @@ impl Patch {
                         let b = self.at(n, i, j + 1);
                         if i == 0 && tri.sharp[2] {
                             mid(a, b)
+                        } else if i >= 1 {
+                            let (iu, ju) = (i as usize, j as usize);
+                            let g = &self.grid;
+                            odd_smooth(
+                                a,
+                                b,
+                                g[grid_index(n, iu + 1, ju)],
+                                g[grid_index(n, iu - 1, ju + 1)],
+                            )
                         } else {
                             odd_smooth(a, b, self.at(n, i + 1, j), self.at(n, i - 1, j + 1))
                         }
@@ -358,6 +391,15 @@ impl Patch {
                         let b = self.at(n, i, j + 1);
                         if (i + j + 1) as usize == n && tri.sharp[1] {
                             mid(a, b)
+                        } else if ((i + j + 2) as usize) <= n {
+                            let (iu, ju) = (i as usize, j as usize);
+                            let g = &self.grid;
+                            odd_smooth(
+                                a,
+                                b,
+                                g[grid_index(n, iu, ju)],
+                                g[grid_index(n, iu + 1, ju + 1)],
+                            )
                         } else {
                             odd_smooth(a, b, self.at(n, i, j), self.at(n, i + 1, j + 1))
                         }
@@ -408,6 +450,28 @@ impl Patch {
     /// neighbours in counter-clockwise order, skipping faces across boundary edges.
     fn grid_normal(&self, tri: &Tri, n: usize, i: isize, j: isize) -> P {
         const D: [(isize, isize); 6] = [(1, 0), (0, 1), (-1, 1), (-1, 0), (0, -1), (1, -1)];
+        if i >= 1 && j >= 1 && ((i + j) as usize) < n {
+            // Interior point: the six neighbours are grid points (no band, no boundary).
+            let (iu, ju) = (i as usize, j as usize);
+            let row = grid_index(n, 0, ju);
+            let below = grid_index(n, 0, ju - 1);
+            let above = grid_index(n, 0, ju + 1);
+            let g = &self.grid;
+            let v = g[row + iu];
+            let nb = [
+                g[row + iu + 1],
+                g[above + iu],
+                g[above + iu - 1],
+                g[row + iu - 1],
+                g[below + iu],
+                g[below + iu + 1],
+            ];
+            let mut s = [0.0f32; 3];
+            for k in 0..6 {
+                s = add(s, cross(sub(nb[k], v), sub(nb[(k + 1) % 6], v)));
+            }
+            return s;
+        }
         let v = self.at(n, i, j);
         let avail = |(di, dj): (isize, isize)| {
             let (a, b) = (i + di, j + dj);
