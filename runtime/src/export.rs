@@ -244,6 +244,29 @@ mod tests {
     use super::*;
 
     #[test]
+    fn gltf_and_glb_round_trip_through_the_importer() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.5],
+            [1.0, 1.0, 0.25],
+        ];
+        let n = [[0.0, 0.0, 1.0]; 4];
+        let t = [[0, 1, 2], [1, 3, 2]];
+        for ext in ["gltf", "glb", "obj"] {
+            let path = dir.path().join(format!("m.{ext}"));
+            write_mesh(&path, &p, &n, &t).unwrap();
+            let back = crate::import::load_mesh(&path).unwrap();
+            assert_eq!(back.positions, p.to_vec(), "{ext}");
+            assert_eq!(back.triangles, t.to_vec(), "{ext}");
+            assert_eq!(back.corner_normals.unwrap().len(), 6, "{ext}");
+        }
+        // Only the destination is left: the temporary file was renamed.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 3);
+    }
+
+    #[test]
     fn base64_matches_rfc4648_vectors() {
         assert_eq!(base64(b"f"), "Zg==");
         assert_eq!(base64(b"fo"), "Zm8=");

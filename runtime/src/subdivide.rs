@@ -34,6 +34,25 @@
 //! grid or band point); the edge-point formula is symmetric in its endpoints and in its
 //! opposite vertices, bit for bit, so both copies are equal.
 //!
+//! # Order of arithmetic (for a bit-faithful port)
+//!
+//! All in `f32`, per component, without fused multiply-add:
+//! * `mid(a, b) = (a + b) * 0.5`.
+//! * Smooth edge point of edge `(a, b)` with opposite vertices `c`, `d`:
+//!   `(a + b) * 0.375 + (c + d) * 0.125`. Sharp edge point: `mid(a, b)`.
+//! * Smooth vertex point of `v` with neighbours `n_0 .. n_{k-1}`:
+//!   `s = mid(v, n_0); s = s + mid(v, n_1); ...` (a corner in the order of its table ring
+//!   from index 0; a grid point in the lattice directions `(1,0), (0,1), (-1,1), (-1,0),
+//!   (0,-1), (1,-1)`, a direction outside the grid read from the band), then
+//!   `avg = v * 0.25 + s * (0.75 / k as f32)` and `v + (avg - v) * cf(k)` with
+//!   `cf(k)` rounded from `f64` to `f32` ([`correction_factor`]).
+//! * Crease vertex with sharp neighbours `a`, `b` (a corner: its two sharp spokes in ring
+//!   order; a point on a sharp coarse edge: its previous and next points along the edge):
+//!   `v * 0.75 + (a + b) * 0.125`. Corner vertex: `v`.
+//! * Per level, in this order: rings and corner points, then the grid in rows of increasing
+//!   `J`, then the bands (first and last band points copied from the new rings, at ring
+//!   positions `k_e - 1` of corner `e` and `k_{e+1} + 2` of corner `e + 1`, mod the valence).
+//!
 //! # Output numbering
 //!
 //! With `M = 2^L`, `V` control vertices, `E` edges and `F` triangles:
@@ -86,16 +105,14 @@ fn mid(a: P, b: P) -> P {
     mul(add(a, b), 0.5)
 }
 
-/// Edge point of edge `(a, b)` with opposite vertices `c` and `d`: the factored form's
-/// averaging of the linearly split mesh (`cf(6) = 1`, no correction), `m/4 + 1/8 Σ` of the six
-/// fine neighbours of the midpoint `m`. Grouped so that swapping `a, b` or `c, d` gives the same
-/// bits.
+/// Edge point of edge `(a, b)` with opposite vertices `c` and `d`. In the factored form it is
+/// the averaging of the linearly split mesh at the midpoint (valence 6, `cf(6) = 1`, so no
+/// correction): `m/4 + 1/8 Σ` of its six fine neighbours, which collapses exactly to Loop's
+/// `3/8 (a + b) + 1/8 (c + d)`; the collapsed form is 4 times cheaper and, being symmetric
+/// in `a, b` and in `c, d`, gives the same bits whichever way round the edge is read.
 #[inline(always)]
 fn odd_smooth(a: P, b: P, c: P, d: P) -> P {
-    let ab = add(a, b);
-    let cs = add(mid(a, c), mid(b, c));
-    let ds = add(mid(a, d), mid(b, d));
-    add(mul(ab, 0.125), mul(add(ab, add(cs, ds)), 0.125))
+    add(mul(add(a, b), 0.375), mul(add(c, d), 0.125))
 }
 
 /// Vertex point of a smooth vertex: averaging `v' = v/4 + 3/(4n) Σ mid(v, n_i)` then the
