@@ -82,7 +82,6 @@ pub fn load_obj(path: &Path) -> Result<InputMesh, ImportError> {
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
     let (models, _materials) = tobj::load_obj(path, &opts).map_err(|source| ImportError::Obj {
         path: path.to_owned(),
@@ -95,11 +94,8 @@ pub fn load_obj(path: &Path) -> Result<InputMesh, ImportError> {
         let m = &model.mesh;
         let base = out.positions.len() as u32;
         let nv = m.positions.len() / 3;
-        out.positions.extend(
-            m.positions
-                .chunks_exact(3)
-                .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]),
-        );
+        out.positions
+            .extend(m.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]));
         let has_normals = m.normal_indices.len() == m.indices.len() && !m.normals.is_empty();
         all_normals &= has_normals;
         for (k, tri) in m.indices.chunks_exact(3).enumerate() {
@@ -128,7 +124,7 @@ pub fn load_obj(path: &Path) -> Result<InputMesh, ImportError> {
                                     n + 1
                                 ),
                             })?;
-                    normals.push([v[0] as f32, v[1] as f32, v[2] as f32]);
+                    normals.push([v[0], v[1], v[2]]);
                 }
             }
         }

@@ -70,6 +70,9 @@
 //! triangles around the vertex at the output level, not limit normals; every vertex owner has
 //! the full one-ring in its patch, so this is local too.
 
+// Index loops over corners, edges and lattice rows mirror the WGSL kernel this is ported to.
+#![allow(clippy::needless_range_loop)]
+
 use hce_format::{
     ControlMesh, NO_NEIGHBOUR, RULE_CORNER, RULE_CREASE, SPOKE_SHARP, VERTEX_BOUNDARY,
 };

@@ -493,8 +493,7 @@ pub fn build_control_mesh(
     }
     // 7. Neighbours and edge ids in first-appearance order.
     let mut next_edge = 0u32;
-    for i in 0..3 * f {
-        let p = pair[i];
+    for (i, &p) in pair.iter().enumerate() {
         if p == u32::MAX {
             mesh.edges[i] = next_edge;
             next_edge += 1;

@@ -1,6 +1,8 @@
 //! Known-answer tests of the CPU Loop subdivision: counts, weights, planarity, invariance
 //! under relabeling, watertightness, numbering, determinism and error handling.
 
+#![allow(clippy::needless_range_loop)]
+
 mod common;
 
 use std::collections::HashMap;

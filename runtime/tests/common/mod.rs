@@ -2,6 +2,7 @@
 //! reading, and the point-set distance used to compare with OpenSubdiv's output (whose vertex
 //! numbering differs from ours).
 #![allow(dead_code)]
+#![allow(clippy::needless_range_loop)]
 
 use std::collections::HashMap;
 use std::path::Path;
