@@ -12,7 +12,7 @@ use hce_runtime::topology::{Creases, NonManifold, TopologyConfig};
 pub struct SubdivideArgs {
     /// Input mesh (.obj, .gltf or .glb).
     pub input: PathBuf,
-    /// Subdivision level, 1 to 6.
+    /// Subdivision level, 1 to 6 (0 writes the welded, manifold control mesh itself).
     #[arg(long, short = 'l', default_value_t = 1)]
     pub levels: u32,
     /// Output mesh (.obj, .gltf or .glb), written atomically.
