@@ -55,6 +55,10 @@ fn bench(c: &mut Criterion) {
     g.bench_function("subdivide_from_tables", |b| {
         b.iter(|| hce_runtime::subdivide::subdivide(&topo.mesh, level).unwrap())
     });
+    let mut reused = hce_runtime::subdivide::Refined::default();
+    g.bench_function("subdivide_into_reused_buffers", |b| {
+        b.iter(|| hce_runtime::subdivide::subdivide_into(&topo.mesh, level, &mut reused).unwrap())
+    });
     g.bench_function("tables_plus_subdivide", |b| {
         b.iter(|| hce_runtime::subdivide::subdivide(&build().mesh, level).unwrap())
     });
@@ -87,14 +91,22 @@ fn bench(c: &mut Criterion) {
         let sub = ours(&|| {
             std::hint::black_box(hce_runtime::subdivide::subdivide(&topo.mesh, level).unwrap());
         });
+        let mut buf = hce_runtime::subdivide::Refined::default();
+        hce_runtime::subdivide::subdivide_into(&topo.mesh, level, &mut buf).unwrap();
+        let buf = std::cell::RefCell::new(buf);
+        let reuse = ours(&|| {
+            hce_runtime::subdivide::subdivide_into(&topo.mesh, level, &mut buf.borrow_mut())
+                .unwrap();
+        });
         let all = ours(&|| {
             std::hint::black_box(hce_runtime::subdivide::subdivide(&build().mesh, level).unwrap());
         });
         println!(
             "bunny level 3: OpenSubdiv {osd_ms:.1} ms (topology + interpolate, positions only, 1 thread); \
-             hce {sub:.1} ms from tables ({:.1}x), {all:.1} ms tables + subdivide ({:.1}x), \
-             positions + normals + indices, {} threads",
+             hce {sub:.1} ms from tables ({:.1}x), {reuse:.1} ms into reused buffers ({:.1}x), \
+             {all:.1} ms tables + subdivide ({:.1}x), positions + normals + indices, {} threads",
             osd_ms / sub,
+            osd_ms / reuse,
             osd_ms / all,
             rayon::current_num_threads()
         );

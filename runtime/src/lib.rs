@@ -9,7 +9,7 @@ pub mod subdivide;
 pub mod topology;
 
 pub use import::{load_mesh, weld, ImportError, InputMesh, Weld};
-pub use subdivide::{subdivide, subtriangle_cells, Refined, SubdivError};
+pub use subdivide::{subdivide, subdivide_into, subtriangle_cells, Refined, SubdivError};
 pub use topology::{
     build_control_mesh, Creases, NonManifold, Topology, TopologyConfig, TopologyError,
     TopologyReport,

@@ -739,6 +739,22 @@ const CHUNK: usize = 64;
 /// Subdivides `mesh` to `level` (0..=6) with positions, normals and indices. Level 0 gives
 /// the control mesh itself (with normals), numbered as the tables number it.
 pub fn subdivide(mesh: &ControlMesh, level: u32) -> Result<Refined, SubdivError> {
+    let mut out = Refined::default();
+    subdivide_into(mesh, level, &mut out)?;
+    Ok(out)
+}
+
+/// [`subdivide`] into the buffers of `out`, reusing their allocations: a viewer refining every
+/// frame (or a benchmark) then pays no page faults for fresh output memory. `out` is
+/// overwritten entirely; on error it is left empty.
+pub fn subdivide_into(
+    mesh: &ControlMesh,
+    level: u32,
+    out: &mut Refined,
+) -> Result<(), SubdivError> {
+    out.positions.clear();
+    out.normals.clear();
+    out.indices.clear();
     if level > MAX_LEVEL {
         return Err(SubdivError::Level(level));
     }
@@ -766,9 +782,12 @@ pub fn subdivide(mesh: &ControlMesh, level: u32) -> Result<Refined, SubdivError>
         .map(|t| t.map(|[i, j]| grid_index(m, i as usize, j as usize) as u32))
         .collect();
 
-    let mut positions = vec![[0.0f32; 3]; total_v];
-    let mut normals = vec![[0.0f32; 3]; total_v];
-    let mut indices = vec![[0u32; 3]; nf * fine_per_tri];
+    let mut positions = std::mem::take(&mut out.positions);
+    let mut normals = std::mem::take(&mut out.normals);
+    let mut indices = std::mem::take(&mut out.indices);
+    positions.resize(total_v, [0.0; 3]);
+    normals.resize(total_v, [0.0; 3]);
+    indices.resize(nf * fine_per_tri, [0; 3]);
 
     // Split the outputs into per-chunk disjoint slices: a chunk of triangles owns a contiguous
     // range of edge ids (first-appearance order) and of interior points and fine triangles.
@@ -883,7 +902,7 @@ pub fn subdivide(mesh: &ControlMesh, level: u32) -> Result<Refined, SubdivError>
             normals[v as usize] = n;
         }
     }
-    Ok(Refined {
+    *out = Refined {
         level,
         positions,
         normals,
@@ -891,7 +910,8 @@ pub fn subdivide(mesh: &ControlMesh, level: u32) -> Result<Refined, SubdivError>
         coarse_vertices: nv,
         coarse_edges: ne,
         coarse_triangles: nf,
-    })
+    };
+    Ok(())
 }
 
 #[inline(always)]
