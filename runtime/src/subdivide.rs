@@ -231,6 +231,7 @@ struct Patch {
     next_grid: Vec<P>,
     next_band: [Vec<P>; 3],
     next_ring: [Vec<P>; 3],
+    square: Vec<P>,
 }
 
 struct Tri<'a> {
@@ -243,16 +244,33 @@ struct Tri<'a> {
 }
 
 impl Patch {
+    /// Lattice point `(i, j)`, `-1 <= i, j <= n + 1`, grid or band, from the square copy.
     #[inline(always)]
     fn at(&self, n: usize, i: isize, j: isize) -> P {
-        if j < 0 {
-            self.band[0][(i - 1) as usize]
-        } else if i < 0 {
-            self.band[2][n - j as usize]
-        } else if (i + j) as usize > n {
-            self.band[1][n - i as usize]
-        } else {
-            self.grid[grid_index(n, i as usize, j as usize)]
+        self.square[(i + 1) as usize + (j + 1) as usize * (n + 3)]
+    }
+
+    /// Copies grid and bands into `square`, a `(n+3)²` array over lattice points
+    /// `-1 ..= n+1` in both coordinates, so that [`Patch::at`] reads any neighbour without
+    /// branching on which array holds it. Positions across a boundary edge stay unset and
+    /// are never read.
+    fn fill_square(&mut self, n: usize) {
+        let w = n + 3;
+        self.square.clear();
+        self.square.resize(w * w, [0.0; 3]);
+        for j in 0..=n {
+            let row = grid_index(n, 0, j);
+            let dst = (j + 1) * w + 1;
+            self.square[dst..dst + n + 1 - j].copy_from_slice(&self.grid[row..row + n + 1 - j]);
+        }
+        for (m, &b) in self.band[0].iter().enumerate() {
+            self.square[m + 2] = b;
+        }
+        for (m, &b) in self.band[1].iter().enumerate() {
+            self.square[(n - m + 1) + (m + 2) * w] = b;
+        }
+        for (m, &b) in self.band[2].iter().enumerate() {
+            self.square[(n - m + 1) * w] = b;
         }
     }
 
@@ -464,6 +482,7 @@ impl Patch {
         std::mem::swap(&mut self.grid, &mut self.next_grid);
         std::mem::swap(&mut self.band, &mut self.next_band);
         std::mem::swap(&mut self.ring, &mut self.next_ring);
+        self.fill_square(m2);
     }
 
     /// Area-weighted normal at grid point `(i, j)` (not a corner) from its six lattice
@@ -843,6 +862,7 @@ pub fn subdivide_into(
                 for c in 0..3 {
                     patch.grid[corner_lattice(1, c)] = mesh.position(tv[c]);
                 }
+                patch.fill_square(1);
                 let mut n = 1;
                 while n < m {
                     patch.step(&tri, n);
