@@ -26,6 +26,10 @@
 //! * `ring[c]`: corner `c`'s whole one-ring at level `l`, in the order of the control-mesh ring
 //!   (its length, the valence, never changes), with the spoke flags of the table.
 //!
+//! On the CPU the grid and bands are also copied after each level into `square`, a
+//! `(N+3)²` array over lattice points `-1 ..= N+1` (index `(i+1) + (j+1)(N+3)`), so that a
+//! neighbour read never branches on which array holds it; a GPU port can keep only that array.
+//!
 //! Level `l + 1` is computed from level `l` alone: the rings from the rings (the child of spoke
 //! `m` is the edge point of spoke `m`, whose opposite vertices are spokes `m - 1` and `m + 1`),
 //! the grid from the grid and bands, and the new bands from the grid, the old bands and the new
