@@ -5,3 +5,15 @@
 
 #[cfg(feature = "gpu")]
 pub mod gpu;
+
+pub mod export;
+pub mod import;
+pub mod subdivide;
+pub mod topology;
+
+pub use import::{load_mesh, weld, ImportError, InputMesh, Weld};
+pub use subdivide::{subdivide, subdivide_into, subtriangle_cells, Refined, SubdivError};
+pub use topology::{
+    build_control_mesh, Creases, NonManifold, Topology, TopologyConfig, TopologyError,
+    TopologyReport,
+};

@@ -17,6 +17,8 @@ enum Command {
     Render(cmd::render::RenderArgs),
     /// Measure the GPU kernels' throughput per level.
     BenchGpu(cmd::bench_gpu::BenchGpuArgs),
+    /// Loop-subdivide a mesh on the CPU (OBJ, glTF or GLB in and out).
+    Subdivide(cmd::subdivide::SubdivideArgs),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -24,5 +26,6 @@ fn main() -> anyhow::Result<()> {
     match cli.command {
         Command::Render(args) => cmd::render::run(args),
         Command::BenchGpu(args) => cmd::bench_gpu::run(args),
+        Command::Subdivide(args) => cmd::subdivide::run(args),
     }
 }

@@ -2,3 +2,4 @@
 
 pub mod bench_gpu;
 pub mod render;
+pub mod subdivide;

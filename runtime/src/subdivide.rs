@@ -1,0 +1,949 @@
+//! Loop subdivision (CPU reference) computed from the control-mesh adjacency tables, one
+//! independent local patch per coarse triangle, as the GPU kernel computes it.
+//!
+//! Based on:
+//! * Charles Loop. Smooth Subdivision Surfaces Based on Triangles. MSc thesis, University of
+//!   Utah, 1987.
+//! * Joe Warren and Scott Schaefer. A factored approach to subdivision surfaces. IEEE Computer
+//!   Graphics and Applications 24(3), 2004 (linear split, averaging, valence correction
+//!   `cf(n) = 5/3 - 8/3 (3/8 + 1/4 cos(2π/n))²`).
+//! * Infinitely sharp creases and boundaries as in OpenSubdiv 3.5 (`Sdc::SCHEME_LOOP`,
+//!   `VTX_BOUNDARY_EDGE_AND_CORNER`): midpoint on sharp edges, `3/4, 1/8, 1/8` for vertices with
+//!   two sharp edges, fixed corners (three or more sharp edges, or a boundary vertex with a
+//!   single triangle).
+//!
+//! # The local patch
+//!
+//! Triangle `t = (v0, v1, v2)` at level `l` (`N = 2^l` segments per edge) holds:
+//!
+//! * `grid`: the `(N+1)(N+2)/2` points of the triangle, lattice point `(i, j)` (barycentric
+//!   `v0 + i/N (v1 - v0) + j/N (v2 - v0)`, `i, j >= 0`, `i + j <= N`) at index
+//!   `j (N+1) - j (j-1)/2 + i` (rows of constant `j`).
+//! * `band[e]` for each interior edge `e` (from `v_e` to `v_{e+1}`, points `p_0 = v_e .. p_N`):
+//!   the `N` vertices of the neighbouring triangle one row away from the edge; `band[e][m]` is
+//!   adjacent to `p_m` and `p_{m+1}`. As lattice points outside the grid: edge 0 `(m+1, -1)`,
+//!   edge 1 `(N-m, m+1)`, edge 2 `(-1, N-m)`.
+//! * `ring[c]`: corner `c`'s whole one-ring at level `l`, in the order of the control-mesh ring
+//!   (its length, the valence, never changes), with the spoke flags of the table.
+//!
+//! On the CPU the grid and bands are also copied after each level into `square`, a
+//! `(N+3)²` array over lattice points `-1 ..= N+1` (index `(i+1) + (j+1)(N+3)`), so that a
+//! neighbour read never branches on which array holds it; a GPU port can keep only that array.
+//!
+//! Level `l + 1` is computed from level `l` alone: the rings from the rings (the child of spoke
+//! `m` is the edge point of spoke `m`, whose opposite vertices are spokes `m - 1` and `m + 1`),
+//! the grid from the grid and bands, and the new bands from the grid, the old bands and the new
+//! rings (every new band vertex is an edge point; the first and last are ring spokes). The same
+//! fine vertex may be computed twice inside one patch (a ring spoke next to a corner is also a
+//! grid or band point); the edge-point formula is symmetric in its endpoints and in its
+//! opposite vertices, bit for bit, so both copies are equal.
+//!
+//! # Order of arithmetic (for a bit-faithful port)
+//!
+//! All in `f32`, per component, without fused multiply-add:
+//! * `mid(a, b) = (a + b) * 0.5`.
+//! * Smooth edge point of edge `(a, b)` with opposite vertices `c`, `d`:
+//!   `(a + b) * 0.375 + (c + d) * 0.125`. Sharp edge point: `mid(a, b)`.
+//! * Smooth vertex point of `v` with neighbours `n_0 .. n_{k-1}`:
+//!   `s = mid(v, n_0); s = s + mid(v, n_1); ...` (a corner in the order of its table ring
+//!   from index 0; a grid point in the lattice directions `(1,0), (0,1), (-1,1), (-1,0),
+//!   (0,-1), (1,-1)`, a direction outside the grid read from the band), then
+//!   `avg = v * 0.25 + s * (0.75 / k as f32)` and `v + (avg - v) * cf(k)` with
+//!   `cf(k)` rounded from `f64` to `f32` ([`correction_factor`]).
+//! * Crease vertex with sharp neighbours `a`, `b` (a corner: its two sharp spokes in ring
+//!   order; a point on a sharp coarse edge: its previous and next points along the edge):
+//!   `v * 0.75 + (a + b) * 0.125`. Corner vertex: `v`.
+//! * Per level, in this order: rings and corner points, then the grid in rows of increasing
+//!   `J`, then the bands (first and last band points copied from the new rings, at ring
+//!   positions `k_e - 1` of corner `e` and `k_{e+1} + 2` of corner `e + 1`, mod the valence).
+//!
+//! # Output numbering
+//!
+//! With `M = 2^L`, `V` control vertices, `E` edges and `F` triangles:
+//! `[V coarse vertices][E edges × (M − 1) points, from the owning triangle's v_e to v_{e+1}]
+//! [F triangles × (M−1)(M−2)/2 interior points]`, interior points in rows of increasing `j`,
+//! each row in increasing `i` (`1 <= i, j`, `i + j <= M - 1`). Fine triangle `t · 4^L + path`
+//! has the corners the recursive 1-to-4 split gives (child order Top, Left, Center, Right of
+//! `hce_format::model`). Every output vertex is written by exactly one owner (a coarse vertex
+//! by the first triangle corner that uses it in scan order, an edge point by the owner of its
+//! edge, an interior point by its triangle), so shared vertices cannot disagree.
+//!
+//! # Normals
+//!
+//! Per-vertex normals are the normalised sum of the (area-weighted) normals of the fine
+//! triangles around the vertex at the output level, not limit normals; every vertex owner has
+//! the full one-ring in its patch, so this is local too.
+
+// Index loops over corners, edges and lattice rows mirror the WGSL kernel this is ported to.
+#![allow(clippy::needless_range_loop)]
+
+use hce_format::{
+    ControlMesh, NO_NEIGHBOUR, RULE_CORNER, RULE_CREASE, SPOKE_SHARP, VERTEX_BOUNDARY,
+};
+use rayon::prelude::*;
+
+/// Highest supported subdivision level.
+pub const MAX_LEVEL: u32 = 6;
+
+type P = [f32; 3];
+
+#[inline(always)]
+fn add(a: P, b: P) -> P {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+#[inline(always)]
+fn sub(a: P, b: P) -> P {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+#[inline(always)]
+fn mul(a: P, s: f32) -> P {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+#[inline(always)]
+fn cross(a: P, b: P) -> P {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+#[inline(always)]
+fn mid(a: P, b: P) -> P {
+    mul(add(a, b), 0.5)
+}
+
+/// Edge point of edge `(a, b)` with opposite vertices `c` and `d`. In the factored form it is
+/// the averaging of the linearly split mesh at the midpoint (valence 6, `cf(6) = 1`, so no
+/// correction): `m/4 + 1/8 Σ` of its six fine neighbours, which collapses exactly to Loop's
+/// `3/8 (a + b) + 1/8 (c + d)`; the collapsed form is 4 times cheaper and, being symmetric
+/// in `a, b` and in `c, d`, gives the same bits whichever way round the edge is read.
+#[inline(always)]
+fn odd_smooth(a: P, b: P, c: P, d: P) -> P {
+    add(mul(add(a, b), 0.375), mul(add(c, d), 0.125))
+}
+
+/// Vertex point of a smooth vertex: averaging `v' = v/4 + 3/(4n) Σ mid(v, n_i)` then the
+/// valence correction `v'' = v + cf(n) (v' - v)`.
+#[inline(always)]
+fn even_smooth(v: P, sum_mid: P, n: usize, cf: f32) -> P {
+    let avg = add(mul(v, 0.25), mul(sum_mid, 0.75 / n as f32));
+    add(v, mul(sub(avg, v), cf))
+}
+
+/// Crease rule for a vertex with two sharp edges to `a` and `b`.
+#[inline(always)]
+fn even_crease(v: P, a: P, b: P) -> P {
+    add(mul(v, 0.75), mul(add(a, b), 0.125))
+}
+
+/// The valence correction factor of Warren & Schaefer, `cf(n)`.
+pub fn correction_factor(n: usize) -> f32 {
+    let a = 0.375 + 0.25 * (2.0 * std::f64::consts::PI / n as f64).cos();
+    (5.0 / 3.0 - 8.0 / 3.0 * a * a) as f32
+}
+
+/// Errors of subdivision.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum SubdivError {
+    #[error("subdivision level {0} is out of range; use 0..={MAX_LEVEL}")]
+    Level(u32),
+    #[error("control mesh tables are inconsistent: {0}")]
+    Tables(String),
+    #[error("level {level} output of {triangles} coarse triangles is too large ({what})")]
+    TooLarge {
+        level: u32,
+        triangles: usize,
+        what: &'static str,
+    },
+}
+
+/// A mesh refined to one level.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Refined {
+    pub level: u32,
+    pub positions: Vec<[f32; 3]>,
+    /// Unit per-vertex normals (see the module documentation).
+    pub normals: Vec<[f32; 3]>,
+    /// Fine triangle `t · 4^level + path`, counter-clockwise.
+    pub indices: Vec<[u32; 3]>,
+    pub coarse_vertices: usize,
+    pub coarse_edges: usize,
+    pub coarse_triangles: usize,
+}
+
+impl Refined {
+    /// The coarse triangle fine triangle `f` lies in.
+    pub fn coarse_triangle(&self, f: usize) -> usize {
+        f >> (2 * self.level)
+    }
+    /// The path of fine triangle `f` in its coarse triangle (see `hce_format::model`).
+    pub fn path(&self, f: usize) -> u32 {
+        (f & ((1usize << (2 * self.level)) - 1)) as u32
+    }
+}
+
+/// Lattice corners `(i, j)` of each level-`level` subtriangle of a coarse triangle, indexed by
+/// path: the recursive split of `(0,0), (2^L,0), (0,2^L)` into Top, Left, Center, Right.
+pub fn subtriangle_cells(level: u32) -> Vec<[[u32; 2]; 3]> {
+    let m = 1u32 << level;
+    let mut out = Vec::with_capacity(1 << (2 * level));
+    fn rec(t: [[u32; 2]; 3], d: u32, out: &mut Vec<[[u32; 2]; 3]>) {
+        if d == 0 {
+            out.push(t);
+            return;
+        }
+        let h = |a: [u32; 2], b: [u32; 2]| [(a[0] + b[0]) / 2, (a[1] + b[1]) / 2];
+        let [v0, v1, v2] = t;
+        let (m01, m12, m20) = (h(v0, v1), h(v1, v2), h(v2, v0));
+        rec([v0, m01, m20], d - 1, out);
+        rec([m01, v1, m12], d - 1, out);
+        rec([m12, m20, m01], d - 1, out);
+        rec([m20, m12, v2], d - 1, out);
+    }
+    rec([[0, 0], [m, 0], [0, m]], level, &mut out);
+    out
+}
+
+/// Index of lattice point `(i, j)` in a level grid with `n` segments per edge.
+#[inline(always)]
+pub fn grid_index(n: usize, i: usize, j: usize) -> usize {
+    j * (n + 1) - j * j.saturating_sub(1) / 2 + i
+}
+
+fn grid_len(n: usize) -> usize {
+    (n + 1) * (n + 2) / 2
+}
+
+/// Per-triangle constants read from the tables once.
+struct Corner {
+    /// Offset of the ring in `mesh.ring`.
+    off: usize,
+    n: usize,
+    k: usize,
+    closed: bool,
+    rule: u32,
+    /// The two sharp spokes of a crease vertex.
+    creases: [usize; 2],
+}
+
+/// Local patch storage, reused across the triangles of one task.
+#[derive(Default)]
+struct Patch {
+    grid: Vec<P>,
+    band: [Vec<P>; 3],
+    ring: [Vec<P>; 3],
+    next_grid: Vec<P>,
+    next_band: [Vec<P>; 3],
+    next_ring: [Vec<P>; 3],
+    square: Vec<P>,
+}
+
+struct Tri<'a> {
+    mesh: &'a ControlMesh,
+    corners: [Corner; 3],
+    /// Edge `e` is interior (has a band).
+    interior: [bool; 3],
+    sharp: [bool; 3],
+    cf: &'a [f32],
+}
+
+impl Patch {
+    /// Lattice point `(i, j)`, `-1 <= i, j <= n + 1`, grid or band, from the square copy.
+    #[inline(always)]
+    fn at(&self, n: usize, i: isize, j: isize) -> P {
+        self.square[(i + 1) as usize + (j + 1) as usize * (n + 3)]
+    }
+
+    /// Copies grid and bands into `square`, a `(n+3)²` array over lattice points
+    /// `-1 ..= n+1` in both coordinates, so that [`Patch::at`] reads any neighbour without
+    /// branching on which array holds it. Positions across a boundary edge stay unset and
+    /// are never read.
+    fn fill_square(&mut self, n: usize) {
+        let w = n + 3;
+        self.square.clear();
+        self.square.resize(w * w, [0.0; 3]);
+        for j in 0..=n {
+            let row = grid_index(n, 0, j);
+            let dst = (j + 1) * w + 1;
+            self.square[dst..dst + n + 1 - j].copy_from_slice(&self.grid[row..row + n + 1 - j]);
+        }
+        for (m, &b) in self.band[0].iter().enumerate() {
+            self.square[m + 2] = b;
+        }
+        for (m, &b) in self.band[1].iter().enumerate() {
+            self.square[(n - m + 1) + (m + 2) * w] = b;
+        }
+        for (m, &b) in self.band[2].iter().enumerate() {
+            self.square[(n - m + 1) * w] = b;
+        }
+    }
+
+    /// Point `m` of edge `e` at a level with `n` segments, from `v_e`.
+    #[inline(always)]
+    fn edge_point(&self, n: usize, e: usize, m: usize) -> P {
+        self.grid[edge_lattice(n, e, m)]
+    }
+
+    fn load(&mut self, tri: &Tri) {
+        let mesh = tri.mesh;
+        self.grid.clear();
+        self.grid.resize(3, [0.0; 3]);
+        for c in 0..3 {
+            let corner = &tri.corners[c];
+            let ring = &mut self.ring[c];
+            ring.clear();
+            ring.extend(
+                mesh.ring[corner.off..corner.off + corner.n]
+                    .iter()
+                    .map(|&s| mesh.position(s)),
+            );
+        }
+        for e in 0..3 {
+            self.band[e].clear();
+            if tri.interior[e] {
+                let c = &tri.corners[e];
+                self.band[e].push(self.ring[e][(c.k + c.n - 1) % c.n]);
+            }
+        }
+    }
+
+    /// One level: `n` segments to `2n`.
+    fn step(&mut self, tri: &Tri, n: usize) {
+        let m2 = 2 * n;
+        // Rings and corners.
+        let mut new_corner = [[0.0f32; 3]; 3];
+        for c in 0..3 {
+            let corner = &tri.corners[c];
+            let v = self.grid[corner_lattice(n, c)];
+            let ring = &self.ring[c];
+            let flags = &tri.mesh.spoke_flags[corner.off..corner.off + corner.n];
+            let nr = &mut self.next_ring[c];
+            nr.clear();
+            let cn = corner.n;
+            for s in 0..cn {
+                let r = ring[s];
+                nr.push(if flags[s] & SPOKE_SHARP != 0 {
+                    mid(v, r)
+                } else {
+                    odd_smooth(v, r, ring[(s + cn - 1) % cn], ring[(s + 1) % cn])
+                });
+            }
+            new_corner[c] = match corner.rule {
+                RULE_CORNER => v,
+                RULE_CREASE => even_crease(v, ring[corner.creases[0]], ring[corner.creases[1]]),
+                _ => {
+                    let mut s = [0.0f32; 3];
+                    for &r in ring.iter() {
+                        s = add(s, mid(v, r));
+                    }
+                    even_smooth(v, s, cn, tri.cf[cn])
+                }
+            };
+        }
+        // Grid.
+        let mut ng = std::mem::take(&mut self.next_grid);
+        ng.clear();
+        ng.resize(grid_len(m2), [0.0; 3]);
+        let cf6 = tri.cf[6];
+        for jj in 0..=m2 {
+            for ii in 0..=(m2 - jj) {
+                let (i, j) = ((ii / 2) as isize, (jj / 2) as isize);
+                let p = match (ii % 2, jj % 2) {
+                    (0, 0) => {
+                        let (iu, ju) = (i as usize, j as usize);
+                        if iu == 0 && ju == 0 {
+                            new_corner[0]
+                        } else if iu == n && ju == 0 {
+                            new_corner[1]
+                        } else if iu == 0 && ju == n {
+                            new_corner[2]
+                        } else {
+                            let v = self.at(n, i, j);
+                            // On a sharp coarse edge: crease rule along the edge.
+                            if ju == 0 && tri.sharp[0] {
+                                even_crease(v, self.at(n, i - 1, j), self.at(n, i + 1, j))
+                            } else if iu + ju == n && tri.sharp[1] {
+                                even_crease(v, self.at(n, i + 1, j - 1), self.at(n, i - 1, j + 1))
+                            } else if iu == 0 && tri.sharp[2] {
+                                even_crease(v, self.at(n, i, j - 1), self.at(n, i, j + 1))
+                            } else if iu >= 1 && ju >= 1 && iu + ju < n {
+                                // Interior: all six neighbours are grid points (same order).
+                                let g = &self.grid;
+                                let (row, below, above) = (
+                                    grid_index(n, 0, ju),
+                                    grid_index(n, 0, ju - 1),
+                                    grid_index(n, 0, ju + 1),
+                                );
+                                let mut s = mid(v, g[row + iu + 1]);
+                                s = add(s, mid(v, g[above + iu]));
+                                s = add(s, mid(v, g[above + iu - 1]));
+                                s = add(s, mid(v, g[row + iu - 1]));
+                                s = add(s, mid(v, g[below + iu]));
+                                s = add(s, mid(v, g[below + iu + 1]));
+                                even_smooth(v, s, 6, cf6)
+                            } else {
+                                let mut s = mid(v, self.at(n, i + 1, j));
+                                s = add(s, mid(v, self.at(n, i, j + 1)));
+                                s = add(s, mid(v, self.at(n, i - 1, j + 1)));
+                                s = add(s, mid(v, self.at(n, i - 1, j)));
+                                s = add(s, mid(v, self.at(n, i, j - 1)));
+                                s = add(s, mid(v, self.at(n, i + 1, j - 1)));
+                                even_smooth(v, s, 6, cf6)
+                            }
+                        }
+                    }
+                    (1, 0) => {
+                        let a = self.at(n, i, j);
+                        let b = self.at(n, i + 1, j);
+                        if j == 0 && tri.sharp[0] {
+                            mid(a, b)
+                        } else if j >= 1 {
+                            let (iu, ju) = (i as usize, j as usize);
+                            let g = &self.grid;
+                            odd_smooth(
+                                a,
+                                b,
+                                g[grid_index(n, iu, ju + 1)],
+                                g[grid_index(n, iu + 1, ju - 1)],
+                            )
+                        } else {
+                            odd_smooth(a, b, self.at(n, i, j + 1), self.at(n, i + 1, j - 1))
+                        }
+                    }
+                    (0, 1) => {
+                        let a = self.at(n, i, j);
+                        let b = self.at(n, i, j + 1);
+                        if i == 0 && tri.sharp[2] {
+                            mid(a, b)
+                        } else if i >= 1 {
+                            let (iu, ju) = (i as usize, j as usize);
+                            let g = &self.grid;
+                            odd_smooth(
+                                a,
+                                b,
+                                g[grid_index(n, iu + 1, ju)],
+                                g[grid_index(n, iu - 1, ju + 1)],
+                            )
+                        } else {
+                            odd_smooth(a, b, self.at(n, i + 1, j), self.at(n, i - 1, j + 1))
+                        }
+                    }
+                    _ => {
+                        let a = self.at(n, i + 1, j);
+                        let b = self.at(n, i, j + 1);
+                        if (i + j + 1) as usize == n && tri.sharp[1] {
+                            mid(a, b)
+                        } else if ((i + j + 2) as usize) <= n {
+                            let (iu, ju) = (i as usize, j as usize);
+                            let g = &self.grid;
+                            odd_smooth(
+                                a,
+                                b,
+                                g[grid_index(n, iu, ju)],
+                                g[grid_index(n, iu + 1, ju + 1)],
+                            )
+                        } else {
+                            odd_smooth(a, b, self.at(n, i, j), self.at(n, i + 1, j + 1))
+                        }
+                    }
+                };
+                ng[grid_index(m2, ii, jj)] = p;
+            }
+        }
+        self.next_grid = ng;
+        // Bands.
+        for e in 0..3 {
+            let mut nb = std::mem::take(&mut self.next_band[e]);
+            nb.clear();
+            if !tri.interior[e] {
+                self.next_band[e] = nb;
+                continue;
+            }
+            let band = &self.band[e];
+            let (c0, c1) = (&tri.corners[e], &tri.corners[(e + 1) % 3]);
+            nb.push(self.next_ring[e][(c0.k + c0.n - 1) % c0.n]);
+            for m in 0..n {
+                if m >= 1 {
+                    nb.push(odd_smooth(
+                        self.edge_point(n, e, m),
+                        band[m],
+                        self.edge_point(n, e, m + 1),
+                        band[m - 1],
+                    ));
+                }
+                if m + 2 <= n {
+                    nb.push(odd_smooth(
+                        self.edge_point(n, e, m + 1),
+                        band[m],
+                        self.edge_point(n, e, m),
+                        band[m + 1],
+                    ));
+                }
+            }
+            nb.push(self.next_ring[(e + 1) % 3][(c1.k + 2) % c1.n]);
+            self.next_band[e] = nb;
+        }
+        std::mem::swap(&mut self.grid, &mut self.next_grid);
+        std::mem::swap(&mut self.band, &mut self.next_band);
+        std::mem::swap(&mut self.ring, &mut self.next_ring);
+        self.fill_square(m2);
+    }
+
+    /// Area-weighted normal at grid point `(i, j)` (not a corner) from its six lattice
+    /// neighbours in counter-clockwise order, skipping faces across boundary edges.
+    fn grid_normal(&self, tri: &Tri, n: usize, i: isize, j: isize) -> P {
+        const D: [(isize, isize); 6] = [(1, 0), (0, 1), (-1, 1), (-1, 0), (0, -1), (1, -1)];
+        if i >= 1 && j >= 1 && ((i + j) as usize) < n {
+            // Interior point: the six neighbours are grid points (no band, no boundary).
+            let (iu, ju) = (i as usize, j as usize);
+            let row = grid_index(n, 0, ju);
+            let below = grid_index(n, 0, ju - 1);
+            let above = grid_index(n, 0, ju + 1);
+            let g = &self.grid;
+            let v = g[row + iu];
+            let nb = [
+                g[row + iu + 1],
+                g[above + iu],
+                g[above + iu - 1],
+                g[row + iu - 1],
+                g[below + iu],
+                g[below + iu + 1],
+            ];
+            let mut s = [0.0f32; 3];
+            for k in 0..6 {
+                s = add(s, cross(sub(nb[k], v), sub(nb[(k + 1) % 6], v)));
+            }
+            return s;
+        }
+        let v = self.at(n, i, j);
+        let avail = |(di, dj): (isize, isize)| {
+            let (a, b) = (i + di, j + dj);
+            (b >= 0 || tri.interior[0])
+                && (a >= 0 || tri.interior[2])
+                && (a + b <= n as isize || tri.interior[1])
+        };
+        let mut s = [0.0f32; 3];
+        for k in 0..6 {
+            let (d0, d1) = (D[k], D[(k + 1) % 6]);
+            if avail(d0) && avail(d1) {
+                let a = sub(self.at(n, i + d0.0, j + d0.1), v);
+                let b = sub(self.at(n, i + d1.0, j + d1.1), v);
+                s = add(s, cross(a, b));
+            }
+        }
+        s
+    }
+
+    fn corner_normal(&self, tri: &Tri, n: usize, c: usize) -> P {
+        let corner = &tri.corners[c];
+        let v = self.grid[corner_lattice(n, c)];
+        let ring = &self.ring[c];
+        let faces = if corner.closed {
+            corner.n
+        } else {
+            corner.n - 1
+        };
+        let mut s = [0.0f32; 3];
+        for f in 0..faces {
+            s = add(s, cross(sub(ring[f], v), sub(ring[(f + 1) % corner.n], v)));
+        }
+        s
+    }
+}
+
+fn normalize(s: P) -> P {
+    let l = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
+    if l > 0.0 && l.is_finite() {
+        mul(s, 1.0 / l)
+    } else {
+        [0.0, 0.0, 1.0]
+    }
+}
+
+#[inline(always)]
+fn corner_lattice(n: usize, c: usize) -> usize {
+    match c {
+        0 => 0,
+        1 => grid_index(n, n, 0),
+        _ => grid_index(n, 0, n),
+    }
+}
+
+#[inline(always)]
+fn edge_lattice(n: usize, e: usize, m: usize) -> usize {
+    match e {
+        0 => grid_index(n, m, 0),
+        1 => grid_index(n, n - m, m),
+        _ => grid_index(n, 0, n - m),
+    }
+}
+
+/// Everything the per-triangle tasks share, derived from the tables once (O(V + F)).
+struct Prepared {
+    /// `vertex_owner[v]`: the corner `3 t + c` that writes coarse vertex `v`.
+    vertex_owner: Vec<u32>,
+    /// `edge_start[t]`: the first edge id owned by triangle `t` (ids are in first-appearance
+    /// order, so triangle `t` owns `edge_start[t] .. edge_start[t + 1]`).
+    edge_start: Vec<u32>,
+    /// Whether `(t, e)` owns its edge.
+    owns_edge: Vec<bool>,
+    crease_spokes: Vec<[u32; 2]>,
+    cf: Vec<f32>,
+    edge_count: usize,
+}
+
+fn prepare(mesh: &ControlMesh) -> Result<Prepared, SubdivError> {
+    let bad = |s: String| Err(SubdivError::Tables(s));
+    let nv = mesh.vertex_count();
+    let nf = mesh.triangle_count();
+    if mesh.positions.len() != 3 * nv
+        || mesh.triangles.len() != 3 * nf
+        || mesh.ring_offsets.len() != nv + 1
+        || mesh.vertex_flags.len() != nv
+        || mesh.corner_spokes.len() != 3 * nf
+        || mesh.neighbours.len() != 3 * nf
+        || mesh.edges.len() != 3 * nf
+        || mesh.spoke_flags.len() != mesh.ring.len()
+    {
+        return bad("array lengths disagree with the vertex and triangle counts".into());
+    }
+    if nf == 0 {
+        return bad("no triangles".into());
+    }
+    if mesh.ring_offsets[0] != 0 || mesh.ring_offsets[nv] as usize != mesh.ring.len() {
+        return bad("ring_offsets do not span the ring array".into());
+    }
+    let mut max_valence = 6;
+    let mut crease_spokes = vec![[0u32; 2]; nv];
+    for v in 0..nv {
+        let (a, b) = (
+            mesh.ring_offsets[v] as usize,
+            mesh.ring_offsets[v + 1] as usize,
+        );
+        if b < a + 2 {
+            return bad(format!("vertex {v}: ring shorter than 2"));
+        }
+        max_valence = max_valence.max(b - a);
+        if let Some(&s) = mesh.ring[a..b].iter().find(|&&s| s as usize >= nv) {
+            return bad(format!("vertex {v}: spoke {s} out of range"));
+        }
+        if mesh.rule(v as u32) == RULE_CREASE {
+            let sharp: Vec<usize> = (0..b - a)
+                .filter(|&k| mesh.spoke_flags[a + k] & SPOKE_SHARP != 0)
+                .collect();
+            if sharp.len() != 2 {
+                return bad(format!(
+                    "vertex {v}: crease rule with {} sharp spokes",
+                    sharp.len()
+                ));
+            }
+            crease_spokes[v] = [sharp[0] as u32, sharp[1] as u32];
+        }
+    }
+    let mut vertex_owner = vec![u32::MAX; nv];
+    let mut edge_start = Vec::with_capacity(nf + 1);
+    let mut owns_edge = vec![false; 3 * nf];
+    let mut next = 0u32;
+    for t in 0..nf {
+        edge_start.push(next);
+        let tri = mesh.triangle(t);
+        for c in 0..3 {
+            let v = tri[c] as usize;
+            if v >= nv {
+                return bad(format!("triangle {t}: vertex {v} out of range"));
+            }
+            if vertex_owner[v] == u32::MAX {
+                vertex_owner[v] = (3 * t + c) as u32;
+            }
+            let ring = mesh.ring_of(tri[c]);
+            let k = mesh.corner_spokes[3 * t + c] as usize;
+            let closed = mesh.vertex_flags[v] & VERTEX_BOUNDARY == 0;
+            let k1 = if closed { (k + 1) % ring.len() } else { k + 1 };
+            if k >= ring.len()
+                || k1 >= ring.len()
+                || ring[k] != tri[(c + 1) % 3]
+                || ring[k1] != tri[(c + 2) % 3]
+            {
+                return bad(format!(
+                    "triangle {t} corner {c}: corner_spokes does not point at the triangle's edges"
+                ));
+            }
+            let id = mesh.edges[3 * t + c];
+            if id == next {
+                owns_edge[3 * t + c] = true;
+                next += 1;
+            } else if id > next {
+                return bad(format!(
+                    "triangle {t} edge {c}: edge ids are not in first-appearance order"
+                ));
+            }
+            let nb = mesh.neighbours[3 * t + c];
+            // An interior edge needs the spokes before and after the triangle in both rings.
+            if nb != NO_NEIGHBOUR {
+                if nb as usize >= nf {
+                    return bad(format!("triangle {t} edge {c}: neighbour out of range"));
+                }
+                if !closed && k == 0 {
+                    return bad(format!(
+                        "triangle {t} edge {c}: interior edge on the first (boundary) spoke"
+                    ));
+                }
+            } else if closed
+                || mesh.spoke_flags[mesh.ring_offsets[v] as usize + k] & SPOKE_SHARP == 0
+            {
+                return bad(format!(
+                    "triangle {t} edge {c}: boundary edge that is not marked sharp at an interior vertex"
+                ));
+            }
+        }
+        for c in 0..3 {
+            let nb = mesh.neighbours[3 * t + c];
+            let v1 = tri[(c + 1) % 3];
+            let ring = mesh.ring_of(v1);
+            let k = mesh.corner_spokes[3 * t + (c + 1) % 3] as usize;
+            let closed = mesh.vertex_flags[v1 as usize] & VERTEX_BOUNDARY == 0;
+            if nb != NO_NEIGHBOUR && !closed && k + 2 >= ring.len() {
+                return bad(format!(
+                    "triangle {t} edge {c}: interior edge on the last (boundary) spoke"
+                ));
+            }
+        }
+    }
+    edge_start.push(next);
+    if let Some(v) = vertex_owner.iter().position(|&o| o == u32::MAX) {
+        return bad(format!("vertex {v} is used by no triangle"));
+    }
+    let cf = (0..=max_valence)
+        .map(|n| if n < 2 { 0.0 } else { correction_factor(n) })
+        .collect();
+    Ok(Prepared {
+        vertex_owner,
+        edge_start,
+        owns_edge,
+        crease_spokes,
+        cf,
+        edge_count: next as usize,
+    })
+}
+
+fn make_tri<'a>(mesh: &'a ControlMesh, prep: &'a Prepared, t: usize) -> Tri<'a> {
+    let tri = mesh.triangle(t);
+    let corners = std::array::from_fn(|c| {
+        let v = tri[c] as usize;
+        let off = mesh.ring_offsets[v] as usize;
+        let n = mesh.ring_offsets[v + 1] as usize - off;
+        let cs = prep.crease_spokes[v];
+        Corner {
+            off,
+            n,
+            k: mesh.corner_spokes[3 * t + c] as usize,
+            closed: mesh.vertex_flags[v] & VERTEX_BOUNDARY == 0,
+            rule: mesh.rule(v as u32),
+            creases: [cs[0] as usize, cs[1] as usize],
+        }
+    });
+    let interior = std::array::from_fn(|e| mesh.neighbours[3 * t + e] != NO_NEIGHBOUR);
+    let sharp = std::array::from_fn(|e| {
+        let c: &Corner = &corners[e];
+        mesh.spoke_flags[c.off + c.k] & SPOKE_SHARP != 0
+    });
+    Tri {
+        mesh,
+        corners,
+        interior,
+        sharp,
+        cf: &prep.cf,
+    }
+}
+
+/// Triangles per parallel task.
+const CHUNK: usize = 64;
+
+/// Subdivides `mesh` to `level` (0..=6) with positions, normals and indices. Level 0 gives
+/// the control mesh itself (with normals), numbered as the tables number it.
+pub fn subdivide(mesh: &ControlMesh, level: u32) -> Result<Refined, SubdivError> {
+    let mut out = Refined::default();
+    subdivide_into(mesh, level, &mut out)?;
+    Ok(out)
+}
+
+/// [`subdivide`] into the buffers of `out`, reusing their allocations: a viewer refining every
+/// frame (or a benchmark) then pays no page faults for fresh output memory. `out` is
+/// overwritten entirely; on error it is left empty.
+pub fn subdivide_into(
+    mesh: &ControlMesh,
+    level: u32,
+    out: &mut Refined,
+) -> Result<(), SubdivError> {
+    out.positions.clear();
+    out.normals.clear();
+    out.indices.clear();
+    if level > MAX_LEVEL {
+        return Err(SubdivError::Level(level));
+    }
+    let prep = prepare(mesh)?;
+    let nv = mesh.vertex_count();
+    let nf = mesh.triangle_count();
+    let ne = prep.edge_count;
+    let m = 1usize << level;
+    let per_edge = m - 1;
+    let per_tri = (m - 1) * m.saturating_sub(2) / 2;
+    let fine_per_tri = 1usize << (2 * level);
+    let total_v = nv as u128 + ne as u128 * per_edge as u128 + nf as u128 * per_tri as u128;
+    let total_f = nf as u128 * fine_per_tri as u128;
+    if total_v > u32::MAX as u128 || total_f > (u32::MAX / 3) as u128 {
+        return Err(SubdivError::TooLarge {
+            level,
+            triangles: nf,
+            what: "more than 2^32 vertices or indices",
+        });
+    }
+    let total_v = total_v as usize;
+    let cells = subtriangle_cells(level);
+    let local_cells: Vec<[u32; 3]> = cells
+        .iter()
+        .map(|t| t.map(|[i, j]| grid_index(m, i as usize, j as usize) as u32))
+        .collect();
+
+    let mut positions = std::mem::take(&mut out.positions);
+    let mut normals = std::mem::take(&mut out.normals);
+    let mut indices = std::mem::take(&mut out.indices);
+    positions.resize(total_v, [0.0; 3]);
+    normals.resize(total_v, [0.0; 3]);
+    indices.resize(nf * fine_per_tri, [0; 3]);
+
+    // Split the outputs into per-chunk disjoint slices: a chunk of triangles owns a contiguous
+    // range of edge ids (first-appearance order) and of interior points and fine triangles.
+    struct Job<'a> {
+        t0: usize,
+        t1: usize,
+        edge_pos: &'a mut [P],
+        edge_nrm: &'a mut [P],
+        int_pos: &'a mut [P],
+        int_nrm: &'a mut [P],
+        idx: &'a mut [[u32; 3]],
+    }
+    let (_, rest_p) = positions.split_at_mut(nv);
+    let (_, rest_n) = normals.split_at_mut(nv);
+    let (mut ep, mut ip) = rest_p.split_at_mut(ne * per_edge);
+    let (mut en, mut inn) = rest_n.split_at_mut(ne * per_edge);
+    let mut idx_rest: &mut [[u32; 3]] = &mut indices;
+    let mut jobs = Vec::with_capacity(nf.div_ceil(CHUNK));
+    for t0 in (0..nf).step_by(CHUNK) {
+        let t1 = (t0 + CHUNK).min(nf);
+        let ecount = (prep.edge_start[t1] - prep.edge_start[t0]) as usize * per_edge;
+        let icount = (t1 - t0) * per_tri;
+        let (a, b) = std::mem::take(&mut ep).split_at_mut(ecount);
+        ep = b;
+        let (c, d) = std::mem::take(&mut en).split_at_mut(ecount);
+        en = d;
+        let (e, f) = std::mem::take(&mut ip).split_at_mut(icount);
+        ip = f;
+        let (g, h) = std::mem::take(&mut inn).split_at_mut(icount);
+        inn = h;
+        let (i, j) = std::mem::take(&mut idx_rest).split_at_mut((t1 - t0) * fine_per_tri);
+        idx_rest = j;
+        jobs.push(Job {
+            t0,
+            t1,
+            edge_pos: a,
+            edge_nrm: c,
+            int_pos: e,
+            int_nrm: g,
+            idx: i,
+        });
+    }
+    let corner_out: Vec<Vec<(u32, P, P)>> = jobs
+        .into_par_iter()
+        .map(|job| {
+            let mut patch = Patch::default();
+            let mut gmap = vec![0u32; grid_len(m)];
+            let mut owned = Vec::new();
+            for t in job.t0..job.t1 {
+                let tri = make_tri(mesh, &prep, t);
+                patch.load(&tri);
+                let tv = mesh.triangle(t);
+                for c in 0..3 {
+                    patch.grid[corner_lattice(1, c)] = mesh.position(tv[c]);
+                }
+                patch.fill_square(1);
+                let mut n = 1;
+                while n < m {
+                    patch.step(&tri, n);
+                    n *= 2;
+                }
+                // Global numbering of the local grid.
+                for c in 0..3 {
+                    gmap[corner_lattice(m, c)] = tv[c];
+                    if prep.vertex_owner[tv[c] as usize] == (3 * t + c) as u32 {
+                        let nrm = normalize(patch.corner_normal(&tri, m, c));
+                        owned.push((tv[c], patch.grid[corner_lattice(m, c)], nrm));
+                    }
+                }
+                for e in 0..3 {
+                    let id = mesh.edges[3 * t + e] as usize;
+                    let owner = prep.owns_edge[3 * t + e];
+                    let base = nv + id * per_edge;
+                    let local_base = (id - prep.edge_start[job.t0] as usize) * per_edge;
+                    for k in 1..m {
+                        let l = edge_lattice(m, e, k);
+                        if owner {
+                            gmap[l] = (base + k - 1) as u32;
+                            let (i, j) = lattice_of(m, e, k);
+                            job.edge_pos[local_base + k - 1] = patch.grid[l];
+                            job.edge_nrm[local_base + k - 1] =
+                                normalize(patch.grid_normal(&tri, m, i, j));
+                        } else {
+                            gmap[l] = (base + m - 1 - k) as u32;
+                        }
+                    }
+                }
+                let ibase = nv + ne * per_edge + t * per_tri;
+                let local = (t - job.t0) * per_tri;
+                let mut q = 0;
+                for j in 1..m {
+                    for i in 1..(m - j) {
+                        let l = grid_index(m, i, j);
+                        gmap[l] = (ibase + q) as u32;
+                        job.int_pos[local + q] = patch.grid[l];
+                        job.int_nrm[local + q] =
+                            normalize(patch.grid_normal(&tri, m, i as isize, j as isize));
+                        q += 1;
+                    }
+                }
+                let out =
+                    &mut job.idx[(t - job.t0) * fine_per_tri..(t - job.t0 + 1) * fine_per_tri];
+                for (o, c) in out.iter_mut().zip(&local_cells) {
+                    *o = c.map(|l| gmap[l as usize]);
+                }
+            }
+            owned
+        })
+        .collect();
+    for list in corner_out {
+        for (v, p, n) in list {
+            positions[v as usize] = p;
+            normals[v as usize] = n;
+        }
+    }
+    *out = Refined {
+        level,
+        positions,
+        normals,
+        indices,
+        coarse_vertices: nv,
+        coarse_edges: ne,
+        coarse_triangles: nf,
+    };
+    Ok(())
+}
+
+#[inline(always)]
+fn lattice_of(n: usize, e: usize, m: usize) -> (isize, isize) {
+    let (i, j) = match e {
+        0 => (m, 0),
+        1 => (n - m, m),
+        _ => (0, n - m),
+    };
+    (i as isize, j as isize)
+}
