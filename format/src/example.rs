@@ -1,8 +1,10 @@
 //! The example container of SPEC.md Appendix D: one triangle, one normal, the 9-node tree of
 //! SPEC.md B.2. Tests (ours and other crates') use it as a small valid file.
 
+use crate::gltf::{embed_container, link_primitive, write_glb, PrimitiveLink};
 use crate::model::*;
 use crate::tree::encode_tree;
+use serde_json::json;
 
 /// The SPEC.md Appendix D container.
 pub fn single_triangle() -> Container {
@@ -115,4 +117,51 @@ pub fn two_triangles() -> Container {
                 .collect(),
         }],
     }
+}
+
+/// A GLB with one triangle primitive (positions and u16 indices) carrying [`single_triangle`]
+/// through `EXT_hce_baked_lighting`; passes the Khronos glTF-Validator without errors or warnings.
+pub fn triangle_glb() -> Vec<u8> {
+    let mut bin = Vec::new();
+    for p in [[0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        for c in p {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for i in [0u16, 1, 2, 0] {
+        bin.extend_from_slice(&i.to_le_bytes()); // the last one is padding
+    }
+    let mut json = json!({
+        "asset": { "version": "2.0", "generator": "hce tests" },
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 1 }] }],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+              "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0] },
+            { "bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR" }
+        ],
+        "bufferViews": [
+            { "buffer": 0, "byteOffset": 0, "byteLength": 36, "target": 34962 },
+            { "buffer": 0, "byteOffset": 36, "byteLength": 6, "target": 34963 }
+        ],
+        "buffers": [{ "byteLength": 44 }]
+    });
+    // The example's arrays have consistent shapes, so writing cannot fail.
+    let container = crate::write(&single_triangle()).unwrap_or_default();
+    // A fresh JSON object with buffers[0] without uri: embedding cannot fail.
+    let _ = embed_container(&mut json, &mut bin, &container);
+    link_primitive(
+        &mut json,
+        &PrimitiveLink {
+            mesh: 0,
+            primitive: 0,
+            object: 0,
+            geometry_hash: single_triangle().objects[0].geometry_hash,
+            first_triangle: 0,
+        },
+    )
+    .ok();
+    write_glb(&json, &bin).unwrap_or_default()
 }

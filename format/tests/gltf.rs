@@ -1,52 +1,11 @@
 //! The glTF extension helpers: embed a container into a GLB, read it back, recompute hashes.
 
 use hce_format::gltf::*;
-use hce_format::{example, read, write};
+use hce_format::{example, read};
 use serde_json::json;
 
-/// A GLB with one triangle primitive (positions and u16 indices) and the example container.
 fn triangle_glb() -> Vec<u8> {
-    let mut bin = Vec::new();
-    for p in [[0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
-        for c in p {
-            bin.extend_from_slice(&c.to_le_bytes());
-        }
-    }
-    for i in [0u16, 1, 2, 0] {
-        bin.extend_from_slice(&i.to_le_bytes()); // the last one is padding
-    }
-    let mut json = json!({
-        "asset": { "version": "2.0", "generator": "hce tests" },
-        "scene": 0,
-        "scenes": [{ "nodes": [0] }],
-        "nodes": [{ "mesh": 0 }],
-        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 1 }] }],
-        "accessors": [
-            { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
-              "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0] },
-            { "bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR" }
-        ],
-        "bufferViews": [
-            { "buffer": 0, "byteOffset": 0, "byteLength": 36, "target": 34962 },
-            { "buffer": 0, "byteOffset": 36, "byteLength": 6, "target": 34963 }
-        ],
-        "buffers": [{ "byteLength": 44 }]
-    });
-    let container = write(&example::single_triangle()).unwrap();
-    let view = embed_container(&mut json, &mut bin, &container).unwrap();
-    assert_eq!(view, 2);
-    link_primitive(
-        &mut json,
-        &PrimitiveLink {
-            mesh: 0,
-            primitive: 0,
-            object: 0,
-            geometry_hash: example::single_triangle().objects[0].geometry_hash,
-            first_triangle: 0,
-        },
-    )
-    .unwrap();
-    write_glb(&json, &bin).unwrap()
+    example::triangle_glb()
 }
 
 #[test]

@@ -2,17 +2,38 @@
 
 use clap::{Parser, Subcommand};
 
+mod cmd;
+
+/// Exit statuses shared by every subcommand (also in SPEC.md Appendix E and README.md).
+const EXIT_CODES: &str = "\
+Exit status:
+  0  success (for `validate`: the file is valid)
+  1  internal or other error
+  2  usage error (bad arguments)
+  3  invalid input (unreadable bytes, failed validation)
+  4  I/O error (file missing, unreadable or unwritable)";
+
 #[derive(Parser)]
-#[command(name = "hce", version, about, long_about = None)]
+#[command(name = "hce", version, about, long_about = None, after_help = EXIT_CODES)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// Show what a .hce, .glb or .gltf file holds: header, sections, objects, links.
+    #[command(after_help = EXIT_CODES)]
+    Inspect(cmd::inspect::InspectArgs),
+    /// Check a .hce, .glb or .gltf file deeply; one line per problem.
+    #[command(after_help = EXIT_CODES)]
+    Validate(cmd::validate::ValidateArgs),
+}
 
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
-    match cli.command {}
+    match cli.command {
+        Command::Inspect(args) => cmd::inspect::run(args),
+        Command::Validate(args) => cmd::validate::run(args),
+    }
 }

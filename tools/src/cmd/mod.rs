@@ -1,0 +1,4 @@
+//! One module per `hce` subcommand.
+
+pub mod inspect;
+pub mod validate;
