@@ -583,3 +583,40 @@ pub fn write_glb(json: &Value, bin: &[u8]) -> Result<Vec<u8>, GltfError> {
     }
     Ok(out)
 }
+
+/// [`primitive_geometry`] for every link, reading each distinct (POSITION, indices, mode)
+/// combination once: the work stays linear in the buffers even when thousands of primitives
+/// share one accessor.
+pub fn linked_geometries(
+    json: &Value,
+    buffers: &[Vec<u8>],
+    links: &[PrimitiveLink],
+) -> Vec<Result<(u64, usize), GltfError>> {
+    let mut cache: std::collections::HashMap<String, Result<(u64, usize), GltfError>> =
+        std::collections::HashMap::new();
+    links
+        .iter()
+        .map(|l| {
+            let prim = json
+                .get("meshes")
+                .and_then(|m| m.get(l.mesh))
+                .and_then(|m| m.get("primitives"))
+                .and_then(|p| p.get(l.primitive));
+            let key = match prim {
+                Some(p) => format!(
+                    "{}/{}/{}",
+                    p.get("attributes")
+                        .and_then(|a| a.get("POSITION"))
+                        .unwrap_or(&Value::Null),
+                    p.get("indices").unwrap_or(&Value::Null),
+                    p.get("mode").unwrap_or(&Value::Null)
+                ),
+                None => format!("missing {}/{}", l.mesh, l.primitive),
+            };
+            cache
+                .entry(key)
+                .or_insert_with(|| primitive_geometry(json, buffers, l.mesh, l.primitive))
+                .clone()
+        })
+        .collect()
+}

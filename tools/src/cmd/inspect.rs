@@ -84,13 +84,23 @@ pub fn load(path: &Path) -> Result<Loaded, LoadError> {
         "gltf"
     };
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut seen = std::collections::HashSet::new();
     let buffers = asset
         .buffers(|uri| {
             // Only plain relative file names: a URI must not reach outside the asset's folder.
             if uri.contains("..") || uri.contains(':') || uri.starts_with('/') {
                 return Err("only relative paths inside the asset's folder are followed".into());
             }
-            std::fs::read(dir.join(uri)).map_err(|e| e.to_string())
+            // Each file is loaded once: many buffers naming one big file would otherwise
+            // multiply memory by the number of buffers.
+            let file = dir.join(uri);
+            let key = std::fs::canonicalize(&file).unwrap_or_else(|_| file.clone());
+            if !seen.insert(key) {
+                return Err(
+                    "another buffer already uses this file; hce loads each buffer file once".into(),
+                );
+            }
+            std::fs::read(&file).map_err(|e| e.to_string())
         })
         .map_err(invalid)?;
     let container = gltf::container_bytes(&asset.json, &buffers)
@@ -103,13 +113,14 @@ pub fn load(path: &Path) -> Result<Loaded, LoadError> {
             ))
         })?
         .to_vec();
-    let primitives = gltf::primitive_links(&asset.json)
-        .map_err(invalid)?
+    let links = gltf::primitive_links(&asset.json).map_err(invalid)?;
+    let geometries = gltf::linked_geometries(&asset.json, &buffers, &links);
+    let primitives = links
         .into_iter()
-        .map(|link| LinkedPrimitive {
-            computed: gltf::primitive_geometry(&asset.json, &buffers, link.mesh, link.primitive)
-                .map_err(|e| e.to_string()),
+        .zip(geometries)
+        .map(|(link, computed)| LinkedPrimitive {
             link,
+            computed: computed.map_err(|e| e.to_string()),
         })
         .collect();
     Ok(Loaded {
