@@ -449,12 +449,22 @@ pub fn primitive_geometry(
         .ok_or_else(|| GltfError::Json(format!("{loc} has no POSITION attribute")))?
         as usize;
     let (positions, vertex_count) = accessor_values(json, buffers, position)?;
+    // accessor_values returns count * components values: VEC3 has three per vertex.
+    if positions.len() != 3 * vertex_count {
+        return Err(GltfError::Json(format!(
+            "{loc}: the POSITION accessor is not VEC3"
+        )));
+    }
     let indices: Vec<usize> = match prim.get("indices").and_then(Value::as_u64) {
-        Some(i) => accessor_values(json, buffers, i as usize)?
-            .0
-            .iter()
-            .map(|&x| x as usize)
-            .collect(),
+        Some(i) => {
+            let (values, count) = accessor_values(json, buffers, i as usize)?;
+            if values.len() != count {
+                return Err(GltfError::Json(format!(
+                    "{loc}: the indices accessor is not SCALAR"
+                )));
+            }
+            values.iter().map(|&x| x as usize).collect()
+        }
         None => (0..vertex_count).collect(),
     };
     if indices.len() % 3 != 0 {
