@@ -240,7 +240,7 @@ pub fn control_mesh(positions: Vec<f32>, triangles: Vec<u32>) -> ControlMesh {
             RULE_SMOOTH
         };
         spoke_flags.extend(flags);
-        vertex_flags.push(u32::from(boundary[v]) * VERTEX_BOUNDARY | rule << VERTEX_RULE_SHIFT);
+        vertex_flags.push((u32::from(boundary[v]) * VERTEX_BOUNDARY) | (rule << VERTEX_RULE_SHIFT));
     }
     let mut corner_spokes = Vec::with_capacity(3 * nf);
     let mut neighbours = Vec::with_capacity(3 * nf);
