@@ -100,6 +100,7 @@ fn sample_files_can_be_written_for_external_tools() {
         )
         .unwrap();
         hce_format::write_file(&dir.join("two_triangles.hce"), &example::two_triangles()).unwrap();
+        hce_format::write_file(&dir.join("grid.hce"), &example::grid(3, 3)).unwrap();
         println!("wrote samples to {}", dir.display());
     }
 }
