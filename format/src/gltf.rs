@@ -449,12 +449,22 @@ pub fn primitive_geometry(
         .ok_or_else(|| GltfError::Json(format!("{loc} has no POSITION attribute")))?
         as usize;
     let (positions, vertex_count) = accessor_values(json, buffers, position)?;
+    // accessor_values returns count * components values: VEC3 has three per vertex.
+    if positions.len() != 3 * vertex_count {
+        return Err(GltfError::Json(format!(
+            "{loc}: the POSITION accessor is not VEC3"
+        )));
+    }
     let indices: Vec<usize> = match prim.get("indices").and_then(Value::as_u64) {
-        Some(i) => accessor_values(json, buffers, i as usize)?
-            .0
-            .iter()
-            .map(|&x| x as usize)
-            .collect(),
+        Some(i) => {
+            let (values, count) = accessor_values(json, buffers, i as usize)?;
+            if values.len() != count {
+                return Err(GltfError::Json(format!(
+                    "{loc}: the indices accessor is not SCALAR"
+                )));
+            }
+            values.iter().map(|&x| x as usize).collect()
+        }
         None => (0..vertex_count).collect(),
     };
     if indices.len() % 3 != 0 {
@@ -582,4 +592,41 @@ pub fn write_glb(json: &Value, bin: &[u8]) -> Result<Vec<u8>, GltfError> {
         out.resize(total, 0);
     }
     Ok(out)
+}
+
+/// [`primitive_geometry`] for every link, reading each distinct (POSITION, indices, mode)
+/// combination once: the work stays linear in the buffers even when thousands of primitives
+/// share one accessor.
+pub fn linked_geometries(
+    json: &Value,
+    buffers: &[Vec<u8>],
+    links: &[PrimitiveLink],
+) -> Vec<Result<(u64, usize), GltfError>> {
+    let mut cache: std::collections::HashMap<String, Result<(u64, usize), GltfError>> =
+        std::collections::HashMap::new();
+    links
+        .iter()
+        .map(|l| {
+            let prim = json
+                .get("meshes")
+                .and_then(|m| m.get(l.mesh))
+                .and_then(|m| m.get("primitives"))
+                .and_then(|p| p.get(l.primitive));
+            let key = match prim {
+                Some(p) => format!(
+                    "{}/{}/{}",
+                    p.get("attributes")
+                        .and_then(|a| a.get("POSITION"))
+                        .unwrap_or(&Value::Null),
+                    p.get("indices").unwrap_or(&Value::Null),
+                    p.get("mode").unwrap_or(&Value::Null)
+                ),
+                None => format!("missing {}/{}", l.mesh, l.primitive),
+            };
+            cache
+                .entry(key)
+                .or_insert_with(|| primitive_geometry(json, buffers, l.mesh, l.primitive))
+                .clone()
+        })
+        .collect()
 }

@@ -183,7 +183,7 @@ fn identifier_problem(found: &[u8]) -> ReadError {
         .join(" ");
     let hint = if found.starts_with(b"\x09HCE") || found.starts_with(b"HCE") {
         "the high bit of byte 0 was stripped: the file went through a 7-bit channel; transfer it in binary mode"
-    } else if found.starts_with(b"\x89HCE\n\x1a") || found.starts_with(b"\x89HCE\r\n\x1a\r\n") {
+    } else if found.starts_with(b"\x89HCE\n\x1a") || found.starts_with(b"\x89HCE\r\r\n") {
         "line endings were converted: the file was transferred in text mode; transfer it in binary mode"
     } else if found.starts_with(b"glTF") {
         "this is a GLB file; hce reads the container embedded in it through its EXT_hce_baked_lighting extension"

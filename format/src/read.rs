@@ -3,7 +3,7 @@
 //! It never panics and never allocates more than the input can justify: every count read from
 //! the file is checked, with checked arithmetic, against the length of the section that holds
 //! the data, and every array is built from bytes that are present. Content invariants (indices
-//! in range, adjacency consistency, trees) are left to [`crate::validate`].
+//! in range, adjacency consistency, trees) are left to [`crate::validate()`].
 
 use crate::error::ReadError;
 use crate::layout::*;

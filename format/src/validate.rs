@@ -288,9 +288,9 @@ fn validate_mesh(at: &str, m: &ControlMesh, p: &mut Problems) {
             }
             // Rule 3: boundary flag and vertex rule agree with the spokes.
             let flags = m.vertex_flags[v];
-            let vat = format!("{at}.mesh.vertex_flags[{v}]");
+            let vat = || format!("{at}.mesh.vertex_flags[{v}]");
             if flags & !(VERTEX_BOUNDARY | VERTEX_RULE_MASK) != 0 {
-                p.push(&vat, format!("unknown bits in {flags:#x}"));
+                p.push(vat(), format!("unknown bits in {flags:#x}"));
             }
             let boundary_spokes: Vec<usize> = (a..b)
                 .filter(|&s| m.spoke_flags[s] & SPOKE_BOUNDARY != 0)
@@ -298,10 +298,10 @@ fn validate_mesh(at: &str, m: &ControlMesh, p: &mut Problems) {
             let is_boundary = flags & VERTEX_BOUNDARY != 0;
             if is_boundary {
                 if b - a < 2 || boundary_spokes != [a, b - 1] {
-                    p.push(&vat, "boundary vertex whose first and last spokes are not exactly its boundary spokes");
+                    p.push(vat(), "boundary vertex whose first and last spokes are not exactly its boundary spokes");
                 }
             } else if !boundary_spokes.is_empty() {
-                p.push(&vat, "interior vertex with a boundary spoke");
+                p.push(vat(), "interior vertex with a boundary spoke");
             }
             let sharp = (a..b)
                 .filter(|&s| m.spoke_flags[s] & SPOKE_SHARP != 0)
@@ -315,7 +315,7 @@ fn validate_mesh(at: &str, m: &ControlMesh, p: &mut Problems) {
             };
             let rule = (flags & VERTEX_RULE_MASK) >> VERTEX_RULE_SHIFT;
             if rule != expected {
-                p.push(&vat, format!("rule {rule} but {sharp} sharp spokes (valence {}) make it {expected} (SPEC.md C.3)", b - a));
+                p.push(vat(), format!("rule {rule} but {sharp} sharp spokes (valence {}) make it {expected} (SPEC.md C.3)", b - a));
             }
         }
     }
@@ -332,10 +332,10 @@ fn validate_mesh(at: &str, m: &ControlMesh, p: &mut Problems) {
                 };
                 let val = b - a;
                 let k = m.corner_spokes[3 * t + c] as usize;
-                let cat = format!("{at}.mesh.corner_spokes[{}]", 3 * t + c);
+                let cat = || format!("{at}.mesh.corner_spokes[{}]", 3 * t + c);
                 if k >= val {
                     p.push(
-                        cat,
+                        cat(),
                         format!("spoke {k} is out of vertex {v}'s ring of {val}"),
                     );
                     continue;
@@ -350,14 +350,14 @@ fn validate_mesh(at: &str, m: &ControlMesh, p: &mut Problems) {
                 let (v1, v2) = (tri[(c + 1) % 3], tri[(c + 2) % 3]);
                 if m.ring[a + k] != v1 {
                     p.push(
-                        cat,
+                        cat(),
                         format!(
                             "ring of vertex {v} has {} at position {k}, triangle {t} needs {v1}",
                             m.ring[a + k]
                         ),
                     );
                 } else if next.map(|n| m.ring[a + n]) != Some(v2) {
-                    p.push(cat, format!("the spoke after position {k} in vertex {v}'s ring is not {v2}: the ring is not counter-clockwise or misses triangle {t}"));
+                    p.push(cat(), format!("the spoke after position {k} in vertex {v}'s ring is not {v2}: the ring is not counter-clockwise or misses triangle {t}"));
                 }
             }
         }
@@ -369,14 +369,14 @@ fn validate_mesh(at: &str, m: &ControlMesh, p: &mut Problems) {
             let tri = m.triangle(t);
             for e in 0..3 {
                 let n = m.neighbours[3 * t + e];
-                let nat = format!("{at}.mesh.neighbours[{}]", 3 * t + e);
+                let nat = || format!("{at}.mesh.neighbours[{}]", 3 * t + e);
                 let (va, vb) = (tri[e], tri[(e + 1) % 3]);
                 if n == NO_NEIGHBOUR {
                     if cs_ok && rings_ok {
                         if let Some((a, b)) = valence_ok(m, va as usize) {
                             let k = m.corner_spokes[3 * t + e] as usize;
                             if a + k < b && m.spoke_flags[a + k] & SPOKE_BOUNDARY == 0 {
-                                p.push(nat, format!("edge ({va}, {vb}) has no neighbour but its spoke is not marked boundary"));
+                                p.push(nat(), format!("edge ({va}, {vb}) has no neighbour but its spoke is not marked boundary"));
                             }
                         }
                     }
@@ -384,7 +384,7 @@ fn validate_mesh(at: &str, m: &ControlMesh, p: &mut Problems) {
                 }
                 if n as usize >= nf {
                     p.push(
-                        nat,
+                        nat(),
                         format!("neighbour {n} is out of range ({nf} triangles)"),
                     );
                     continue;
@@ -392,10 +392,13 @@ fn validate_mesh(at: &str, m: &ControlMesh, p: &mut Problems) {
                 let u = n as usize;
                 let ut = m.triangle(u);
                 match (0..3).find(|&f| ut[f] == vb && ut[(f + 1) % 3] == va) {
-                    None => p.push(nat, format!("triangle {u} does not have edge ({vb}, {va})")),
+                    None => p.push(
+                        nat(),
+                        format!("triangle {u} does not have edge ({vb}, {va})"),
+                    ),
                     Some(f) => {
                         if m.neighbours[3 * u + f] != t as u32 {
-                            p.push(nat, format!("triangle {u} does not name {t} as its neighbour across the shared edge"));
+                            p.push(nat(), format!("triangle {u} does not name {t} as its neighbour across the shared edge"));
                         }
                         if ed_ok && m.edges[3 * u + f] != m.edges[3 * t + e] {
                             p.push(
@@ -491,16 +494,16 @@ fn validate_shading(at: &str, o: &Object, p: &mut Problems) {
     // Rule 7: triangle records; trees decoded in linear time (see `triangle_trees`).
     let shapes = crate::tree::triangle_trees(o);
     for (t, r) in o.triangles.iter().enumerate() {
-        let tat = format!("{at}.triangles[{t}]");
+        let tat = || format!("{at}.triangles[{t}]");
         if r.normal_count == 0 {
             p.push(
-                &tat,
+                tat(),
                 "normal_count is 0; every triangle has at least its geometric normal",
             );
         }
         if o.kind == ObjectKind::Flat && r.normal_count > 1 {
             p.push(
-                &tat,
+                tat(),
                 format!(
                     "flat objects have one normal per triangle, found {}",
                     r.normal_count
@@ -510,7 +513,7 @@ fn validate_shading(at: &str, o: &Object, p: &mut Problems) {
         let n = u64::from(r.normal_count);
         if u64::from(r.normal_start) + n > o.normals.len() as u64 {
             p.push(
-                &tat,
+                tat(),
                 format!(
                     "normals {}..{} run past the {} normals",
                     r.normal_start,
@@ -524,7 +527,7 @@ fn validate_shading(at: &str, o: &Object, p: &mut Problems) {
                 let end = u64::from(r.colour_start) + u64::from(shape.node_count) * n;
                 if end > o.colours.len() as u64 {
                     p.push(
-                        &tat,
+                        tat(),
                         format!(
                             "colours {}..{end} for {} nodes x {n} normals run past the {} colours",
                             r.colour_start,
@@ -534,7 +537,7 @@ fn validate_shading(at: &str, o: &Object, p: &mut Problems) {
                     );
                 }
             }
-            Err(e) => p.push(&tat, e.to_string()),
+            Err(e) => p.push(tat(), e.to_string()),
         }
     }
 }

@@ -220,7 +220,7 @@ fn objects_section(c: &Container, counts: &[Counts]) -> Result<Vec<u8>, WriteErr
 
 /// Serialises a container (SPEC.md Appendix A). Fails only when the arrays' lengths disagree
 /// with each other (for example `positions.len()` not a multiple of 3) or exceed the 32-bit
-/// counts of version 1; content is not validated (use [`crate::validate`]).
+/// counts of version 1; content is not validated (use [`crate::validate()`]).
 pub fn write(c: &Container) -> Result<Vec<u8>, WriteError> {
     let counts = c
         .objects

@@ -129,12 +129,13 @@ fn seeded_mutations_never_panic_or_overallocate() {
     let seeds = [
         write(&example::single_triangle()).unwrap(),
         write(&example::two_triangles()).unwrap(),
+        write(&example::grid(3, 3)).unwrap(),
     ];
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     let (mut readable, mut valid) = (0, 0);
     let iterations = 50_000;
     for i in 0..iterations {
-        let input = mutate(&mut rng, &seeds[i % 2]);
+        let input = mutate(&mut rng, &seeds[i % seeds.len()]);
         let (r, v) = check(&input);
         readable += usize::from(r);
         valid += usize::from(v);

@@ -131,6 +131,12 @@ fn text_mode_corruption_is_explained() {
     crlf.extend_from_slice(&bytes[5..]);
     let e = read(&crlf).unwrap_err().to_string();
     assert!(e.contains("line endings were converted"), "{e}");
+    // LF -> CR LF, the other direction.
+    let mut lf = bytes[..4].to_vec();
+    lf.extend_from_slice(b"\r\r\n\x1a\r\n");
+    lf.extend_from_slice(&bytes[8..]);
+    let e = read(&lf).unwrap_err().to_string();
+    assert!(e.contains("line endings were converted"), "{e}");
     let mut stripped = bytes.clone();
     stripped[0] &= 0x7f;
     let e = read(&stripped).unwrap_err().to_string();

@@ -117,3 +117,16 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(40))]
+
+    /// What a correct builder produces, the validator accepts, and it survives the file.
+    #[test]
+    fn valid_grids_validate_and_round_trip(n in 1u32..7, depth in 0u32..5) {
+        let c = example::grid(n, depth);
+        let bytes = write(&c).unwrap();
+        prop_assert_eq!(validate_bytes(&bytes), vec![]);
+        prop_assert_eq!(read(&bytes).unwrap(), c);
+    }
+}

@@ -120,3 +120,36 @@ fn flat_objects_need_one_normal() {
         vec!["objects[0].triangles[0]: flat objects have one normal per triangle, found 2"]
     );
 }
+
+#[test]
+fn generated_grids_are_valid_and_their_damage_is_found() {
+    for n in [1, 2, 5] {
+        let c = example::grid(n, 4);
+        assert_eq!(validate(&c), vec![], "grid {n}");
+        assert_eq!(validate_bytes(&write(&c).unwrap()), vec![], "grid {n}");
+    }
+    // The reference builder agrees with the hand-written tables of the two-triangle example.
+    let two = example::two_triangles();
+    let m = &two.objects[0].mesh;
+    assert_eq!(
+        example::control_mesh(m.positions.clone(), m.triangles.clone()),
+        *m
+    );
+    // An interior vertex of a 3x3 grid: its ring wraps around, valence 6, smooth.
+    let c = example::grid(3, 2);
+    let m = &c.objects[0].mesh;
+    assert_eq!(m.ring_of(5).len(), 6);
+    assert_eq!(m.vertex_flags[5], 0);
+    let mut damaged = c.clone();
+    damaged.objects[0]
+        .mesh
+        .ring
+        .swap(m.ring_offsets[5] as usize, m.ring_offsets[5] as usize + 1);
+    let p: Vec<String> = validate(&damaged).iter().map(ToString::to_string).collect();
+    assert!(
+        p.iter()
+            .all(|s| s.starts_with("objects[0].mesh.corner_spokes[")),
+        "{p:?}"
+    );
+    assert!(p.len() >= 2, "{p:?}");
+}

@@ -1,5 +1,7 @@
 //! One module per `hce` subcommand.
 
 pub mod bench_gpu;
+pub mod inspect;
 pub mod render;
 pub mod subdivide;
+pub mod validate;
