@@ -884,7 +884,13 @@ pub fn subdivide_into(
                     let id = mesh.edges[3 * t + e] as usize;
                     let owner = prep.owns_edge[3 * t + e];
                     let base = nv + id * per_edge;
-                    let local_base = (id - prep.edge_start[job.t0] as usize) * per_edge;
+                    // Only an owned edge lies in this job's contiguous slice of edge points;
+                    // an edge owned by an earlier triangle may have a smaller id than the slice.
+                    let local_base = if owner {
+                        (id - prep.edge_start[job.t0] as usize) * per_edge
+                    } else {
+                        0
+                    };
                     for k in 1..m {
                         let l = edge_lattice(m, e, k);
                         if owner {
