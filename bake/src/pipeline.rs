@@ -364,23 +364,21 @@ fn prepare_object(
         creases: options.creases,
         ..Default::default()
     };
-    let welded = build_control_mesh(&w.positions, &triangles, corner_normals.as_deref(), &config)
-        .ok()
-        .filter(|top| {
-            top.mesh.triangle_count() == triangles.len()
-                && top.triangle_flipped.iter().all(|&f| !f)
-                && top
-                    .triangle_source
-                    .iter()
-                    .enumerate()
-                    .all(|(t, &s)| s as usize == t)
-                && top
-                    .mesh
-                    .triangles
-                    .iter()
-                    .zip(&corners)
-                    .all(|(&v, c)| top.mesh.position(v).map(f32::to_bits) == c.map(f32::to_bits))
-        });
+    let welded =
+        build_control_mesh(&w.positions, &triangles, corner_normals.as_deref(), &config)
+            .ok()
+            .filter(|top| {
+                top.mesh.triangle_count() == triangles.len()
+                    && top.triangle_flipped.iter().all(|&f| !f)
+                    && top
+                        .triangle_source
+                        .iter()
+                        .enumerate()
+                        .all(|(t, &s)| s as usize == t)
+                    && top.mesh.triangles.iter().zip(&corners).all(|(&v, c)| {
+                        top.mesh.position(v).map(f32::to_bits) == c.map(f32::to_bits)
+                    })
+            });
     let (mesh, kind) = match welded {
         Some(top) => (
             top.mesh,
@@ -418,7 +416,10 @@ fn prepare_object(
     let geometric: Vec<[f32; 3]> = (0..mesh.triangle_count())
         .map(|t| {
             let p = mesh.triangle(t).map(|v| Vec3::from(mesh.position(v)));
-            (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero().to_array()
+            (p[1] - p[0])
+                .cross(p[2] - p[0])
+                .normalize_or_zero()
+                .to_array()
         })
         .collect();
     if kind == ObjectKind::Flat {

@@ -201,7 +201,11 @@ fn print_summary(o: &BakeOutcome, args: &BakeArgs) {
         total += s;
     }
     println!(" total {total:.2}s");
-    println!("output: {} ({} bytes)", args.output.display(), o.output_bytes);
+    println!(
+        "output: {} ({} bytes)",
+        args.output.display(),
+        o.output_bytes
+    );
 }
 
 /// `k:count` pairs for the non-empty bins.
