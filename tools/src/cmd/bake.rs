@@ -11,7 +11,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use hce_bake::import::ImportOptions;
 use hce_bake::normal_sets::NormalSetParams;
-use hce_bake::pipeline::{bake_file, BakeOutcome, PipelineOptions};
+use hce_bake::pipeline::{bake_file, BakeOutcome, PipelineError, PipelineOptions};
 use hce_bake::BakeParams;
 use hce_format::ObjectKind;
 use hce_runtime::Creases;
@@ -97,14 +97,33 @@ pub fn run(args: BakeArgs) -> Result<()> {
         builder = builder.num_threads(n);
     }
     let pool = builder.build().context("cannot start the worker threads")?;
-    let outcome = pool
-        .install(|| bake_file(&args.input, &options, &progress))
-        .with_context(|| format!("baking {}", args.input.display()))?;
+    let outcome = match pool.install(|| bake_file(&args.input, &options, &progress)) {
+        Ok(o) => o,
+        Err(e) => {
+            bars.finish();
+            eprintln!("error: baking {}: {e}", args.input.display());
+            std::process::exit(exit_code(&e));
+        }
+    };
     bars.finish();
     if !args.quiet {
         print_summary(&outcome, &args);
     }
     Ok(())
+}
+
+/// The documented exit status of a failed bake (see `hce --help`).
+fn exit_code(e: &PipelineError) -> i32 {
+    use hce_bake::import::ImportError;
+    match e {
+        PipelineError::OutputExtension { .. } | PipelineError::Levels(_) => 2,
+        PipelineError::Bake(hce_bake::BakeError::InvalidParameter(_)) => 2,
+        PipelineError::Import(ImportError::Io { .. }) => 4,
+        PipelineError::Write(_) => 4,
+        PipelineError::Output(hce_bake::output::OutputError::Write(_)) => 4,
+        PipelineError::Import(_) | PipelineError::Bake(_) | PipelineError::Object { .. } => 3,
+        PipelineError::Output(_) => 1,
+    }
 }
 
 /// One progress bar per phase, replaced when the phase changes.
