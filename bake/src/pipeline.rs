@@ -201,13 +201,14 @@ pub fn bake_file(
                 .enumerate()
                 .map(|(t, set)| {
                     let [a, b, c] = so.corners(t);
-                    let n0 = (b - a).cross(c - a).normalize_or_zero();
+                    let n0 = (b - a).cross(c - a).try_normalize().unwrap_or(Vec3::Z);
                     let mut w = vec![n0.to_array()];
-                    w.extend(
-                        set.iter()
-                            .skip(1)
-                            .map(|&n| (inv_t * Vec3::from(n)).normalize_or_zero().to_array()),
-                    );
+                    w.extend(set.iter().skip(1).map(|&n| {
+                        (inv_t * Vec3::from(n))
+                            .try_normalize()
+                            .unwrap_or(n0)
+                            .to_array()
+                    }));
                     w
                 })
                 .collect();
@@ -416,9 +417,12 @@ fn prepare_object(
     let geometric: Vec<[f32; 3]> = (0..mesh.triangle_count())
         .map(|t| {
             let p = mesh.triangle(t).map(|v| Vec3::from(mesh.position(v)));
+            // A zero-area triangle has no normal; any unit vector keeps the file valid, and
+            // it receives no light anyway.
             (p[1] - p[0])
                 .cross(p[2] - p[0])
-                .normalize_or_zero()
+                .try_normalize()
+                .unwrap_or(Vec3::Z)
                 .to_array()
         })
         .collect();
