@@ -138,6 +138,12 @@ fn curved_multiresolution_objects_keep_several_normals() {
     o.creases = Creases::None;
     let outcome = bake_with_threads(&sample("teatime.glb"), &o, 2);
     check_glb(&out);
+    // Multiresolution objects too: one thread gives the same bytes.
+    let one = dir.path().join("teatime-1.glb");
+    let mut o1 = o.clone();
+    o1.output = one.clone();
+    bake_with_threads(&sample("teatime.glb"), &o1, 1);
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&one).unwrap());
     let multires: Vec<_> = outcome
         .objects
         .iter()
@@ -155,4 +161,38 @@ fn curved_multiresolution_objects_keep_several_normals() {
             assert!((l - 1.0).abs() < 1e-4, "{n:?}");
         }
     }
+}
+
+#[test]
+fn gltf_output_writes_json_and_bin_beside_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cornell.gltf");
+    let outcome = bake_with_threads(&sample("cornell-box.glb"), &options(&out, &[]), 2);
+    let bin = dir.path().join("cornell.bin");
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    assert_eq!(json["buffers"][0]["uri"], "cornell.bin");
+    let size = std::fs::metadata(&out).unwrap().len() + std::fs::metadata(&bin).unwrap().len();
+    assert_eq!(outcome.output_bytes, size);
+    // Nothing but the two outputs is left in the directory (writes are atomic renames).
+    let mut names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, vec!["cornell.bin", "cornell.gltf"]);
+}
+
+#[test]
+fn bad_output_extension_is_refused_before_baking() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cornell.png");
+    let e = bake_file(
+        &sample("cornell-box.glb"),
+        &options(&out, &[]),
+        &|_: &str, _: usize, _: usize| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains(".glb, .gltf or .hce"), "{e}");
+    assert!(!out.exists());
 }
