@@ -196,3 +196,40 @@ fn bad_output_extension_is_refused_before_baking() {
     assert!(e.contains(".glb, .gltf or .hce"), "{e}");
     assert!(!out.exists());
 }
+
+#[test]
+fn inconsistently_wound_multires_object_falls_back_to_flat_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("s.mtl"),
+        "newmtl white\nKd 0.8 0.8 0.8\nnewmtl lamp\nKd 0 0 0\nKe 5 5 5\n",
+    )
+    .unwrap();
+    // The floor's second triangle runs its shared edge 1-3 the same way as the first, so the
+    // orientation pass would flip it: the control mesh would not keep the primitive's corners.
+    let obj = "mtllib s.mtl\n\
+        o floor\nv 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nusemtl white\nf 1 3 2\nf 1 3 4\n\
+        o lamp\nv 0 1 0\nv 1 1 0\nv 1 1 1\nv 0 1 1\nusemtl lamp\nf 5 6 7\nf 5 7 8\n";
+    let input = dir.path().join("s.obj");
+    std::fs::write(&input, obj).unwrap();
+    let out = dir.path().join("s.glb");
+    let outcome = bake_with_threads(&input, &options(&out, &["all"]), 2);
+    assert!(
+        outcome.warnings.iter().any(|w| w.contains("floor")),
+        "{:?}",
+        outcome.warnings
+    );
+    let c = &outcome.container;
+    let floor = c.objects.iter().find(|o| o.name.contains("floor")).unwrap();
+    assert_eq!(floor.kind, ObjectKind::Flat);
+    // Unwelded: three control vertices per triangle, corners exactly the primitive's.
+    assert_eq!(floor.mesh.vertex_count(), 6);
+    assert_eq!(
+        floor.mesh.position(floor.mesh.triangle(1)[2]),
+        [0.0, 0.0, 1.0]
+    );
+    let lamp = c.objects.iter().find(|o| o.name.contains("lamp")).unwrap();
+    assert_eq!(lamp.kind, ObjectKind::Multiresolution);
+    assert_eq!(lamp.mesh.vertex_count(), 4);
+    assert_eq!(check_glb(&out), 2);
+}
