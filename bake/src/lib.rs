@@ -15,6 +15,7 @@ pub mod hierarchical;
 pub mod import;
 pub mod normal_sets;
 pub mod output;
+pub mod pipeline;
 pub mod scene;
 pub mod visibility;
 

@@ -22,6 +22,9 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Bake global illumination into a glTF or OBJ scene (.glb/.gltf with the extension, or .hce).
+    #[command(after_help = EXIT_CODES)]
+    Bake(cmd::bake::BakeArgs),
     /// Refine a mesh on the GPU and render it headless to PNG or EXR.
     #[command(after_help = EXIT_CODES)]
     Render(cmd::render::RenderArgs),
@@ -40,6 +43,7 @@ enum Command {
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
     match cli.command {
+        Command::Bake(args) => cmd::bake::run(args),
         Command::Render(args) => cmd::render::run(args),
         Command::BenchGpu(args) => cmd::bench_gpu::run(args),
         Command::Subdivide(args) => cmd::subdivide::run(args),

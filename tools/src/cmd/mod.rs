@@ -1,5 +1,6 @@
 //! One module per `hce` subcommand.
 
+pub mod bake;
 pub mod bench_gpu;
 pub mod inspect;
 pub mod render;

@@ -1,0 +1,243 @@
+//! `hce bake`: import a glTF or OBJ scene, choose normal sets, solve enriched hierarchical
+//! radiosity and write the baked `.glb`/`.gltf` (extension + `COLOR_0` fallback) or the `.hce`
+//! container alone. The work is `hce_bake::pipeline::bake_file`; this module parses flags,
+//! draws progress bars and prints the summary.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::sync::Mutex;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use hce_bake::import::ImportOptions;
+use hce_bake::normal_sets::NormalSetParams;
+use hce_bake::pipeline::{bake_file, BakeOutcome, PipelineError, PipelineOptions};
+use hce_bake::BakeParams;
+use hce_format::ObjectKind;
+use hce_runtime::Creases;
+use indicatif::{ProgressBar, ProgressStyle};
+
+#[derive(Args)]
+pub struct BakeArgs {
+    /// Input scene (.gltf, .glb or .obj with its .mtl).
+    pub input: PathBuf,
+    /// Output: .glb or .gltf (scene + extension + COLOR_0) or .hce (container alone); written
+    /// atomically.
+    #[arg(long, short = 'o')]
+    pub output: PathBuf,
+    /// Make objects whose node or mesh name matches PATTERN (`*`, `?`) multiresolution;
+    /// repeatable; `all` selects every object. Node extras `{"hce": {"multires": true}}` also do.
+    #[arg(long, value_name = "PATTERN")]
+    pub multires: Vec<String>,
+    /// Deepest Loop subdivision level the normal sets serve (0..=6).
+    #[arg(long, default_value_t = 3)]
+    pub levels: u32,
+    /// Most normals per coarse triangle besides its geometric normal.
+    #[arg(long, default_value_t = 7)]
+    pub max_normals: usize,
+    /// Target angle (degrees) between any subtriangle normal and its representative.
+    #[arg(long, default_value_t = 10.0)]
+    pub normal_tolerance: f32,
+    /// Sharp creases of multiresolution objects: none, auto (split input normals) or angle=DEG.
+    #[arg(long, default_value = "none")]
+    pub creases: Creases,
+    /// Link refinement threshold (fraction of the scene's reference power).
+    #[arg(long, default_value_t = 1e-4)]
+    pub bf_epsilon: f32,
+    /// Jittered visibility rays per link (0 disables occlusion).
+    #[arg(long, default_value_t = 8)]
+    pub visibility_rays: u32,
+    /// Worker threads (default: all cores). The output is the same whatever the count.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// No progress bars and no summary.
+    #[arg(long, short = 'q')]
+    pub quiet: bool,
+}
+
+pub fn run(args: BakeArgs) -> Result<()> {
+    if args.max_normals + 1 > hce_bake::MAX_NORMALS_PER_TRIANGLE {
+        anyhow::bail!(
+            "--max-normals {} is too large; use at most {}",
+            args.max_normals,
+            hce_bake::MAX_NORMALS_PER_TRIANGLE - 1
+        );
+    }
+    if !(args.normal_tolerance.is_finite() && args.normal_tolerance >= 0.0) {
+        anyhow::bail!("--normal-tolerance must be a non-negative number of degrees");
+    }
+    let options = PipelineOptions {
+        import: ImportOptions {
+            multires: args.multires.clone(),
+        },
+        levels: args.levels,
+        normal_sets: NormalSetParams {
+            max_normals: args.max_normals,
+            normal_tolerance_deg: args.normal_tolerance,
+        },
+        creases: args.creases,
+        bake: BakeParams {
+            bf_epsilon: args.bf_epsilon,
+            visibility_rays: args.visibility_rays,
+            ..BakeParams::default()
+        },
+        output: args.output.clone(),
+    };
+    let show = !args.quiet && std::io::stderr().is_terminal();
+    let bars = Bars {
+        enabled: show,
+        current: Mutex::new(None),
+    };
+    let progress = |phase: &str, done: usize, total: usize| bars.update(phase, done, total);
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = args.threads {
+        if n == 0 {
+            anyhow::bail!("--threads must be at least 1");
+        }
+        builder = builder.num_threads(n);
+    }
+    let pool = builder.build().context("cannot start the worker threads")?;
+    let outcome = match pool.install(|| bake_file(&args.input, &options, &progress)) {
+        Ok(o) => o,
+        Err(e) => {
+            bars.finish();
+            eprintln!("error: baking {}: {e}", args.input.display());
+            std::process::exit(exit_code(&e));
+        }
+    };
+    bars.finish();
+    if !args.quiet {
+        print_summary(&outcome, &args);
+    }
+    Ok(())
+}
+
+/// The documented exit status of a failed bake (see `hce --help`).
+fn exit_code(e: &PipelineError) -> i32 {
+    use hce_bake::import::ImportError;
+    match e {
+        PipelineError::OutputExtension { .. } | PipelineError::Levels(_) => 2,
+        PipelineError::Bake(hce_bake::BakeError::InvalidParameter(_)) => 2,
+        PipelineError::Import(ImportError::Io { .. }) => 4,
+        PipelineError::Write(_) => 4,
+        PipelineError::Output(hce_bake::output::OutputError::Write(_)) => 4,
+        PipelineError::Import(_) | PipelineError::Bake(_) | PipelineError::Object { .. } => 3,
+        PipelineError::Output(_) => 1,
+    }
+}
+
+/// One progress bar per phase, replaced when the phase changes.
+struct Bars {
+    enabled: bool,
+    current: Mutex<Option<(String, ProgressBar)>>,
+}
+
+impl Bars {
+    fn update(&self, phase: &str, done: usize, total: usize) {
+        if !self.enabled {
+            return;
+        }
+        let Ok(mut cur) = self.current.lock() else {
+            return;
+        };
+        if cur.as_ref().is_none_or(|(p, _)| p != phase) {
+            if let Some((_, bar)) = cur.take() {
+                bar.finish();
+            }
+            let bar = ProgressBar::new(total as u64);
+            if let Ok(style) =
+                ProgressStyle::with_template("{prefix:>26} [{bar:30}] {pos}/{len} {elapsed}")
+            {
+                bar.set_style(style.progress_chars("=> "));
+            }
+            bar.set_prefix(phase.to_string());
+            *cur = Some((phase.to_string(), bar));
+        }
+        if let Some((_, bar)) = cur.as_ref() {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        }
+    }
+
+    fn finish(&self) {
+        if let Ok(mut cur) = self.current.lock() {
+            if let Some((_, bar)) = cur.take() {
+                bar.finish();
+            }
+        }
+    }
+}
+
+fn print_summary(o: &BakeOutcome, args: &BakeArgs) {
+    for w in &o.warnings {
+        eprintln!("warning: {w}");
+    }
+    println!("{}", o.import_summary.trim_end());
+    let multires = o
+        .objects
+        .iter()
+        .filter(|s| s.kind == ObjectKind::Multiresolution)
+        .count();
+    println!(
+        "objects: {} ({multires} multiresolution, {} flat)",
+        o.objects.len(),
+        o.objects.len() - multires
+    );
+    for s in &o.objects {
+        let kind = match s.kind {
+            ObjectKind::Multiresolution => "multires",
+            ObjectKind::Flat => "flat",
+        };
+        let mut line = format!(
+            "  {:<24} {kind:<8} {:>7} triangles {:>7} control vertices",
+            s.name, s.triangles, s.control_vertices
+        );
+        if s.kind == ObjectKind::Multiresolution {
+            line += &format!(
+                ", normals {}, worst {:.1} deg",
+                histogram(&s.normal_histogram),
+                s.worst_angle_deg
+            );
+        }
+        println!("{line}");
+    }
+    println!("coarse triangles: {}", o.coarse_triangles);
+    println!("elements: {}", o.elements);
+    println!("links: {}", o.links);
+    println!("iterations: {}", o.iterations);
+    if multires > 0 {
+        println!(
+            "normals per triangle: {} (worst remaining angle {:.1} deg)",
+            histogram(&o.normal_histogram),
+            o.worst_angle_deg
+        );
+    }
+    println!("COLOR_0 exposure: {:.4}", o.exposure);
+    print!("time:");
+    let mut total = 0.0;
+    for (phase, s) in &o.phase_seconds {
+        print!(" {phase} {s:.2}s,");
+        total += s;
+    }
+    println!(" total {total:.2}s");
+    println!(
+        "output: {} ({} bytes)",
+        args.output.display(),
+        o.output_bytes
+    );
+}
+
+/// `k:count` pairs for the non-empty bins.
+fn histogram(h: &[usize]) -> String {
+    let parts: Vec<String> = h
+        .iter()
+        .enumerate()
+        .filter(|(_, &c)| c > 0)
+        .map(|(k, c)| format!("{k}:{c}"))
+        .collect();
+    if parts.is_empty() {
+        "-".into()
+    } else {
+        parts.join(" ")
+    }
+}
