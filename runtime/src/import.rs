@@ -56,6 +56,11 @@ pub fn load_mesh(path: &Path) -> Result<InputMesh, ImportError> {
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
+    // The parsers report a missing or unreadable file as a parse failure; say what it is.
+    std::fs::File::open(path).map_err(|source| ImportError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
     let mesh = match ext.as_deref() {
         Some("obj") => load_obj(path)?,
         Some("gltf") | Some("glb") => load_gltf(path)?,

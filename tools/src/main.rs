@@ -40,14 +40,38 @@ enum Command {
     Validate(cmd::validate::ValidateArgs),
 }
 
-fn main() -> anyhow::Result<()> {
+fn main() {
     let cli = Cli::parse();
-    match cli.command {
+    let result = match cli.command {
         Command::Bake(args) => cmd::bake::run(args),
         Command::Render(args) => cmd::render::run(args),
         Command::BenchGpu(args) => cmd::bench_gpu::run(args),
         Command::Subdivide(args) => cmd::subdivide::run(args),
         Command::Inspect(args) => cmd::inspect::run(args),
         Command::Validate(args) => cmd::validate::run(args),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(exit_status(&e));
+    }
+}
+
+/// The documented exit status (see [`EXIT_CODES`]) of a command's error: 4 when reading or
+/// writing a file failed, 3 when input bytes were read but are not acceptable, 1 otherwise.
+fn exit_status(e: &anyhow::Error) -> i32 {
+    if e.chain().any(|c| c.is::<std::io::Error>()) {
+        return 4;
+    }
+    let invalid_input = e.chain().any(|c| {
+        c.is::<hce_runtime::ImportError>()
+            || c.is::<hce_runtime::TopologyError>()
+            || c.is::<hce_runtime::SubdivError>()
+            || c.is::<hce_format::ReadError>()
+            || c.is::<hce_format::gltf::GltfError>()
+    });
+    if invalid_input {
+        3
+    } else {
+        1
     }
 }
