@@ -339,6 +339,35 @@ mod tests {
     }
 
     #[test]
+    fn colours_are_written_clamped_as_color_0_and_obj_vertex_colours() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let n = [[0.0, 0.0, 1.0]; 3];
+        let c = [[0.25, 0.5, 0.75], [2.0, -1.0, f32::NAN], [1.0, 0.0, 0.125]];
+        let clamped = [[0.25, 0.5, 0.75], [1.0, 0.0, 0.0], [1.0, 0.0, 0.125]];
+        for ext in ["gltf", "glb"] {
+            let path = dir.path().join(format!("m.{ext}"));
+            write_mesh_with_colours(&path, &p, &n, &c, &[[0, 1, 2]]).unwrap();
+            let (doc, buffers, _) = gltf::import(&path).unwrap();
+            let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
+            let reader = prim.reader(|b| Some(&buffers[b.index()]));
+            let got: Vec<[f32; 3]> = reader.read_colors(0).unwrap().into_rgb_f32().collect();
+            assert_eq!(got, clamped.to_vec(), "{ext}");
+            let idx: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
+            assert_eq!(idx, vec![0, 1, 2], "{ext}");
+        }
+        let path = dir.path().join("m.obj");
+        write_mesh_with_colours(&path, &p, &n, &c, &[[0, 1, 2]]).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.contains("v 1 0 0 1 0 0\n"), "{text}");
+        let short = write_mesh_with_colours(&path, &p, &n, &c[..2], &[[0, 1, 2]]);
+        assert!(matches!(
+            short,
+            Err(ExportError::ColourCount { colours: 2, .. })
+        ));
+    }
+
+    #[test]
     fn base64_matches_rfc4648_vectors() {
         assert_eq!(base64(b"f"), "Zg==");
         assert_eq!(base64(b"fo"), "Zm8=");
