@@ -20,6 +20,12 @@ pub enum ExportError {
     NotFinite { path: PathBuf, index: usize },
     #[error("{path}: the mesh is too large for a single glTF buffer")]
     TooLarge { path: PathBuf },
+    #[error("{path}: {colours} vertex colours for {vertices} vertices; give one per vertex")]
+    ColourCount {
+        path: PathBuf,
+        colours: usize,
+        vertices: usize,
+    },
 }
 
 /// Writes a triangle mesh with per-vertex normals; the format follows the extension.
@@ -29,14 +35,49 @@ pub fn write_mesh(
     normals: &[[f32; 3]],
     indices: &[[u32; 3]],
 ) -> Result<(), ExportError> {
+    write_any(path, positions, normals, None, indices)
+}
+
+/// [`write_mesh`] with one linear RGB colour per vertex: glTF and GLB get a `COLOR_0` float
+/// VEC3 accessor, OBJ gets `v x y z r g b` lines. glTF requires `COLOR_0` in [0, 1] (the Khronos
+/// validator rejects anything else), so colours are clamped to [0, 1] (NaN becomes 0) in every
+/// format; radiosity above 1 is lost, as a viewer would clip it anyway.
+pub fn write_mesh_with_colours(
+    path: &Path,
+    positions: &[[f32; 3]],
+    normals: &[[f32; 3]],
+    colours: &[[f32; 3]],
+    indices: &[[u32; 3]],
+) -> Result<(), ExportError> {
+    if colours.len() != positions.len() {
+        return Err(ExportError::ColourCount {
+            path: path.to_owned(),
+            colours: colours.len(),
+            vertices: positions.len(),
+        });
+    }
+    let clamped: Vec<[f32; 3]> = colours
+        .iter()
+        .map(|c| c.map(|x| if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) }))
+        .collect();
+    write_any(path, positions, normals, Some(&clamped), indices)
+}
+
+fn write_any(
+    path: &Path,
+    positions: &[[f32; 3]],
+    normals: &[[f32; 3]],
+    colours: Option<&[[f32; 3]]>,
+    indices: &[[u32; 3]],
+) -> Result<(), ExportError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     let bytes = match ext.as_deref() {
-        Some("obj") => obj_bytes(positions, normals, indices),
-        Some("gltf") => gltf_bytes(path, positions, normals, indices, false)?,
-        Some("glb") => gltf_bytes(path, positions, normals, indices, true)?,
+        Some("obj") => obj_bytes(positions, normals, colours, indices),
+        Some("gltf") => gltf_bytes(path, positions, normals, colours, indices, false)?,
+        Some("glb") => gltf_bytes(path, positions, normals, colours, indices, true)?,
         _ => {
             return Err(ExportError::UnknownFormat {
                 path: path.to_owned(),
@@ -73,12 +114,24 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ExportError> {
     result.map_err(io)
 }
 
-fn obj_bytes(positions: &[[f32; 3]], normals: &[[f32; 3]], indices: &[[u32; 3]]) -> Vec<u8> {
+fn obj_bytes(
+    positions: &[[f32; 3]],
+    normals: &[[f32; 3]],
+    colours: Option<&[[f32; 3]]>,
+    indices: &[[u32; 3]],
+) -> Vec<u8> {
     use std::fmt::Write as _;
     let mut s = String::with_capacity(positions.len() * 80 + indices.len() * 40);
     s.push_str("# written by hce subdivide\n");
-    for p in positions {
-        let _ = writeln!(s, "v {} {} {}", p[0], p[1], p[2]);
+    for (i, p) in positions.iter().enumerate() {
+        match colours.and_then(|c| c.get(i)) {
+            Some(c) => {
+                let _ = writeln!(s, "v {} {} {} {} {} {}", p[0], p[1], p[2], c[0], c[1], c[2]);
+            }
+            None => {
+                let _ = writeln!(s, "v {} {} {}", p[0], p[1], p[2]);
+            }
+        }
     }
     for n in normals {
         let _ = writeln!(s, "vn {} {} {}", n[0], n[1], n[2]);
@@ -117,6 +170,7 @@ fn gltf_bytes(
     path: &Path,
     positions: &[[f32; 3]],
     normals: &[[f32; 3]],
+    colours: Option<&[[f32; 3]]>,
     indices: &[[u32; 3]],
     binary: bool,
 ) -> Result<Vec<u8>, ExportError> {
@@ -135,8 +189,10 @@ fn gltf_bytes(
     } else {
         0
     };
+    let colours = colours.filter(|c| c.len() == positions.len());
+    let col_len = colours.map_or(0, |c| c.len() * 12);
     let idx_len = indices.len() * 12;
-    let total = pos_len + nrm_len + idx_len;
+    let total = pos_len + nrm_len + col_len + idx_len;
     if total > u32::MAX as usize - 64 {
         return Err(ExportError::TooLarge {
             path: path.to_owned(),
@@ -153,6 +209,11 @@ fn gltf_bytes(
             for c in n {
                 bin.extend_from_slice(&c.to_le_bytes());
             }
+        }
+    }
+    for c in colours.unwrap_or(&[]) {
+        for x in c {
+            bin.extend_from_slice(&x.to_le_bytes());
         }
     }
     for t in indices {
@@ -180,7 +241,7 @@ fn gltf_bytes(
             base64(&bin)
         )
     };
-    let (attrs, views, accessors) = {
+    let (attrs, views, accessors, idx_accessor) = {
         let mut views =
             format!("{{\"buffer\":0,\"byteOffset\":0,\"byteLength\":{pos_len},\"target\":34962}}");
         let mut accessors = format!(
@@ -201,17 +262,28 @@ fn gltf_bytes(
             attrs.push_str(",\"NORMAL\":1");
             next = 2;
         }
+        if let Some(c) = colours {
+            views.push_str(&format!(
+                ",{{\"buffer\":0,\"byteOffset\":{},\"byteLength\":{col_len},\"target\":34962}}",
+                pos_len + nrm_len
+            ));
+            accessors.push_str(&format!(
+                ",{{\"bufferView\":{next},\"componentType\":5126,\"count\":{},\"type\":\"VEC3\"}}",
+                c.len()
+            ));
+            attrs.push_str(&format!(",\"COLOR_0\":{next}"));
+            next += 1;
+        }
         views.push_str(&format!(
             ",{{\"buffer\":0,\"byteOffset\":{},\"byteLength\":{idx_len},\"target\":34963}}",
-            pos_len + nrm_len
+            pos_len + nrm_len + col_len
         ));
         accessors.push_str(&format!(
             ",{{\"bufferView\":{next},\"componentType\":5125,\"count\":{},\"type\":\"SCALAR\"}}",
             indices.len() * 3
         ));
-        (attrs, views, accessors)
+        (attrs, views, accessors, next)
     };
-    let idx_accessor = if nrm_len > 0 { 2 } else { 1 };
     let json = format!(
         "{{\"asset\":{{\"version\":\"2.0\",\"generator\":\"hce subdivide\"}},\"scene\":0,\"scenes\":[{{\"nodes\":[0]}}],\"nodes\":[{{\"mesh\":0}}],\"meshes\":[{{\"primitives\":[{{\"attributes\":{{{attrs}}},\"indices\":{idx_accessor},\"mode\":4}}]}}],\"buffers\":[{{\"byteLength\":{total}{uri}}}],\"bufferViews\":[{views}],\"accessors\":[{accessors}]}}"
     );
@@ -264,6 +336,35 @@ mod tests {
         }
         // Only the destination is left: the temporary file was renamed.
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 3);
+    }
+
+    #[test]
+    fn colours_are_written_clamped_as_color_0_and_obj_vertex_colours() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let n = [[0.0, 0.0, 1.0]; 3];
+        let c = [[0.25, 0.5, 0.75], [2.0, -1.0, f32::NAN], [1.0, 0.0, 0.125]];
+        let clamped = [[0.25, 0.5, 0.75], [1.0, 0.0, 0.0], [1.0, 0.0, 0.125]];
+        for ext in ["gltf", "glb"] {
+            let path = dir.path().join(format!("m.{ext}"));
+            write_mesh_with_colours(&path, &p, &n, &c, &[[0, 1, 2]]).unwrap();
+            let (doc, buffers, _) = gltf::import(&path).unwrap();
+            let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
+            let reader = prim.reader(|b| Some(&buffers[b.index()]));
+            let got: Vec<[f32; 3]> = reader.read_colors(0).unwrap().into_rgb_f32().collect();
+            assert_eq!(got, clamped.to_vec(), "{ext}");
+            let idx: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
+            assert_eq!(idx, vec![0, 1, 2], "{ext}");
+        }
+        let path = dir.path().join("m.obj");
+        write_mesh_with_colours(&path, &p, &n, &c, &[[0, 1, 2]]).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.contains("v 1 0 0 1 0 0\n"), "{text}");
+        let short = write_mesh_with_colours(&path, &p, &n, &c[..2], &[[0, 1, 2]]);
+        assert!(matches!(
+            short,
+            Err(ExportError::ColourCount { colours: 2, .. })
+        ));
     }
 
     #[test]

@@ -6,6 +6,7 @@
 #[cfg(feature = "gpu")]
 pub mod gpu;
 
+pub mod colour;
 pub mod export;
 pub mod import;
 pub mod subdivide;

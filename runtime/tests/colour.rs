@@ -1,0 +1,168 @@
+//! Applying baked colours on the CPU (`hce_runtime::colour`) to the example containers of
+//! hce-format, against colours worked out by hand from their trees.
+
+use hce_format::{example, rgb9e5, tree::encode_tree, Object};
+use hce_runtime::colour::{apply_baked_colours, ColourError};
+use hce_runtime::subdivide::{subdivide, Refined};
+
+fn area(r: &Refined, f: usize) -> f64 {
+    let p = r.indices[f].map(|i| r.positions[i as usize].map(f64::from));
+    let e1 = [0, 1, 2].map(|k| p[1][k] - p[0][k]);
+    let e2 = [0, 1, 2].map(|k| p[2][k] - p[0][k]);
+    let c = [
+        e1[1] * e2[2] - e1[2] * e2[1],
+        e1[2] * e2[0] - e1[0] * e2[2],
+        e1[0] * e2[1] - e1[1] * e2[0],
+    ];
+    0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+}
+
+/// The area-weighted mean at each vertex of the given per-subtriangle colours.
+fn vertex_means(r: &Refined, face: impl Fn(usize) -> [f32; 3]) -> Vec<[f64; 3]> {
+    let mut sum = vec![[0.0; 3]; r.positions.len()];
+    let mut w = vec![0.0; r.positions.len()];
+    for f in 0..r.indices.len() {
+        let a = area(r, f);
+        let c = face(f);
+        for &i in &r.indices[f] {
+            for k in 0..3 {
+                sum[i as usize][k] += a * f64::from(c[k]);
+            }
+            w[i as usize] += a;
+        }
+    }
+    sum.iter().zip(&w).map(|(s, w)| s.map(|x| x / w)).collect()
+}
+
+fn close(a: [f32; 3], b: [f64; 3]) -> bool {
+    (0..3).all(|k| (f64::from(a[k]) - b[k]).abs() < 1e-5)
+}
+
+#[test]
+fn single_node_tree_colours_every_vertex_with_its_colour() {
+    let mut c = example::single_triangle();
+    let o = &mut c.objects[0];
+    let (bits, bit_len) = encode_tree(&[false]).unwrap();
+    o.bits = bits;
+    o.bit_len = bit_len;
+    let colour = [0.75, 0.125, 2.5];
+    o.colours = vec![rgb9e5::encode(colour)];
+    for level in 0..=3 {
+        let r = subdivide(&o.mesh, level).unwrap();
+        let rgb = apply_baked_colours(o, &r, level).unwrap();
+        assert_eq!(rgb.len(), r.positions.len());
+        for v in &rgb {
+            assert_eq!(*v, colour, "level {level}");
+        }
+    }
+}
+
+#[test]
+fn level_one_subtriangles_take_their_childs_colour() {
+    // The Appendix D tree: root split; Top, Left, Right leaves (nodes 1, 2, 4); Center (node 3)
+    // split into nodes 5..8. Node k's colour is (k / 8, 1/2, 1/4).
+    let c = example::single_triangle();
+    let o = &c.objects[0];
+    let node = |k: u32| [k as f32 / 8.0, 0.5, 0.25];
+    let r = subdivide(&o.mesh, 1).unwrap();
+    let rgb = apply_baked_colours(o, &r, 1).unwrap();
+    // Subtriangle with path p (Top, Left, Center, Right) lies in node 1 + p.
+    let expected = vertex_means(&r, |f| node(1 + r.path(f)));
+    for (v, (got, want)) in rgb.iter().zip(&expected).enumerate() {
+        assert!(close(*got, *want), "vertex {v}: {got:?} vs {want:?}");
+    }
+    // The coarse corners lie in one subtriangle each: Top, Left and Right.
+    let corner = |p: [f32; 3]| r.positions.iter().position(|q| *q == p).unwrap();
+    assert_eq!(rgb[corner([0.0, 0.0, 0.0])], node(1));
+    assert_eq!(rgb[corner([1.0, 0.0, 0.0])], node(2));
+    assert_eq!(rgb[corner([0.0, 1.0, 0.0])], node(4));
+}
+
+#[test]
+fn level_two_paths_stop_at_leaves_and_descend_where_split() {
+    let c = example::single_triangle();
+    let o = &c.objects[0];
+    let node = |k: u32| [k as f32 / 8.0, 0.5, 0.25];
+    let r = subdivide(&o.mesh, 2).unwrap();
+    let rgb = apply_baked_colours(o, &r, 2).unwrap();
+    // Paths 0..3 (Top's children) stop at leaf 1; 8..11 (Center's children) reach 5..8.
+    let face_node = |p: u32| match p >> 2 {
+        0 => 1,
+        1 => 2,
+        2 => 5 + (p & 3),
+        _ => 4,
+    };
+    let expected = vertex_means(&r, |f| node(face_node(r.path(f))));
+    for (v, (got, want)) in rgb.iter().zip(&expected).enumerate() {
+        assert!(close(*got, *want), "vertex {v}: {got:?} vs {want:?}");
+    }
+}
+
+#[test]
+fn subtriangles_pick_the_normal_closest_to_their_own_across_borders() {
+    // grid(3, 0): single-node trees, normals (0,0,1) and (0.6,0,0.8) with red 0.0 and 0.01.
+    let mut c = example::grid(3, 0);
+    // Steepen the bumps (z x 5) so that some subtriangles face the tilted normal.
+    for z in c.objects[0].mesh.positions.iter_mut().skip(2).step_by(3) {
+        *z *= 5.0;
+    }
+    let o: &Object = &c.objects[0];
+    let r = subdivide(&o.mesh, 2).unwrap();
+    let rgb = apply_baked_colours(o, &r, 2).unwrap();
+    let mut picked = [0usize; 2];
+    let face = |f: usize| {
+        let p = r.indices[f].map(|i| r.positions[i as usize]);
+        let e1 = [0, 1, 2].map(|k| p[1][k] - p[0][k]);
+        let e2 = [0, 1, 2].map(|k| p[2][k] - p[0][k]);
+        let n = [
+            e1[1] * e2[2] - e1[2] * e2[1],
+            e1[2] * e2[0] - e1[0] * e2[2],
+            e1[0] * e2[1] - e1[1] * e2[0],
+        ];
+        let t = r.coarse_triangle(f);
+        let j = usize::from(0.6 * n[0] + 0.8 * n[2] > n[2]);
+        let rec = o.triangles[t];
+        rgb9e5::decode(o.colours[rec.colour_start as usize + j])
+    };
+    for f in 0..r.indices.len() {
+        picked[usize::from(face(f)[0] > 0.0)] += 1;
+    }
+    // The tilted grid makes both choices occur.
+    assert!(picked[0] > 0 && picked[1] > 0, "{picked:?}");
+    let expected = vertex_means(&r, face);
+    for (v, (got, want)) in rgb.iter().zip(&expected).enumerate() {
+        assert!(close(*got, *want), "vertex {v}: {got:?} vs {want:?}");
+    }
+}
+
+#[test]
+fn mismatched_or_damaged_input_is_an_error() {
+    let c = example::single_triangle();
+    let other = example::two_triangles();
+    let r = subdivide(&other.objects[0].mesh, 1).unwrap();
+    assert!(matches!(
+        apply_baked_colours(&c.objects[0], &r, 1),
+        Err(ColourError::TriangleCount {
+            records: 1,
+            refined: 2,
+            ..
+        })
+    ));
+    let r = subdivide(&c.objects[0].mesh, 1).unwrap();
+    assert!(matches!(
+        apply_baked_colours(&c.objects[0], &r, 2),
+        Err(ColourError::Level { .. })
+    ));
+    let mut o = c.objects[0].clone();
+    o.colours.truncate(4);
+    assert!(matches!(
+        apply_baked_colours(&o, &r, 1),
+        Err(ColourError::Record { triangle: 0, .. })
+    ));
+    let mut o = c.objects[0].clone();
+    o.triangles[0].normal_start = 5;
+    assert!(matches!(
+        apply_baked_colours(&o, &r, 1),
+        Err(ColourError::Record { triangle: 0, .. })
+    ));
+}

@@ -1,0 +1,42 @@
+//! `hce subdivide` on a baked `.hce`: every object is refined from its stored control mesh and
+//! the output carries the applied colours as COLOR_0.
+
+use hce_format::{example, write};
+use std::process::Command;
+
+#[test]
+fn baked_hce_subdivides_to_a_glb_with_colours() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("grid.hce");
+    let mut c = example::grid(2, 1);
+    // A second object, so that concatenation is exercised: 2 x 2 grid (8 triangles) + 1.
+    c.objects.push(example::single_triangle().objects.remove(0));
+    std::fs::write(&input, write(&c).unwrap()).unwrap();
+    let output = dir.path().join("out.glb");
+    let out = Command::new(env!("CARGO_BIN_EXE_hce"))
+        .args(["subdivide", input.to_str().unwrap(), "--levels", "2", "-o"])
+        .arg(&output)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (doc, buffers, _) = gltf::import(&output).unwrap();
+    let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
+    let reader = prim.reader(|b| Some(&buffers[b.index()]));
+    let positions: Vec<_> = reader.read_positions().unwrap().collect();
+    let colours: Vec<[f32; 3]> = reader.read_colors(0).unwrap().into_rgb_f32().collect();
+    let triangles = reader.read_indices().unwrap().into_u32().count() / 3;
+    // Level 2: 16 subtriangles per coarse triangle; vertices: a 2x2 grid refined 4 times per
+    // edge is a 9 x 9 lattice (81), the single triangle a 15-vertex triangular lattice.
+    assert_eq!(triangles, (8 + 1) * 16);
+    assert_eq!(positions.len(), 81 + 15);
+    assert_eq!(colours.len(), positions.len());
+    // The single triangle's first corner lies only in Top's subtriangles: node 1's colour.
+    let last = &colours[81..];
+    assert!(last.contains(&[1.0 / 8.0, 0.5, 0.25]), "{last:?}");
+    // Grid colours are (k * 0.01, t, 0.5) clamped to [0, 1]: blue is 0.5 everywhere.
+    assert!(colours[..81].iter().all(|c| (c[2] - 0.5).abs() < 1e-6));
+}
