@@ -16,6 +16,7 @@ pub mod import;
 pub mod normal_sets;
 pub mod output;
 pub mod pipeline;
+pub mod reference;
 pub mod scene;
 pub mod visibility;
 

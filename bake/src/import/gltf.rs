@@ -25,14 +25,30 @@ pub(super) fn import(path: &Path, options: &ImportOptions) -> Result<ImportedSce
         path: path.to_path_buf(),
         source,
     })?;
-    precheck(&bytes).map_err(|message| ImportError::Invalid {
+    import_bytes(
+        path,
+        Some(path.parent().unwrap_or_else(|| Path::new("."))),
+        &bytes,
+        options,
+    )
+}
+
+/// Imports a `.glb` or `.gltf` held in memory. `path` names it in messages; external buffers
+/// and images are read relative to `base`, or not at all (a warning each) when it is `None`.
+pub(super) fn import_bytes(
+    path: &Path,
+    base: Option<&Path>,
+    bytes: &[u8],
+    options: &ImportOptions,
+) -> Result<ImportedScene, ImportError> {
+    precheck(bytes).map_err(|message| ImportError::Invalid {
         path: path.to_path_buf(),
         message,
     })?;
     // The checks here and in `check_accessor` cover every panic of the `gltf` crate we know of;
     // this catches the ones we do not, so that a bad file is an error, never a crash.
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        import_checked(path, &bytes, options)
+        import_checked(path, base, bytes, options)
     }))
     .unwrap_or_else(|panic| {
         let what = panic
@@ -78,6 +94,7 @@ fn precheck(bytes: &[u8]) -> Result<(), String> {
 
 fn import_checked(
     path: &Path,
+    base: Option<&Path>,
     bytes: &[u8],
     options: &ImportOptions,
 ) -> Result<ImportedScene, ImportError> {
@@ -91,7 +108,6 @@ fn import_checked(
             path: path.to_path_buf(),
             source,
         })?;
-    let base = path.parent().unwrap_or_else(|| Path::new("."));
     let mut warnings = Vec::new();
 
     for ext in document.extensions_used() {
@@ -223,14 +239,35 @@ pub(crate) fn read_uri(base: &Path, uri: &str) -> Result<Vec<u8>, String> {
     if uri.contains("://") {
         return Err("only relative file URIs and data URIs are supported".into());
     }
-    let p = base.join(percent_decode(uri));
+    let rel = percent_decode(uri);
+    if Path::new(&rel).is_absolute() {
+        return Err(
+            "an absolute path is not a relative URI; give the file relative to the scene".into(),
+        );
+    }
+    let p = base.join(rel);
+    // A device or a pipe (`/dev/zero`, a FIFO) would be read forever: only regular files,
+    // whose size is known, are read.
+    let meta = std::fs::metadata(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+    if !meta.is_file() {
+        return Err(format!("{} is not a regular file", p.display()));
+    }
     std::fs::read(&p).map_err(|e| format!("{}: {e}", p.display()))
+}
+
+/// Reads a URI relative to `base`; without a base only `data:` URIs can be read.
+fn read_uri_from(base: Option<&Path>, uri: &str) -> Result<Vec<u8>, String> {
+    match base {
+        Some(base) => read_uri(base, uri),
+        None if uri.starts_with("data:") => read_uri(Path::new(""), uri),
+        None => Err("external files are not followed when importing from memory".into()),
+    }
 }
 
 /// Every buffer's bytes, `None` where it could not be loaded (with a warning).
 fn load_buffers(
     document: &::gltf::Document,
-    base: &Path,
+    base: Option<&Path>,
     mut blob: Option<Vec<u8>>,
     warnings: &mut Vec<String>,
 ) -> Vec<Option<Vec<u8>>> {
@@ -242,7 +279,7 @@ fn load_buffers(
                     .take()
                     .ok_or_else(|| "the GLB has no BIN chunk for it".to_string()),
                 ::gltf::buffer::Source::Uri(uri) => {
-                    read_uri(base, uri).map_err(|e| format!("cannot load {uri:?}: {e}"))
+                    read_uri_from(base, uri).map_err(|e| format!("cannot load {uri:?}: {e}"))
                 }
             };
             match data {
@@ -564,7 +601,7 @@ fn wrap_mode(m: ::gltf::texture::WrappingMode) -> WrapMode {
 /// Decodes an image into linear RGB, or says why it cannot be.
 fn decode_image(
     image: &::gltf::Image,
-    base: &Path,
+    base: Option<&Path>,
     buffers: &[Option<Vec<u8>>],
 ) -> Result<Texture, String> {
     use ::gltf::image::Format;
@@ -585,12 +622,23 @@ fn decode_image(
             ));
         }
     }
+    if let ::gltf::image::Source::Uri { uri, .. } = image.source() {
+        if !uri.starts_with("data:") {
+            // The `gltf` crate would read any path, devices included: read it here instead.
+            let bytes = read_uri_from(base, uri)?;
+            let img = image::load_from_memory(&bytes)
+                .map_err(|e| e.to_string())?
+                .to_rgb8();
+            return Texture::from_srgb8(img.width(), img.height(), 3, img.as_raw())
+                .ok_or_else(|| "the decoded image is empty".into());
+        }
+    }
     let data: Vec<::gltf::buffer::Data> = buffers
         .iter()
         .map(|b| ::gltf::buffer::Data(b.clone().unwrap_or_default()))
         .collect();
-    let img = ::gltf::image::Data::from_source(image.source(), Some(base), &data)
-        .map_err(|e| e.to_string())?;
+    let img =
+        ::gltf::image::Data::from_source(image.source(), base, &data).map_err(|e| e.to_string())?;
     let (channels, wide) = match img.format {
         Format::R8 => (1, false),
         Format::R8G8 => (2, false),
@@ -620,7 +668,7 @@ fn decode_image(
 
 fn read_materials(
     document: &::gltf::Document,
-    base: &Path,
+    base: Option<&Path>,
     buffers: &[Option<Vec<u8>>],
     warnings: &mut Vec<String>,
 ) -> Vec<Material> {

@@ -331,7 +331,7 @@ pub fn import_scene(path: &Path, options: &ImportOptions) -> Result<ImportedScen
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    let mut scene = match ext.as_deref() {
+    let scene = match ext.as_deref() {
         Some("gltf") | Some("glb") => gltf::import(path, options)?,
         Some("obj") => obj::import(path, options)?,
         _ => {
@@ -340,6 +340,49 @@ pub fn import_scene(path: &Path, options: &ImportOptions) -> Result<ImportedScen
             })
         }
     };
+    finish(scene, options)
+}
+
+/// A scene file held in memory, for [`import_scene_bytes`].
+#[derive(Clone, Copy, Debug)]
+pub enum SceneBytes<'a> {
+    /// A `.glb` or `.gltf` (JSON) file. Buffers and images are read from the file itself or
+    /// from `data:` URIs; external files are not followed (a warning each).
+    Gltf(&'a [u8]),
+    /// An OBJ file and the MTL library it names, if any (whatever name `mtllib` gives resolves
+    /// to these bytes); `map_Kd` textures are not read (a warning each).
+    Obj {
+        obj: &'a [u8],
+        mtl: Option<&'a [u8]>,
+    },
+}
+
+/// Reads a scene from memory: the same reader, checks and warnings as [`import_scene`], with
+/// no file system access. Messages name the input `<memory>.glb`/`.gltf`/`.obj`.
+pub fn import_scene_bytes(
+    bytes: SceneBytes<'_>,
+    options: &ImportOptions,
+) -> Result<ImportedScene, ImportError> {
+    let scene = match bytes {
+        SceneBytes::Gltf(b) => {
+            let name = if b.starts_with(b"glTF") {
+                "<memory>.glb"
+            } else {
+                "<memory>.gltf"
+            };
+            gltf::import_bytes(Path::new(name), None, b, options)?
+        }
+        SceneBytes::Obj { obj, mtl } => {
+            obj::import_bytes(Path::new("<memory>.obj"), obj, mtl, options)?
+        }
+    };
+    finish(scene, options)
+}
+
+/// The checks every imported scene goes through: something to bake, something to light it.
+fn finish(mut scene: ImportedScene, options: &ImportOptions) -> Result<ImportedScene, ImportError> {
+    let path = scene.path.clone();
+    let path = path.as_path();
     if scene.objects.is_empty() {
         return Err(ImportError::NoTriangles {
             path: path.to_path_buf(),

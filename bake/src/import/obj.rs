@@ -9,24 +9,76 @@ use glam::Mat4;
 use std::path::Path;
 use std::sync::Arc;
 
+const LOAD: tobj::LoadOptions = tobj::LoadOptions {
+    single_index: true,
+    triangulate: true,
+    ignore_points: true,
+    ignore_lines: true,
+};
+
 pub(super) fn import(path: &Path, options: &ImportOptions) -> Result<ImportedScene, ImportError> {
-    let load = tobj::LoadOptions {
-        single_index: true,
-        triangulate: true,
-        ignore_points: true,
-        ignore_lines: true,
-    };
-    let (models, materials) = tobj::load_obj(path, &load).map_err(|e| match e {
-        tobj::LoadError::OpenFileFailed => ImportError::Io {
-            path: path.to_path_buf(),
-            source: std::io::Error::new(std::io::ErrorKind::NotFound, "cannot open the file"),
-        },
-        e => ImportError::Obj {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        },
+    let bytes = std::fs::read(path).map_err(|source| ImportError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let loaded = tobj::load_obj_buf(&mut &bytes[..], &LOAD, |mtl| {
+        tobj::load_mtl(path.parent().unwrap_or_else(|| Path::new(".")).join(mtl))
+    });
+    finish(
+        path,
+        Some(path.parent().unwrap_or_else(|| Path::new("."))),
+        loaded,
+        points_and_lines(&bytes),
+        options,
+    )
+}
+
+/// Imports an OBJ held in memory, with the bytes of the MTL library its `mtllib` names (any
+/// name resolves to them); `map_Kd` textures are not read (a warning each).
+pub(super) fn import_bytes(
+    path: &Path,
+    obj: &[u8],
+    mtl: Option<&[u8]>,
+    options: &ImportOptions,
+) -> Result<ImportedScene, ImportError> {
+    let loaded = tobj::load_obj_buf(&mut &obj[..], &LOAD, |_| match mtl {
+        Some(m) => tobj::load_mtl_buf(&mut &m[..]),
+        None => Err(tobj::LoadError::OpenFileFailed),
+    });
+    finish(path, None, loaded, points_and_lines(obj), options)
+}
+
+/// How many point (`p`) and line (`l`) elements the OBJ text holds: they are not baked.
+fn points_and_lines(obj: &[u8]) -> (usize, usize) {
+    let (mut p, mut l) = (0, 0);
+    for line in obj.split(|&b| b == b'\n') {
+        let line = line.trim_ascii_start();
+        if line.starts_with(b"p ") || line.starts_with(b"p\t") {
+            p += 1;
+        } else if line.starts_with(b"l ") || line.starts_with(b"l\t") {
+            l += 1;
+        }
+    }
+    (p, l)
+}
+
+fn finish(
+    path: &Path,
+    base: Option<&Path>,
+    loaded: tobj::LoadResult,
+    (points, lines): (usize, usize),
+    options: &ImportOptions,
+) -> Result<ImportedScene, ImportError> {
+    let (models, materials) = loaded.map_err(|e| ImportError::Obj {
+        path: path.to_path_buf(),
+        message: e.to_string(),
     })?;
     let mut warnings = Vec::new();
+    if points + lines > 0 {
+        warnings.push(format!(
+            "{points} point and {lines} line elements are not surfaces; they are skipped"
+        ));
+    }
     let materials = match materials {
         Ok(m) => m,
         Err(e) => {
@@ -37,23 +89,22 @@ pub(super) fn import(path: &Path, options: &ImportOptions) -> Result<ImportedSce
             Vec::new()
         }
     };
-    let base = path.parent().unwrap_or_else(|| Path::new("."));
     let materials: Vec<Material> = materials
         .iter()
         .map(|m| {
-            let texture =
-                m.diffuse_texture
-                    .as_deref()
-                    .and_then(|t| match load_texture(&base.join(t)) {
-                        Ok(t) => Some(Arc::new(t)),
-                        Err(e) => {
-                            warnings.push(format!(
+            let texture = m
+                .diffuse_texture
+                .as_deref()
+                .and_then(|t| match load_texture(base, t) {
+                    Ok(t) => Some(Arc::new(t)),
+                    Err(e) => {
+                        warnings.push(format!(
                             "material {:?}: map_Kd {t:?} cannot be read ({e}); Kd alone is used",
                             m.name
                         ));
-                            None
-                        }
-                    });
+                        None
+                    }
+                });
             Material {
                 name: Some(m.name.clone()),
                 base_color: m.diffuse.unwrap_or([1.0; 3]),
@@ -131,8 +182,11 @@ pub(super) fn import(path: &Path, options: &ImportOptions) -> Result<ImportedSce
     })
 }
 
-fn load_texture(path: &Path) -> Result<Texture, String> {
-    let img = image::open(path).map_err(|e| e.to_string())?.to_rgb8();
+fn load_texture(base: Option<&Path>, name: &str) -> Result<Texture, String> {
+    let base = base.ok_or("external files are not followed when importing from memory")?;
+    let img = image::open(base.join(name))
+        .map_err(|e| e.to_string())?
+        .to_rgb8();
     Texture::from_srgb8(img.width(), img.height(), 3, img.as_raw())
         .ok_or_else(|| "the image is empty".into())
 }
