@@ -587,11 +587,13 @@ impl Ctx<'_> {
                 }
                 let inv = 1.0 / pts.len() as f32;
                 k.iter_mut().for_each(|v| *v *= inv);
+                let sn = self.roots[sk.root as usize].normal;
                 visible_fraction(nv, |i| {
                     let mut rng = Rng::new(recv.id(), src_id, u64::from(i));
                     let p = jittered_point(rt, i, nv, &mut rng);
                     let q = jittered_point(st, i, nv, &mut rng);
-                    self.occ.segment_clear(p, q)
+                    self.exchanges(p, &root.normals, q, sn)
+                        .then(|| self.occ.segment_clear(p, q))
                 })
             }
             Source::Cluster(c) => {
@@ -609,12 +611,21 @@ impl Ctx<'_> {
                     let t = self.clusters.pick(c, rng.next_f32());
                     let tc = self.roots[t as usize].corners;
                     let q = jittered_point(tc, 0, 1, &mut rng);
-                    self.occ.segment_clear(p, q)
+                    self.exchanges(p, &root.normals, q, self.roots[t as usize].normal)
+                        .then(|| self.occ.segment_clear(p, q))
                 })
             }
         };
         k.iter_mut().for_each(|v| *v *= visible);
         k
+    }
+
+    /// Whether light can pass from a source point `q` (normal `sn`) to a receiver point `p`
+    /// (normals `normals`) at all: `p` in front of the source and `q` above the tangent plane
+    /// of at least one receiver normal.
+    fn exchanges(&self, p: Vec3, normals: &[Vec3], q: Vec3, sn: Vec3) -> bool {
+        let d = q - p;
+        sn.dot(-d) > self.plane_eps && normals.iter().any(|n| n.dot(d) > self.plane_eps)
     }
 
     /// Builds root `r`'s tree from the keys that must exist.
@@ -782,10 +793,15 @@ impl Ctx<'_> {
     }
 }
 
-/// Fraction of `n` visibility samples that are clear. Four well-spread samples go first; when
-/// they agree (the common fully visible or fully hidden case) they decide alone, otherwise
-/// all `n` are taken. The order depends only on `n`, so the result is deterministic.
-fn visible_fraction(n: u32, mut clear: impl FnMut(u32) -> bool) -> f32 {
+/// Fraction of `n` visibility samples that are clear, among the samples whose two points can
+/// exchange light at all (`clear` returns `None` for the others). The form factor already
+/// weighs the pair by where it exchanges light; counting a sample whose receiver point lies
+/// behind the source (say a floor point on the far side of a block standing on it) as
+/// occluded would darken the link a second time. Four well-spread samples go first; when all
+/// four count and agree (the common fully visible or fully hidden case) they decide alone,
+/// otherwise all `n` are taken. A pair with no sample that counts is left unoccluded (its form
+/// factor is small). The order depends only on `n`, so the result is deterministic.
+fn visible_fraction(n: u32, mut clear: impl FnMut(u32) -> Option<bool>) -> f32 {
     if n == 0 {
         return 1.0;
     }
@@ -794,19 +810,22 @@ fn visible_fraction(n: u32, mut clear: impl FnMut(u32) -> bool) -> f32 {
     } else {
         (0..n).collect()
     };
-    let hits: Vec<bool> = first.iter().map(|&i| clear(i)).collect();
-    let seen = hits.iter().filter(|&&h| h).count() as u32;
-    if n <= 4 {
-        return seen as f32 / n as f32;
+    let hits: Vec<Option<bool>> = first.iter().map(|&i| clear(i)).collect();
+    let mut counted = hits.iter().flatten().count() as u32;
+    let mut seen = hits.iter().flatten().filter(|&&h| h).count() as u32;
+    if n > 4 && !(counted == 4 && (seen == 0 || seen == 4)) {
+        for i in (0..n).filter(|i| !first.contains(i)) {
+            if let Some(h) = clear(i) {
+                counted += 1;
+                seen += u32::from(h);
+            }
+        }
     }
-    if seen == 0 || seen == 4 {
-        return seen as f32 / 4.0;
+    if counted == 0 {
+        1.0
+    } else {
+        seen as f32 / counted as f32
     }
-    let rest = (0..n)
-        .filter(|i| !first.contains(i))
-        .filter(|&i| clear(i))
-        .count() as u32;
-    (seen + rest) as f32 / n as f32
 }
 
 /// Bakes the scene: direct light, link refinement, solve, repeated `refine_passes` times.
