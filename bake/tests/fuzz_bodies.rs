@@ -350,4 +350,22 @@ fn regressions_still_pass() {
         }
     }
     println!("replayed {replayed} regression inputs");
+    assert!(replayed >= 1, "no regression input found under {}", dir.display());
+    // The first bug: tobj 4.0 panics on a colour line with two values; it is now a warning.
+    let bug = std::fs::read(dir.join("import_obj/tobj-colour-with-two-values.bin")).unwrap();
+    let (obj, mtl) = bug.split_at(bug.iter().position(|&b| b == 0).unwrap());
+    let s = hce_bake::import::import_scene_bytes(
+        hce_bake::import::SceneBytes::Obj {
+            obj,
+            mtl: Some(&mtl[1..]),
+        },
+        &Default::default(),
+    )
+    .unwrap();
+    assert!(
+        s.warnings.iter().any(|w| w.contains("needs three values")),
+        "{:?}",
+        s.warnings
+    );
+    assert_eq!(s.material_of(&s.objects[0]).emission, [1.0; 3]);
 }

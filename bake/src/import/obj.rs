@@ -6,6 +6,7 @@ use super::{
     ImportError, ImportOptions, ImportedScene, Material, SceneObject, SourceFormat, Texture,
 };
 use glam::Mat4;
+use std::cell::RefCell;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -21,16 +22,40 @@ pub(super) fn import(path: &Path, options: &ImportOptions) -> Result<ImportedSce
         path: path.to_path_buf(),
         source,
     })?;
+    let base = path.parent().unwrap_or_else(|| Path::new("."));
+    let mtl_warnings = RefCell::new(Vec::new());
     let loaded = tobj::load_obj_buf(&mut &bytes[..], &LOAD, |mtl| {
-        tobj::load_mtl(path.parent().unwrap_or_else(|| Path::new(".")).join(mtl))
+        let text = std::fs::read(base.join(mtl)).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        let (clean, w) = sanitize_mtl(&text);
+        mtl_warnings.borrow_mut().extend(w);
+        tobj::load_mtl_buf(&mut &clean[..])
     });
-    finish(
-        path,
-        Some(path.parent().unwrap_or_else(|| Path::new("."))),
-        loaded,
-        points_and_lines(&bytes),
-        options,
-    )
+    let mut scene = finish(path, Some(base), loaded, points_and_lines(&bytes), options)?;
+    scene.warnings.extend(mtl_warnings.into_inner());
+    Ok(scene)
+}
+
+/// Drops the colour lines (`Ka`, `Kd`, `Ks`, `Ke`) with fewer than three values, on which
+/// `tobj` 4.0 panics instead of returning an error, with a warning naming each.
+fn sanitize_mtl(mtl: &[u8]) -> (Vec<u8>, Vec<String>) {
+    let mut out = Vec::with_capacity(mtl.len());
+    let mut warnings = Vec::new();
+    for (n, line) in mtl.split(|&b| b == b'\n').enumerate() {
+        let text = String::from_utf8_lossy(line);
+        let mut words = text.split_whitespace();
+        let key = words.next();
+        if matches!(key, Some("Ka" | "Kd" | "Ks" | "Ke")) && words.count() < 3 {
+            warnings.push(format!(
+                "MTL line {}: {:?} needs three values (r g b); the line is ignored",
+                n + 1,
+                text.trim()
+            ));
+            continue;
+        }
+        out.extend_from_slice(line);
+        out.push(b'\n');
+    }
+    (out, warnings)
 }
 
 /// Imports an OBJ held in memory, with the bytes of the MTL library its `mtllib` names (any
@@ -41,11 +66,20 @@ pub(super) fn import_bytes(
     mtl: Option<&[u8]>,
     options: &ImportOptions,
 ) -> Result<ImportedScene, ImportError> {
-    let loaded = tobj::load_obj_buf(&mut &obj[..], &LOAD, |_| match mtl {
+    let (clean, mtl_warnings) = match mtl {
+        Some(m) => {
+            let (c, w) = sanitize_mtl(m);
+            (Some(c), w)
+        }
+        None => (None, Vec::new()),
+    };
+    let loaded = tobj::load_obj_buf(&mut &obj[..], &LOAD, |_| match &clean {
         Some(m) => tobj::load_mtl_buf(&mut &m[..]),
         None => Err(tobj::LoadError::OpenFileFailed),
     });
-    finish(path, None, loaded, points_and_lines(obj), options)
+    let mut scene = finish(path, None, loaded, points_and_lines(obj), options)?;
+    scene.warnings.extend(mtl_warnings);
+    Ok(scene)
 }
 
 /// How many point (`p`) and line (`l`) elements the OBJ text holds: they are not baked.
