@@ -350,7 +350,11 @@ fn regressions_still_pass() {
         }
     }
     println!("replayed {replayed} regression inputs");
-    assert!(replayed >= 1, "no regression input found under {}", dir.display());
+    assert!(
+        replayed >= 1,
+        "no regression input found under {}",
+        dir.display()
+    );
     // The first bug: tobj 4.0 panics on a colour line with two values; it is now a warning.
     let bug = std::fs::read(dir.join("import_obj/tobj-colour-with-two-values.bin")).unwrap();
     let (obj, mtl) = bug.split_at(bug.iter().position(|&b| b == 0).unwrap());

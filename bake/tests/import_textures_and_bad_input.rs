@@ -158,3 +158,39 @@ fn truncated_and_garbage_files_are_errors() {
     let e = import_scene(&dir.path().join("absent.glb"), &ImportOptions::default()).unwrap_err();
     assert!(e.to_string().contains("absent.glb"), "{e}");
 }
+
+#[test]
+fn devices_and_absolute_paths_are_never_read() {
+    // A buffer, an image and an MTL library that name /dev/zero would be read forever; each
+    // becomes a warning naming the file, and the import ends.
+    let dir = tempfile::tempdir().unwrap();
+    let gltf = r#"{"asset": {"version": "2.0"},
+      "buffers": [{"byteLength": 16, "uri": "/dev/zero"}, {"byteLength": 16, "uri": "zero.bin"}],
+      "images": [{"uri": "zero.png"}], "textures": [{"source": 0}],
+      "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]}"#;
+    std::fs::write(dir.path().join("s.gltf"), gltf).unwrap();
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink("/dev/zero", dir.path().join("zero.bin")).unwrap();
+        std::os::unix::fs::symlink("/dev/zero", dir.path().join("zero.png")).unwrap();
+    }
+    let e = import_scene(&dir.path().join("s.gltf"), &ImportOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("an absolute path is not a relative URI"), "{e}");
+    #[cfg(unix)]
+    assert!(e.contains("zero.bin is not a regular file"), "{e}");
+
+    std::fs::write(
+        dir.path().join("s.obj"),
+        "mtllib zero.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    #[cfg(unix)]
+    std::os::unix::fs::symlink("/dev/zero", dir.path().join("zero.mtl")).unwrap();
+    // No light either: the error lists nothing to bake with, after the MTL was refused.
+    let e = import_scene(&dir.path().join("s.obj"), &ImportOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no light source"), "{e}");
+}

@@ -25,7 +25,12 @@ pub(super) fn import(path: &Path, options: &ImportOptions) -> Result<ImportedSce
     let base = path.parent().unwrap_or_else(|| Path::new("."));
     let mtl_warnings = RefCell::new(Vec::new());
     let loaded = tobj::load_obj_buf(&mut &bytes[..], &LOAD, |mtl| {
-        let text = std::fs::read(base.join(mtl)).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        // Only a regular file: a device or a pipe named by `mtllib` would be read forever.
+        let p = base.join(mtl);
+        if !std::fs::metadata(&p).is_ok_and(|m| m.is_file()) {
+            return Err(tobj::LoadError::OpenFileFailed);
+        }
+        let text = std::fs::read(&p).map_err(|_| tobj::LoadError::OpenFileFailed)?;
         let (clean, w) = sanitize_mtl(&text);
         mtl_warnings.borrow_mut().extend(w);
         tobj::load_mtl_buf(&mut &clean[..])
@@ -218,9 +223,11 @@ fn finish(
 
 fn load_texture(base: Option<&Path>, name: &str) -> Result<Texture, String> {
     let base = base.ok_or("external files are not followed when importing from memory")?;
-    let img = image::open(base.join(name))
-        .map_err(|e| e.to_string())?
-        .to_rgb8();
+    let path = base.join(name);
+    if !std::fs::metadata(&path).is_ok_and(|m| m.is_file()) {
+        return Err(format!("{} is not a readable regular file", path.display()));
+    }
+    let img = image::open(path).map_err(|e| e.to_string())?.to_rgb8();
     Texture::from_srgb8(img.width(), img.height(), 3, img.as_raw())
         .ok_or_else(|| "the image is empty".into())
 }
