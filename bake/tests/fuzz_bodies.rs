@@ -237,8 +237,10 @@ o lamp\nv 0.5 1 0.5\nv 1.5 1 0.5\nv 1.5 1 1.5\nv 0.5 1 1.5\nusemtl lamp\nf 5 6 7
 g wire\nl 1 5\np 2\n";
 const MTL: &str = "newmtl white\nKd 0.8 0.7 0.6\nnewmtl lamp\nKd 0 0 0\nKe 4 4 3\n";
 
-/// Seeds per target (already in the target's input layout).
-fn seeds() -> Vec<(&'static str, fn(&[u8]), Vec<Vec<u8>>)> {
+/// A fuzz target: its name, its body and its seeds (already in the target's input layout).
+type Target = (&'static str, fn(&[u8]), Vec<Vec<u8>>);
+
+fn seeds() -> Vec<Target> {
     let cornell = sample("cornell-box.glb");
     let asset = hce_format::gltf::Asset::parse(&cornell).unwrap();
     let cornell_json = serde_json::to_vec(&asset.json).unwrap();
