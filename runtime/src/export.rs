@@ -75,9 +75,9 @@ fn write_any(
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     match ext.as_deref() {
-        Some("obj") => write_atomic_with(path, |w| {
-            write_obj(w, positions, normals, colours, indices)
-        }),
+        Some("obj") => {
+            write_atomic_with(path, |w| write_obj(w, positions, normals, colours, indices))
+        }
         Some("gltf") => {
             let bytes = gltf_text(path, positions, normals, colours, indices)?;
             write_atomic(path, &bytes)
@@ -133,7 +133,7 @@ pub fn write_atomic_with(
 /// Items formatted per parallel task, and tasks per batch written in order: the text in memory
 /// at once stays a few tens of megabytes, whatever the mesh size.
 const BLOCK: usize = 1 << 14;
-const BATCH: usize = 64;
+const BATCH: usize = 16;
 
 /// Formats `items` in parallel blocks and writes the blocks in order, so the output is the
 /// same whatever the thread count.

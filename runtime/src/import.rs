@@ -168,10 +168,8 @@ pub fn load_gltf(path: &Path) -> Result<InputMesh, ImportError> {
             // tree (a cycle, or a node with two parents) must be an error, not a stack
             // overflow, an endless walk or an exponential number of instances.
             let mut seen = vec![false; doc.nodes().len()];
-            let mut stack: Vec<(gltf::Node, glam::Mat4)> = scene
-                .nodes()
-                .map(|n| (n, glam::Mat4::IDENTITY))
-                .collect();
+            let mut stack: Vec<(gltf::Node, glam::Mat4)> =
+                scene.nodes().map(|n| (n, glam::Mat4::IDENTITY)).collect();
             stack.reverse();
             while let Some((node, parent)) = stack.pop() {
                 if std::mem::replace(&mut seen[node.index()], true) {
@@ -232,8 +230,7 @@ pub fn load_gltf(path: &Path) -> Result<InputMesh, ImportError> {
                 .filter(|b| b.checked_add(nv as u32).is_some() && nv <= u32::MAX as usize)
                 .ok_or_else(|| ImportError::Invalid {
                     path: path.to_owned(),
-                    what: "more than 2^32 vertices in all mesh instances; split the scene"
-                        .into(),
+                    what: "more than 2^32 vertices in all mesh instances; split the scene".into(),
                 })?;
             let prim_normals: Option<Vec<[f32; 3]>> =
                 reader.read_normals().map(|n| n.map(turn).collect());

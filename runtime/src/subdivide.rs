@@ -749,7 +749,6 @@ fn make_tri<'a>(mesh: &'a ControlMesh, prep: &'a Prepared, t: usize) -> Tri<'a> 
     }
 }
 
-
 /// Triangles per parallel task.
 const CHUNK: usize = 64;
 
@@ -822,11 +821,7 @@ pub fn subdivide_into(
     result
 }
 
-fn subdivide_checked(
-    mesh: &ControlMesh,
-    level: u32,
-    out: &mut Refined,
-) -> Result<(), SubdivError> {
+fn subdivide_checked(mesh: &ControlMesh, level: u32, out: &mut Refined) -> Result<(), SubdivError> {
     if level > MAX_LEVEL {
         return Err(SubdivError::Level(level));
     }

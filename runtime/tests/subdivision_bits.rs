@@ -109,7 +109,9 @@ fn positions_and_indices_keep_their_pinned_bits() {
             }
         }
         if h != want {
-            wrong.push(format!("{name} {creases:?} level {level}: {h:016x}, pinned {want:016x}"));
+            wrong.push(format!(
+                "{name} {creases:?} level {level}: {h:016x}, pinned {want:016x}"
+            ));
         }
     }
     assert!(wrong.is_empty(), "changed bits:\n{}", wrong.join("\n"));
