@@ -101,6 +101,33 @@ fn bench(c: &mut Criterion) {
         let all = ours(&|| {
             std::hint::black_box(hce_runtime::subdivide::subdivide(&build().mesh, level).unwrap());
         });
+        // The memory-bandwidth floor: writing the output's bytes once, on both cores, into
+        // memory already mapped (as `subdivide_into` does) and into fresh memory (as
+        // `subdivide` does, page faults included).
+        let out = hce_runtime::subdivide::subdivide(&topo.mesh, level).unwrap();
+        let bytes = out.positions.len() * 24 + out.indices.len() * 12;
+        drop(out);
+        let fill = |buf: &mut [u8]| {
+            use rayon::prelude::*;
+            buf.par_chunks_mut(1 << 20).for_each(|c| c.fill(1));
+        };
+        let mut warm = vec![0u8; bytes];
+        fill(&mut warm);
+        let warm_cell = std::cell::RefCell::new(warm);
+        let warm_ms = ours(&|| fill(&mut warm_cell.borrow_mut()));
+        drop(warm_cell);
+        let fresh_ms = ours(&|| {
+            let mut b = vec![0u8; bytes];
+            fill(&mut b);
+            std::hint::black_box(&b);
+        });
+        println!(
+            "memory floor for {:.1} MB of output: {warm_ms:.1} ms into mapped memory ({:.1} GB/s), \
+             {fresh_ms:.1} ms into fresh memory ({:.1} GB/s)",
+            bytes as f64 / 1e6,
+            bytes as f64 / warm_ms / 1e6,
+            bytes as f64 / fresh_ms / 1e6
+        );
         println!(
             "bunny level 3: OpenSubdiv {osd_ms:.1} ms (topology + interpolate, positions only, 1 thread); \
              hce {sub:.1} ms from tables ({:.1}x), {reuse:.1} ms into reused buffers ({:.1}x), \

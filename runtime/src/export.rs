@@ -74,21 +74,35 @@ fn write_any(
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    let bytes = match ext.as_deref() {
-        Some("obj") => obj_bytes(positions, normals, colours, indices),
-        Some("gltf") => gltf_bytes(path, positions, normals, colours, indices, false)?,
-        Some("glb") => gltf_bytes(path, positions, normals, colours, indices, true)?,
-        _ => {
-            return Err(ExportError::UnknownFormat {
-                path: path.to_owned(),
-            })
+    match ext.as_deref() {
+        Some("obj") => {
+            write_atomic_with(path, |w| write_obj(w, positions, normals, colours, indices))
         }
-    };
-    write_atomic(path, &bytes)
+        Some("gltf") => {
+            let bytes = gltf_text(path, positions, normals, colours, indices)?;
+            write_atomic(path, &bytes)
+        }
+        Some("glb") => {
+            let glb = Glb::new(path, positions, normals, colours, indices)?;
+            write_atomic_with(path, |w| glb.write(w))
+        }
+        _ => Err(ExportError::UnknownFormat {
+            path: path.to_owned(),
+        }),
+    }
 }
 
 /// Writes `bytes` to a temporary file in `path`'s directory, then renames it to `path`.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ExportError> {
+    write_atomic_with(path, |w| w.write_all(bytes))
+}
+
+/// Streams a file through `fill` into a buffered temporary file in `path`'s directory,
+/// flushes it to disk, then renames it to `path`, so that a reader never sees half a file.
+pub fn write_atomic_with(
+    path: &Path,
+    fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<(), ExportError> {
     let io = |source| ExportError::Io {
         path: path.to_owned(),
         source,
@@ -103,9 +117,11 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ExportError> {
         .unwrap_or_default();
     let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
     let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
+        let mut f = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(&tmp)?);
+        fill(&mut f)?;
+        let f = f.into_inner().map_err(|e| e.into_error())?;
         f.sync_all()?;
+        drop(f);
         std::fs::rename(&tmp, path)
     })();
     if result.is_err() {
@@ -114,38 +130,97 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ExportError> {
     result.map_err(io)
 }
 
-fn obj_bytes(
+/// Items formatted per parallel task, and tasks per batch written in order: the text in memory
+/// at once stays a few tens of megabytes, whatever the mesh size.
+const BLOCK: usize = 1 << 14;
+const BATCH: usize = 16;
+
+/// Formats `items` in parallel blocks and writes the blocks in order, so the output is the
+/// same whatever the thread count.
+fn write_parallel<T: Sync>(
+    w: &mut dyn Write,
+    items: &[T],
+    line: impl Fn(&mut Vec<u8>, usize, &T) + Sync,
+) -> std::io::Result<()> {
+    use rayon::prelude::*;
+    for (b, batch) in items.chunks(BLOCK * BATCH).enumerate() {
+        let texts: Vec<Vec<u8>> = batch
+            .par_chunks(BLOCK)
+            .enumerate()
+            .map(|(k, block)| {
+                let mut s = Vec::with_capacity(block.len() * 40);
+                let first = b * BLOCK * BATCH + k * BLOCK;
+                for (i, item) in block.iter().enumerate() {
+                    line(&mut s, first + i, item);
+                }
+                s
+            })
+            .collect();
+        for t in &texts {
+            w.write_all(t)?;
+        }
+    }
+    Ok(())
+}
+
+/// Appends the decimal digits of `x`.
+fn push_u32(s: &mut Vec<u8>, mut x: u32) {
+    let mut buf = [0u8; 10];
+    let mut i = buf.len();
+    loop {
+        i -= 1;
+        buf[i] = b'0' + (x % 10) as u8;
+        x /= 10;
+        if x == 0 {
+            break;
+        }
+    }
+    s.extend_from_slice(&buf[i..]);
+}
+
+/// Appends `x` as Rust's `Display` writes it (the shortest text that reads back exactly).
+fn push_f32(s: &mut Vec<u8>, x: f32) {
+    let _ = write!(s, "{x}");
+}
+
+fn write_obj(
+    w: &mut dyn Write,
     positions: &[[f32; 3]],
     normals: &[[f32; 3]],
     colours: Option<&[[f32; 3]]>,
     indices: &[[u32; 3]],
-) -> Vec<u8> {
-    use std::fmt::Write as _;
-    let mut s = String::with_capacity(positions.len() * 80 + indices.len() * 40);
-    s.push_str("# written by hce subdivide\n");
-    for (i, p) in positions.iter().enumerate() {
-        match colours.and_then(|c| c.get(i)) {
-            Some(c) => {
-                let _ = writeln!(s, "v {} {} {} {} {} {}", p[0], p[1], p[2], c[0], c[1], c[2]);
-            }
-            None => {
-                let _ = writeln!(s, "v {} {} {}", p[0], p[1], p[2]);
-            }
+) -> std::io::Result<()> {
+    w.write_all(b"# written by hce subdivide\n")?;
+    let colours = colours.filter(|c| c.len() == positions.len());
+    write_parallel(w, positions, |s, i, p| {
+        s.extend_from_slice(b"v");
+        for &x in p.iter().chain(colours.map(|c| &c[i]).into_iter().flatten()) {
+            s.push(b' ');
+            push_f32(s, x);
         }
-    }
-    for n in normals {
-        let _ = writeln!(s, "vn {} {} {}", n[0], n[1], n[2]);
-    }
+        s.push(b'\n');
+    })?;
+    write_parallel(w, normals, |s, _, n| {
+        s.extend_from_slice(b"vn");
+        for &x in n {
+            s.push(b' ');
+            push_f32(s, x);
+        }
+        s.push(b'\n');
+    })?;
     let with_normals = normals.len() == positions.len();
-    for t in indices {
-        let [a, b, c] = t.map(|i| i + 1);
-        if with_normals {
-            let _ = writeln!(s, "f {a}//{a} {b}//{b} {c}//{c}");
-        } else {
-            let _ = writeln!(s, "f {a} {b} {c}");
+    write_parallel(w, indices, |s, _, t| {
+        s.push(b'f');
+        for &i in t {
+            s.push(b' ');
+            push_u32(s, i.wrapping_add(1));
+            if with_normals {
+                s.extend_from_slice(b"//");
+                push_u32(s, i.wrapping_add(1));
+            }
         }
-    }
-    s.into_bytes()
+        s.push(b'\n');
+    })
 }
 
 fn base64(data: &[u8]) -> String {
@@ -165,83 +240,120 @@ fn base64(data: &[u8]) -> String {
     out
 }
 
-/// A minimal glTF 2.0 asset: one mesh, one primitive (POSITION, NORMAL, u32 indices), one node.
-fn gltf_bytes(
-    path: &Path,
-    positions: &[[f32; 3]],
-    normals: &[[f32; 3]],
-    colours: Option<&[[f32; 3]]>,
-    indices: &[[u32; 3]],
-    binary: bool,
-) -> Result<Vec<u8>, ExportError> {
-    if let Some(index) = positions
-        .iter()
-        .position(|p| !p.iter().all(|c| c.is_finite()))
-    {
-        return Err(ExportError::NotFinite {
-            path: path.to_owned(),
-            index,
-        });
+/// Writes `data` as little-endian bytes: straight from memory on a little-endian machine,
+/// converted in bounded pieces elsewhere.
+fn write_le<T: bytemuck::Pod>(w: &mut dyn Write, data: &[T]) -> std::io::Result<()> {
+    let bytes: &[u8] = bytemuck::cast_slice(data);
+    if cfg!(target_endian = "little") {
+        return w.write_all(bytes);
     }
-    let pos_len = positions.len() * 12;
-    let nrm_len = if normals.len() == positions.len() {
-        normals.len() * 12
-    } else {
-        0
-    };
-    let colours = colours.filter(|c| c.len() == positions.len());
-    let col_len = colours.map_or(0, |c| c.len() * 12);
-    let idx_len = indices.len() * 12;
-    let total = pos_len + nrm_len + col_len + idx_len;
-    if total > u32::MAX as usize - 64 {
-        return Err(ExportError::TooLarge {
-            path: path.to_owned(),
-        });
+    // Every element here is made of 4-byte words (f32 or u32).
+    for piece in bytes.chunks(1 << 16) {
+        let swapped: Vec<u8> = piece
+            .chunks_exact(4)
+            .flat_map(|b| [b[3], b[2], b[1], b[0]])
+            .collect();
+        w.write_all(&swapped)?;
     }
-    let mut bin = Vec::with_capacity(total);
-    for p in positions {
-        for c in p {
-            bin.extend_from_slice(&c.to_le_bytes());
+    Ok(())
+}
+
+/// The JSON and buffer layout of a minimal glTF 2.0 asset: one mesh, one primitive
+/// (POSITION, NORMAL, optional COLOR_0, u32 indices), one node. The binary buffer is
+/// positions, normals, colours, indices.
+struct Glb<'a> {
+    json: String,
+    positions: &'a [[f32; 3]],
+    normals: &'a [[f32; 3]],
+    colours: Option<&'a [[f32; 3]]>,
+    indices: &'a [[u32; 3]],
+    bin_len: usize,
+}
+
+impl<'a> Glb<'a> {
+    fn new(
+        path: &Path,
+        positions: &'a [[f32; 3]],
+        normals: &'a [[f32; 3]],
+        colours: Option<&'a [[f32; 3]]>,
+        indices: &'a [[u32; 3]],
+    ) -> Result<Self, ExportError> {
+        Self::with_uri(path, positions, normals, colours, indices, |_| None)
+    }
+
+    /// `uri` gives the buffer's URI from the layout, or `None` for the GLB binary chunk.
+    fn with_uri(
+        path: &Path,
+        positions: &'a [[f32; 3]],
+        normals: &'a [[f32; 3]],
+        colours: Option<&'a [[f32; 3]]>,
+        indices: &'a [[u32; 3]],
+        uri: impl FnOnce(&Glb) -> Option<String>,
+    ) -> Result<Self, ExportError> {
+        use rayon::prelude::*;
+        if let Some(index) = positions
+            .par_iter()
+            .position_first(|p| !p.iter().all(|c| c.is_finite()))
+        {
+            return Err(ExportError::NotFinite {
+                path: path.to_owned(),
+                index,
+            });
         }
-    }
-    if nrm_len > 0 {
-        for n in normals {
-            for c in n {
-                bin.extend_from_slice(&c.to_le_bytes());
-            }
+        let normals = if normals.len() == positions.len() {
+            normals
+        } else {
+            &[]
+        };
+        let colours = colours.filter(|c| c.len() == positions.len());
+        let pos_len = positions.len() * 12;
+        let nrm_len = normals.len() * 12;
+        let col_len = colours.map_or(0, |c| c.len() * 12);
+        let idx_len = indices.len() * 12;
+        let total = pos_len + nrm_len + col_len + idx_len;
+        if total > u32::MAX as usize - 64 {
+            return Err(ExportError::TooLarge {
+                path: path.to_owned(),
+            });
         }
-    }
-    for c in colours.unwrap_or(&[]) {
-        for x in c {
-            bin.extend_from_slice(&x.to_le_bytes());
-        }
-    }
-    for t in indices {
-        for i in t {
-            bin.extend_from_slice(&i.to_le_bytes());
-        }
-    }
-    let mut min = [f32::INFINITY; 3];
-    let mut max = [f32::NEG_INFINITY; 3];
-    for p in positions {
-        for k in 0..3 {
-            min[k] = min[k].min(p[k]);
-            max[k] = max[k].max(p[k]);
-        }
-    }
-    if positions.is_empty() {
-        min = [0.0; 3];
-        max = [0.0; 3];
-    }
-    let uri = if binary {
-        String::new()
-    } else {
-        format!(
-            ",\"uri\":\"data:application/octet-stream;base64,{}\"",
-            base64(&bin)
-        )
-    };
-    let (attrs, views, accessors, idx_accessor) = {
+        // Min and max are exact and order-independent, so a parallel reduction is deterministic.
+        let (min, max) = positions
+            .par_iter()
+            .fold(
+                || ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]),
+                |(mut lo, mut hi), p| {
+                    for k in 0..3 {
+                        lo[k] = lo[k].min(p[k]);
+                        hi[k] = hi[k].max(p[k]);
+                    }
+                    (lo, hi)
+                },
+            )
+            .reduce(
+                || ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]),
+                |a, b| {
+                    (
+                        std::array::from_fn(|k| a.0[k].min(b.0[k])),
+                        std::array::from_fn(|k| a.1[k].max(b.1[k])),
+                    )
+                },
+            );
+        let (min, max) = if positions.is_empty() {
+            ([0.0; 3], [0.0; 3])
+        } else {
+            (min, max)
+        };
+        let mut glb = Glb {
+            json: String::new(),
+            positions,
+            normals,
+            colours,
+            indices,
+            bin_len: total,
+        };
+        let uri = uri(&glb)
+            .map(|u| format!(",\"uri\":\"{u}\""))
+            .unwrap_or_default();
         let mut views =
             format!("{{\"buffer\":0,\"byteOffset\":0,\"byteLength\":{pos_len},\"target\":34962}}");
         let mut accessors = format!(
@@ -282,33 +394,59 @@ fn gltf_bytes(
             ",{{\"bufferView\":{next},\"componentType\":5125,\"count\":{},\"type\":\"SCALAR\"}}",
             indices.len() * 3
         ));
-        (attrs, views, accessors, next)
-    };
-    let json = format!(
-        "{{\"asset\":{{\"version\":\"2.0\",\"generator\":\"hce subdivide\"}},\"scene\":0,\"scenes\":[{{\"nodes\":[0]}}],\"nodes\":[{{\"mesh\":0}}],\"meshes\":[{{\"primitives\":[{{\"attributes\":{{{attrs}}},\"indices\":{idx_accessor},\"mode\":4}}]}}],\"buffers\":[{{\"byteLength\":{total}{uri}}}],\"bufferViews\":[{views}],\"accessors\":[{accessors}]}}"
-    );
-    if !binary {
-        return Ok(json.into_bytes());
+        glb.json = format!(
+            "{{\"asset\":{{\"version\":\"2.0\",\"generator\":\"hce subdivide\"}},\"scene\":0,\"scenes\":[{{\"nodes\":[0]}}],\"nodes\":[{{\"mesh\":0}}],\"meshes\":[{{\"primitives\":[{{\"attributes\":{{{attrs}}},\"indices\":{next},\"mode\":4}}]}}],\"buffers\":[{{\"byteLength\":{total}{uri}}}],\"bufferViews\":[{views}],\"accessors\":[{accessors}]}}"
+        );
+        Ok(glb)
     }
-    let mut json = json.into_bytes();
-    while json.len() % 4 != 0 {
-        json.push(b' ');
+
+    /// The binary buffer, in order.
+    fn write_bin(&self, w: &mut dyn Write) -> std::io::Result<()> {
+        write_le(w, self.positions)?;
+        write_le(w, self.normals)?;
+        write_le(w, self.colours.unwrap_or(&[]))?;
+        write_le(w, self.indices)
     }
-    while bin.len() % 4 != 0 {
-        bin.push(0);
+
+    /// The GLB container: header, JSON chunk (space-padded), BIN chunk (zero-padded).
+    fn write(&self, w: &mut dyn Write) -> std::io::Result<()> {
+        let json_pad = (4 - self.json.len() % 4) % 4;
+        let bin_pad = (4 - self.bin_len % 4) % 4;
+        let json_len = self.json.len() + json_pad;
+        let bin_len = self.bin_len + bin_pad;
+        let len = 12 + 8 + json_len + 8 + bin_len;
+        w.write_all(b"glTF")?;
+        w.write_all(&2u32.to_le_bytes())?;
+        w.write_all(&(len as u32).to_le_bytes())?;
+        w.write_all(&(json_len as u32).to_le_bytes())?;
+        w.write_all(b"JSON")?;
+        w.write_all(self.json.as_bytes())?;
+        w.write_all(&b"   "[..json_pad])?;
+        w.write_all(&(bin_len as u32).to_le_bytes())?;
+        w.write_all(b"BIN\0")?;
+        self.write_bin(w)?;
+        w.write_all(&[0u8; 3][..bin_pad])
     }
-    let len = 12 + 8 + json.len() + 8 + bin.len();
-    let mut out = Vec::with_capacity(len);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(len as u32).to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&json);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&bin);
-    Ok(out)
+}
+
+/// A `.gltf` text with the buffer embedded as a base64 data URI.
+fn gltf_text(
+    path: &Path,
+    positions: &[[f32; 3]],
+    normals: &[[f32; 3]],
+    colours: Option<&[[f32; 3]]>,
+    indices: &[[u32; 3]],
+) -> Result<Vec<u8>, ExportError> {
+    let glb = Glb::with_uri(path, positions, normals, colours, indices, |g| {
+        let mut bin = Vec::with_capacity(g.bin_len);
+        // Writing into memory cannot fail.
+        let _ = g.write_bin(&mut bin);
+        Some(format!(
+            "data:application/octet-stream;base64,{}",
+            base64(&bin)
+        ))
+    })?;
+    Ok(glb.json.into_bytes())
 }
 
 #[cfg(test)]

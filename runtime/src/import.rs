@@ -140,12 +140,17 @@ pub fn load_obj(path: &Path) -> Result<InputMesh, ImportError> {
     Ok(out)
 }
 
-/// Reads every triangle primitive of every mesh of a glTF/GLB file.
+/// Reads every triangle primitive of every mesh instance of a glTF/GLB file, placed where the
+/// scene puts it.
 ///
-/// Node transforms are NOT applied: each mesh is taken once, in its own coordinates, in mesh
-/// order, because the control mesh subdivided here is the mesh asset itself (a mesh instanced by
-/// several nodes is one object). Primitives that are not triangle lists (points, lines, strips,
-/// fans) are skipped.
+/// The nodes of the default scene (the first scene when none is named default) are walked
+/// depth-first in file order, and each node's mesh is taken with the node's world transform
+/// (the product of its ancestors' and its own matrix or TRS): positions by the matrix, corner
+/// normals by its inverse transpose, and a mirroring transform (negative determinant) has its
+/// triangles' winding reversed so that they still face out. A mesh used by several nodes
+/// contributes one copy per node. A file without scenes has its meshes taken once each,
+/// untransformed, in mesh order. Primitives that are not triangle lists (points, lines,
+/// strips, fans) are skipped.
 pub fn load_gltf(path: &Path) -> Result<InputMesh, ImportError> {
     let gltf_err = |source| ImportError::Gltf {
         path: path.to_owned(),
@@ -155,10 +160,61 @@ pub fn load_gltf(path: &Path) -> Result<InputMesh, ImportError> {
     let base = path.parent();
     let buffers =
         gltf::import_buffers(&gltf.document, base, gltf.blob.clone()).map_err(gltf_err)?;
+    let doc = &gltf.document;
+    let mut instances: Vec<(gltf::Mesh, glam::Mat4)> = Vec::new();
+    match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(scene) => {
+            // An explicit stack and a visited set: a malformed file whose nodes do not form a
+            // tree (a cycle, or a node with two parents) must be an error, not a stack
+            // overflow, an endless walk or an exponential number of instances.
+            let mut seen = vec![false; doc.nodes().len()];
+            let mut stack: Vec<(gltf::Node, glam::Mat4)> =
+                scene.nodes().map(|n| (n, glam::Mat4::IDENTITY)).collect();
+            stack.reverse();
+            while let Some((node, parent)) = stack.pop() {
+                if std::mem::replace(&mut seen[node.index()], true) {
+                    return Err(ImportError::Invalid {
+                        path: path.to_owned(),
+                        what: format!(
+                            "nodes[{}] is reached twice from scene {}; glTF nodes must form trees (one parent per node, no cycles)",
+                            node.index(),
+                            scene.index()
+                        ),
+                    });
+                }
+                let world = parent * glam::Mat4::from_cols_array_2d(&node.transform().matrix());
+                if let Some(mesh) = node.mesh() {
+                    instances.push((mesh, world));
+                }
+                let children: Vec<_> = node.children().collect();
+                stack.extend(children.into_iter().rev().map(|c| (c, world)));
+            }
+        }
+        None => instances.extend(doc.meshes().map(|m| (m, glam::Mat4::IDENTITY))),
+    }
     let mut out = InputMesh::default();
     let mut normals = Vec::new();
     let mut all_normals = true;
-    for mesh in gltf.document.meshes() {
+    for (mesh, world) in instances {
+        let identity = world == glam::Mat4::IDENTITY;
+        let mirrored = world.determinant() < 0.0;
+        let normal_matrix = glam::Mat3::from_mat4(world).inverse().transpose();
+        let place = |p: [f32; 3]| -> [f32; 3] {
+            if identity {
+                p
+            } else {
+                world.transform_point3(glam::Vec3::from(p)).to_array()
+            }
+        };
+        let turn = |n: [f32; 3]| -> [f32; 3] {
+            if identity {
+                n
+            } else {
+                (normal_matrix * glam::Vec3::from(n))
+                    .normalize_or_zero()
+                    .to_array()
+            }
+        };
         for prim in mesh.primitives() {
             if prim.mode() != gltf::mesh::Mode::Triangles {
                 continue;
@@ -167,10 +223,17 @@ pub fn load_gltf(path: &Path) -> Result<InputMesh, ImportError> {
             let Some(pos) = reader.read_positions() else {
                 continue;
             };
-            let base_v = out.positions.len() as u32;
-            let pos: Vec<[f32; 3]> = pos.collect();
+            let pos: Vec<[f32; 3]> = pos.map(place).collect();
             let nv = pos.len();
-            let prim_normals: Option<Vec<[f32; 3]>> = reader.read_normals().map(|n| n.collect());
+            let base_v = u32::try_from(out.positions.len())
+                .ok()
+                .filter(|b| b.checked_add(nv as u32).is_some() && nv <= u32::MAX as usize)
+                .ok_or_else(|| ImportError::Invalid {
+                    path: path.to_owned(),
+                    what: "more than 2^32 vertices in all mesh instances; split the scene".into(),
+                })?;
+            let prim_normals: Option<Vec<[f32; 3]>> =
+                reader.read_normals().map(|n| n.map(turn).collect());
             let indices: Vec<u32> = match reader.read_indices() {
                 Some(i) => i.into_u32().collect(),
                 None => (0..nv as u32).collect(),
@@ -188,8 +251,12 @@ pub fn load_gltf(path: &Path) -> Result<InputMesh, ImportError> {
                         ),
                     });
                 }
-                out.triangles
-                    .push([base_v + tri[0], base_v + tri[1], base_v + tri[2]]);
+                let tri = if mirrored {
+                    [tri[0], tri[2], tri[1]]
+                } else {
+                    [tri[0], tri[1], tri[2]]
+                };
+                out.triangles.push(tri.map(|i| base_v + i));
                 if let (true, Some(n)) = (has_normals, prim_normals.as_ref()) {
                     normals.extend(tri.iter().map(|&i| n[i as usize]));
                 }
@@ -293,5 +360,81 @@ mod tests {
             0.001,
         );
         assert_eq!(w.input_to_welded, vec![0, 0, 1]);
+    }
+
+    /// A one-triangle mesh (corner normals `(0.6, 0, 0.8)`) in a `.gltf` with an external
+    /// buffer, used by the nodes given as JSON.
+    fn gltf_with_nodes(dir: &Path, nodes: &str, scene_nodes: &str) -> PathBuf {
+        let mut bin = Vec::new();
+        for p in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+            bin.extend(p.iter().flat_map(|c| c.to_le_bytes()));
+        }
+        for _ in 0..3 {
+            bin.extend([0.6f32, 0.0, 0.8].iter().flat_map(|c| c.to_le_bytes()));
+        }
+        bin.extend([0u32, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
+        std::fs::write(dir.join("tri.bin"), &bin).unwrap();
+        let json = format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":{scene_nodes}}}],
+            "nodes":{nodes},
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1}},"indices":2}}]}}],
+            "buffers":[{{"byteLength":84,"uri":"tri.bin"}}],
+            "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},
+                {{"buffer":0,"byteOffset":36,"byteLength":36}},
+                {{"buffer":0,"byteOffset":72,"byteLength":12}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}},
+                {{"bufferView":2,"componentType":5125,"count":3,"type":"SCALAR"}}]}}"#
+        );
+        let path = dir.join("scene.gltf");
+        std::fs::write(&path, json).unwrap();
+        path
+    }
+
+    #[test]
+    fn gltf_meshes_are_placed_by_their_node_transforms() {
+        let dir = tempfile::tempdir().unwrap();
+        // Node 0 translates its child node 1, which scales the mesh by (2, 1, 1); node 2
+        // mirrors a second instance in x.
+        let path = gltf_with_nodes(
+            dir.path(),
+            r#"[{"translation":[10,0,0],"children":[1]},{"scale":[2,1,1],"mesh":0},
+                {"scale":[-1,1,1],"mesh":0}]"#,
+            "[0, 2]",
+        );
+        let m = load_gltf(&path).unwrap();
+        assert_eq!(
+            m.positions,
+            vec![
+                [10.0, 0.0, 0.0],
+                [12.0, 0.0, 0.0],
+                [10.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [-1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ]
+        );
+        // The mirrored copy keeps facing +z: its winding is reversed.
+        assert_eq!(m.triangles, vec![[0, 1, 2], [3, 5, 4]]);
+        let n = m.corner_normals.unwrap();
+        // Normals go by the inverse transpose: x scaled by 1/2 under the (2, 1, 1) scale.
+        let len = (0.3f32 * 0.3 + 0.8 * 0.8).sqrt();
+        let want = [0.3 / len, 0.0, 0.8 / len];
+        for k in 0..3 {
+            assert!((n[0][k] - want[k]).abs() < 1e-6, "{:?}", n[0]);
+            assert!((n[3][k] - [-0.6, 0.0, 0.8][k]).abs() < 1e-6, "{:?}", n[3]);
+        }
+    }
+
+    #[test]
+    fn gltf_nodes_that_are_not_a_tree_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = gltf_with_nodes(
+            dir.path(),
+            r#"[{"children":[1]},{"children":[0],"mesh":0}]"#,
+            "[0]",
+        );
+        let err = load_gltf(&path).unwrap_err().to_string();
+        assert!(err.contains("nodes[0] is reached twice"), "{err}");
     }
 }

@@ -21,7 +21,8 @@ at the vertices, and all objects are written into one mesh in object space (no n
 applied) with COLOR_0 as linear floats, clamped to [0, 1]."
 )]
 pub struct SubdivideArgs {
-    /// Input mesh (.obj, .gltf or .glb), or a baked .hce / .glb / .gltf (see below).
+    /// Input mesh (.obj, .gltf or .glb; glTF mesh instances are placed by their node
+    /// transforms), or a baked .hce / .glb / .gltf (see below).
     pub input: PathBuf,
     /// Subdivision level, 1 to 6 (0 writes the welded, manifold control mesh itself).
     #[arg(long, short = 'l', default_value_t = 1)]
