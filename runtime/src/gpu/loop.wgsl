@@ -16,8 +16,11 @@
 // memory WebGPU guarantees, and level 6 needs 105 KiB. A per-slot region of a storage buffer
 // works at every level on lavapipe and on real GPUs; the Rust side bounds the number of slots.
 //
-// Nothing here uses fused multiply-add explicitly; the CPU reference rounds every product and
-// sum separately, and a compiler that contracts a * b + c anyway shifts positions by a few ulps.
+// The CPU reference rounds every product and sum separately. SPIR-V from naga lets the driver
+// contract a * b + c into a fused multiply-add (Mesa does), which moves positions by an ulp, so
+// every product by a factor that is not a power of two goes through `keep`, a select on a
+// uniform the compiler cannot see through; products by 0.5, 0.25 and 0.125 are exact and need
+// no guard (a fused and an unfused sum of an exact product round alike).
 
 struct Params {
     level: u32,
@@ -48,7 +51,8 @@ struct Params {
     edge_sides_off: u32,
     vertex_corner_offsets_off: u32,
     vertex_corners_off: u32,
-    _pad0: u32,
+    // Always 1: the opaque condition of `keep`.
+    exact: u32,
     _pad1: u32,
 }
 
@@ -92,22 +96,27 @@ fn corner(t: u32, c: u32) -> u32 {
 // ---------------------------------------------------------------------------------------------
 // The Loop rules, in the CPU's order of arithmetic.
 
+// `x`, rounded on its own: no fused multiply-add may absorb the product that produced it.
+fn keep(x: vec3<f32>) -> vec3<f32> {
+    return select(vec3<f32>(0.0), x, params.exact != 0u);
+}
+
 fn mid(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
     return (a + b) * 0.5;
 }
 
 fn odd_smooth(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
-    return (a + b) * 0.375 + (c + d) * 0.125;
+    return keep((a + b) * 0.375) + (c + d) * 0.125;
 }
 
 fn even_crease(v: vec3<f32>, a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
-    return v * 0.75 + (a + b) * 0.125;
+    return keep(v * 0.75) + (a + b) * 0.125;
 }
 
 // `w` is 0.75 / k rounded once on the CPU (a WGSL division need not be correctly rounded).
 fn even_smooth(v: vec3<f32>, sum_mid: vec3<f32>, w: f32, cf: f32) -> vec3<f32> {
-    let avg = v * 0.25 + sum_mid * w;
-    return v + (avg - v) * cf;
+    let avg = v * 0.25 + keep(sum_mid * w);
+    return v + keep((avg - v) * cf);
 }
 
 fn cf_of(k: u32) -> f32 {

@@ -57,7 +57,9 @@ struct Params {
     square_floats: u32,
     ring_cap: u32,
     offsets: [u32; SECTIONS],
-    _pad: [u32; 2],
+    /// Always 1 (see `keep` in `loop.wgsl`).
+    exact: u32,
+    _pad: u32,
 }
 
 /// Sections packed into the `topo` buffer, in this order (see [`LoopKernel::upload`]).
@@ -378,7 +380,8 @@ impl LoopKernel {
             square_floats: square_floats as u32,
             ring_cap: object.max_valence,
             offsets: object.offsets,
-            _pad: [0; 2],
+            exact: 1,
+            _pad: 0,
         };
         let uniform = super::util::uniform_init(ctx, "loop params", &params);
         let group = |pipeline: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| {
