@@ -48,6 +48,50 @@ fn bipyramid(n: u32) -> Topology {
     build_control_mesh(&p, &t, None, &TopologyConfig::default()).unwrap()
 }
 
+/// The 2x2-per-face cube with flat-shading normals (each corner takes its triangle's normal),
+/// so `Creases::Auto` makes exactly the cube's 12 edges hard: 24 crease edges.
+fn flat_shaded_cube() -> Topology {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cube_creased.obj");
+    let input = hce_runtime::import::load_mesh(&path).unwrap();
+    let w = hce_runtime::import::weld(&input.positions, 0.0);
+    let tris: Vec<[u32; 3]> = input
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| w.input_to_welded[i as usize]))
+        .collect();
+    let normals: Vec<[f32; 3]> = tris
+        .iter()
+        .flat_map(|t| {
+            let p = t.map(|i| w.positions[i as usize]);
+            let u = [0, 1, 2].map(|k| p[1][k] - p[0][k]);
+            let v = [0, 1, 2].map(|k| p[2][k] - p[0][k]);
+            let n = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
+            let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            // `+ 0.0` turns -0.0 into 0.0: Auto compares normals bit for bit.
+            [n.map(|x| x / l + 0.0); 3]
+        })
+        .collect();
+    let t = build_control_mesh(
+        &w.positions,
+        &tris,
+        Some(&normals),
+        &TopologyConfig {
+            creases: Creases::Auto,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(
+        t.report.crease_edges, 24,
+        "auto creases on the cube's edges"
+    );
+    t
+}
+
 /// An object over `mesh` with random HCE trees; the first normal of each triangle is its
 /// geometric normal, as a baker writes it.
 fn baked(name: &str, mesh: &ControlMesh, seed: u64) -> Object {
@@ -114,7 +158,9 @@ fn compare(ctx: &GpuContext, object: &Object, levels: &[u32]) -> Report {
             report.positions += 1;
 
             let gn = &gpu_normals[3 * v..3 * v + 3];
-            let dn = (0..3).map(|k| (gn[k] - cpu.normals[v][k]).abs()).fold(0.0, f32::max);
+            let dn = (0..3)
+                .map(|k| (gn[k] - cpu.normals[v][k]).abs())
+                .fold(0.0, f32::max);
             assert!(
                 dn <= 1e-3,
                 "{name}: vertex {v}: normal {gn:?} vs {:?}",
@@ -170,9 +216,16 @@ fn gpu_loop_matches_cpu_on_built_in_meshes() {
         ("cube_creased", Creases::Angle(45.0)),
     ]
     .into_iter()
-    .map(|(n, c)| (n.to_string(), data_mesh(n, c).mesh))
+    .map(|(n, c)| {
+        let t = data_mesh(n, c);
+        if c != Creases::None {
+            assert!(t.report.crease_edges > 0, "{n}: no crease edges tagged");
+        }
+        (n.to_string(), t.mesh)
+    })
     .collect();
     meshes.push(("bipyramid8".into(), bipyramid(8).mesh));
+    meshes.push(("cube_auto_creases".into(), flat_shaded_cube().mesh));
     let mut total = Report::default();
     for (i, (name, mesh)) in meshes.iter().enumerate() {
         let object = baked(name, mesh, 100 + i as u64);
@@ -202,13 +255,12 @@ fn gpu_loop_matches_cpu_on_real_meshes() {
     };
     // The bunny (69,451 triangles) only to level 2, to keep the test within its time budget in
     // the dev profile; the other meshes to level 4. Suzanne is non-manifold and is split into
-    // manifold pieces by the default topology configuration; it has input normals, so
-    // `Creases::Auto` tags its hard edges.
+    // manifold pieces by the default topology configuration. Fandisk gets angle creases.
     let cases: &[(&str, Creases, u32)] = &[
         ("spot", Creases::None, 4),
         ("fandisk", Creases::Angle(40.0), 4),
         ("teapot", Creases::None, 4),
-        ("suzanne", Creases::Auto, 4),
+        ("suzanne", Creases::None, 4),
         ("stanford-bunny", Creases::None, 2),
     ];
     for (i, &(name, creases, top)) in cases.iter().enumerate() {
@@ -219,12 +271,30 @@ fn gpu_loop_matches_cpu_on_real_meshes() {
                 ..Default::default()
             },
         );
+        // The cases exist for their features: make sure the mesh still has them.
+        if creases != Creases::None {
+            assert!(t.report.crease_edges > 0, "{name}: no crease edges tagged");
+        }
+        let max_valence = t.mesh.ring_offsets.windows(2).map(|w| w[1] - w[0]).max();
+        if name == "suzanne" {
+            assert!(
+                t.report.non_manifold_edges > 0,
+                "suzanne: no non-manifold edge split"
+            );
+        }
+        if name == "teapot" {
+            assert!(
+                max_valence >= Some(40),
+                "teapot: max valence {max_valence:?}"
+            );
+            assert!(t.report.boundary_edges > 0);
+        }
         let object = baked(name, &t.mesh, 200 + i as u64);
         let levels: Vec<u32> = (1..=top).collect();
         let r = compare(&ctx, &object, &levels);
         eprintln!(
-            "{name}: max position error {:.3e} of the diagonal, {} of {} positions bitwise equal",
-            r.max_position, r.positions_bitwise, r.positions
+            "{name} (max valence {max_valence:?}, {} crease edges): max position error {:.3e} of the diagonal, {} of {} positions bitwise equal",
+            t.report.crease_edges, r.max_position, r.positions_bitwise, r.positions
         );
     }
 }
@@ -235,7 +305,11 @@ fn reusing_outputs_keeps_buffers_when_the_level_does_not_grow() {
     else {
         return;
     };
-    let object = baked("icosahedron", &data_mesh("icosahedron", Creases::None).mesh, 5);
+    let object = baked(
+        "icosahedron",
+        &data_mesh("icosahedron", Creases::None).mesh,
+        5,
+    );
     let kernel = LoopKernel::new(&ctx);
     let uploaded = kernel.upload(&ctx, &object).unwrap();
     let mut out = None;
@@ -247,7 +321,11 @@ fn reusing_outputs_keeps_buffers_when_the_level_does_not_grow() {
         .refine_into(&ctx, &uploaded, 1, &mut out, false)
         .unwrap();
     let o = out.as_ref().unwrap();
-    assert_eq!(o.positions.size(), size3, "level 1 must reuse the level 3 buffers");
+    assert_eq!(
+        o.positions.size(),
+        size3,
+        "level 1 must reuse the level 3 buffers"
+    );
     assert_eq!(o.vertex_count, 42);
     assert_eq!(o.triangle_count, 80);
     let cpu = subdivide(&object.mesh, 1).unwrap();
@@ -263,15 +341,23 @@ fn malformed_tables_are_upload_errors() {
     let Some(ctx) = context_or_skip("malformed_tables_are_upload_errors") else {
         return;
     };
-    let good = baked("octahedron", &data_mesh("octahedron", Creases::None).mesh, 9);
+    let good = baked(
+        "octahedron",
+        &data_mesh("octahedron", Creases::None).mesh,
+        9,
+    );
     let kernel = LoopKernel::new(&ctx);
     assert!(kernel.upload(&ctx, &good).is_ok());
     type Damage = fn(&mut Object);
     let damages: &[(&str, Damage)] = &[
         ("spoke out of range", |o| o.mesh.ring[3] = 1000),
-        ("ring offsets past the ring", |o| o.mesh.ring_offsets[1] = 10_000),
+        ("ring offsets past the ring", |o| {
+            o.mesh.ring_offsets[1] = 10_000
+        }),
         ("ring offsets decreasing", |o| o.mesh.ring_offsets[2] = 1),
-        ("corner spoke out of range", |o| o.mesh.corner_spokes[4] = 99),
+        ("corner spoke out of range", |o| {
+            o.mesh.corner_spokes[4] = 99
+        }),
         ("corner spoke wrong", |o| {
             o.mesh.corner_spokes[4] = (o.mesh.corner_spokes[4] + 1) % 4
         }),
@@ -284,8 +370,12 @@ fn malformed_tables_are_upload_errors() {
         ("crease rule without two sharp spokes", |o| {
             o.mesh.vertex_flags[0] = hce_format::RULE_CREASE << hce_format::VERTEX_RULE_SHIFT
         }),
-        ("boundary edge not marked sharp", |o| o.mesh.neighbours[0] = hce_format::NO_NEIGHBOUR),
-        ("record normals outside", |o| o.triangles[3].normal_start = 10_000),
+        ("boundary edge not marked sharp", |o| {
+            o.mesh.neighbours[0] = hce_format::NO_NEIGHBOUR
+        }),
+        ("record normals outside", |o| {
+            o.triangles[3].normal_start = 10_000
+        }),
         ("tree past the bitstream", |o| o.bit_len = 3),
         ("record missing", |o| {
             o.triangles.pop();

@@ -208,6 +208,8 @@ impl LoopKernel {
         let mut tri_flags = vec![0u32; nf];
         for (t, flags) in tri_flags.iter_mut().enumerate() {
             let tri = mesh.triangle(t);
+            // `e` is both a corner and an edge index (edge e starts at corner e).
+            #[allow(clippy::needless_range_loop)]
             for e in 0..3 {
                 let s = 3 * t + e;
                 if prep.owns_edge[s] {
@@ -231,7 +233,10 @@ impl LoopKernel {
         let weights: Vec<u32> = (0..=max_valence.max(6) as usize)
             .flat_map(|k| {
                 let w = if k < 2 { 0.0 } else { 0.75 / k as f32 };
-                [prep.cf.get(k).copied().unwrap_or(0.0).to_bits(), w.to_bits()]
+                [
+                    prep.cf.get(k).copied().unwrap_or(0.0).to_bits(),
+                    w.to_bits(),
+                ]
             })
             .collect();
         let sections: [&[u32]; SECTIONS] = [
@@ -363,7 +368,9 @@ impl LoopKernel {
         o.vertex_count = v;
         o.triangle_count = f;
         // A reused scratch buffer may hold fewer slots at this level than a fresh one would.
-        let slots = wanted_slots.min((o.scratch.size() / slot_bytes) as u32).max(1);
+        let slots = wanted_slots
+            .min((o.scratch.size() / slot_bytes) as u32)
+            .max(1);
 
         let m = 1u32 << level;
         let params = Params {
