@@ -214,7 +214,10 @@ fn spoke_sharp(cr: Corner, s: u32) -> bool {
 
 // One level, n segments to 2n: rings and corners, then the grid in rows of increasing j, then
 // the bands (subdivide.rs, `Patch::step`).
-fn refine_step(sq: u32, nsq: u32, rg: u32, nrg: u32, cs: array<Corner, 3>, flags: u32, n: i32) {
+fn refine_step(sq: u32, nsq: u32, rg: u32, nrg: u32, corners: array<Corner, 3>, flags: u32, n: i32) {
+    // Indexed dynamically below: a variable, not a value (naga copies a value array to a
+    // temporary at every dynamic index).
+    var cs = corners;
     var new_corner: array<vec3<f32>, 3>;
     for (var c = 0u; c < 3u; c++) {
         let cr = cs[c];
@@ -354,7 +357,7 @@ fn available(flags: u32, n: i32, a: i32, b: i32) -> bool {
 // Area-weighted normal at lattice point (i, j), not a corner: the six neighbours in
 // counter-clockwise order, skipping faces across boundary edges (`Patch::grid_normal`).
 fn grid_normal(sq: u32, flags: u32, n: i32, i: i32, j: i32) -> vec3<f32> {
-    let d = array<vec2<i32>, 6>(vec2<i32>(1, 0), vec2<i32>(0, 1), vec2<i32>(-1, 1),
+    var d = array<vec2<i32>, 6>(vec2<i32>(1, 0), vec2<i32>(0, 1), vec2<i32>(-1, 1),
                                 vec2<i32>(-1, 0), vec2<i32>(0, -1), vec2<i32>(1, -1));
     let v = sq_at(sq, n, i, j);
     var s = vec3<f32>(0.0);
@@ -410,7 +413,7 @@ fn patch_main(@builtin(global_invocation_id) gid: vec3<u32>,
     let rg_b = rg_a + ring_floats;
     let mm = i32(params.m);
     for (var t = slot; t < params.triangle_count; t += params.slots) {
-        let cs = array<Corner, 3>(load_corner(t, 0u), load_corner(t, 1u), load_corner(t, 2u));
+        var cs = array<Corner, 3>(load_corner(t, 0u), load_corner(t, 1u), load_corner(t, 2u));
         let flags = topo[params.tri_flags_off + t];
         // Level 0: the three corners, their rings and the one opposite vertex per band.
         for (var c = 0u; c < 3u; c++) {
@@ -614,14 +617,14 @@ fn acc_add(acc: ptr<function, Acc>, g: u32) {
 fn gather(acc: ptr<function, Acc>, t: u32, i: i32, j: i32) {
     let mm = i32(params.m);
     let base = t << (2u * params.level);
-    let ups = array<vec2<i32>, 3>(vec2<i32>(i, j), vec2<i32>(i - 1, j), vec2<i32>(i, j - 1));
+    var ups = array<vec2<i32>, 3>(vec2<i32>(i, j), vec2<i32>(i - 1, j), vec2<i32>(i, j - 1));
     for (var k = 0; k < 3; k++) {
         let u = ups[k];
         if (u.x >= 0 && u.y >= 0 && u.x + u.y < mm) {
             acc_add(acc, base + locate(vec2<i32>(3 * u.x + 1, 3 * u.y + 1)));
         }
     }
-    let downs = array<vec2<i32>, 3>(vec2<i32>(i, j), vec2<i32>(i + 1, j), vec2<i32>(i, j + 1));
+    var downs = array<vec2<i32>, 3>(vec2<i32>(i, j), vec2<i32>(i + 1, j), vec2<i32>(i, j + 1));
     for (var k = 0; k < 3; k++) {
         let d = downs[k];
         if (d.x >= 1 && d.y >= 1 && d.x + d.y <= mm) {
