@@ -393,3 +393,22 @@ fn malformed_tables_are_upload_errors() {
         }
     }
 }
+
+#[test]
+fn flat_and_loop_refinements_number_vertices_alike() {
+    use hce_runtime::gpu::cpu_reference::{refine_flat_cpu, FlatTopology};
+    // CPU twins only: the GPU kernels are compared with them elsewhere (gpu_kernels.rs here).
+    for name in ["octahedron", "grid_open", "fan7_open"] {
+        let object = baked(name, &data_mesh(name, Creases::None).mesh, 3);
+        let topo = FlatTopology::new(name, &object.mesh).unwrap();
+        for level in 1..=4 {
+            let flat = refine_flat_cpu(&object, &topo, level);
+            let loop_ = subdivide(&object.mesh, level).unwrap();
+            assert_eq!(
+                flat.indices,
+                loop_.indices.as_flattened(),
+                "{name} level {level}"
+            );
+        }
+    }
+}
