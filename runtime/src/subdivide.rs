@@ -571,21 +571,24 @@ fn normalize(s: P) -> Out {
     }
 }
 
-/// Everything the per-triangle tasks share, derived from the tables once (O(V + F)).
-struct Prepared {
+/// Everything the per-triangle tasks share, derived from the tables once (O(V + F)). The GPU
+/// kernel (`gpu::loop_kernel`) uploads the same derived tables, so both sides agree on owners,
+/// crease spokes and correction factors.
+pub(crate) struct Prepared {
     /// `vertex_owner[v]`: the corner `3 t + c` that writes coarse vertex `v`.
-    vertex_owner: Vec<u32>,
+    pub(crate) vertex_owner: Vec<u32>,
     /// `edge_start[t]`: the first edge id owned by triangle `t` (ids are in first-appearance
     /// order, so triangle `t` owns `edge_start[t] .. edge_start[t + 1]`).
-    edge_start: Vec<u32>,
+    pub(crate) edge_start: Vec<u32>,
     /// Whether `(t, e)` owns its edge.
-    owns_edge: Vec<bool>,
-    crease_spokes: Vec<[u32; 2]>,
-    cf: Vec<f32>,
-    edge_count: usize,
+    pub(crate) owns_edge: Vec<bool>,
+    pub(crate) crease_spokes: Vec<[u32; 2]>,
+    pub(crate) cf: Vec<f32>,
+    pub(crate) edge_count: usize,
 }
 
-fn prepare(mesh: &ControlMesh) -> Result<Prepared, SubdivError> {
+/// Validates every table index the subdivision reads and derives [`Prepared`].
+pub(crate) fn prepare(mesh: &ControlMesh) -> Result<Prepared, SubdivError> {
     let bad = |s: String| Err(SubdivError::Tables(s));
     let nv = mesh.vertex_count();
     let nf = mesh.triangle_count();
@@ -615,6 +618,10 @@ fn prepare(mesh: &ControlMesh) -> Result<Prepared, SubdivError> {
         );
         if b < a + 2 {
             return bad(format!("vertex {v}: ring shorter than 2"));
+        }
+        // Checked before slicing: a later offset that decreases is caught only afterwards.
+        if b > mesh.ring.len() {
+            return bad(format!("vertex {v}: ring_offsets run past the ring array"));
         }
         max_valence = max_valence.max(b - a);
         if let Some(&s) = mesh.ring[a..b].iter().find(|&&s| s as usize >= nv) {

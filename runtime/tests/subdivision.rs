@@ -258,4 +258,13 @@ fn bad_levels_and_broken_tables_are_errors() {
     let mut m = t.mesh.clone();
     m.ring[0] = 1 << 30;
     assert!(matches!(subdivide(&m, 1), Err(SubdivError::Tables(_))));
+    // An offset past the ring array, caught before the ring is sliced (this used to panic).
+    let mut m = t.mesh.clone();
+    m.ring_offsets[1] = 10_000;
+    assert_eq!(
+        subdivide(&m, 1),
+        Err(SubdivError::Tables(
+            "vertex 0: ring_offsets run past the ring array".into()
+        ))
+    );
 }

@@ -6,7 +6,8 @@ use std::time::Instant;
 
 use hce_format::Object;
 
-use super::flat::FlatKernel;
+use super::flat::{FlatKernel, KernelTiming};
+use super::loop_kernel::LoopKernel;
 use super::{GpuContext, GpuError};
 
 /// Where a time came from.
@@ -27,7 +28,8 @@ pub struct BenchRow {
     pub output_vertices: u64,
     pub seconds: f64,
     pub timer: Timer,
-    /// Bytes the kernel writes: positions, vertex colours, indices and per-face colours.
+    /// Bytes the kernel writes to its outputs: positions, (Loop: normals,) vertex colours,
+    /// indices and per-face colours.
     pub bytes_written: u64,
 }
 
@@ -51,35 +53,81 @@ pub fn bench_flat(
 ) -> Result<Vec<BenchRow>, GpuError> {
     let kernel = FlatKernel::new(ctx);
     let uploaded = kernel.upload(ctx, object)?;
+    let coarse = u64::from(uploaded.topology.triangle_count);
     let mut rows = Vec::new();
     for &level in levels {
         let mut out = None;
-        kernel.refine_into(ctx, &uploaded, level, &mut out, true)?;
-        let mut samples = Vec::new();
-        let mut timer = Timer::Wall;
-        for _ in 0..repeats.max(1) {
-            let start = Instant::now();
-            let timing = kernel.refine_into(ctx, &uploaded, level, &mut out, true)?;
-            let wall = start.elapsed().as_secs_f64();
-            match timing.gpu_seconds {
-                Some(s) if s > 0.0 => {
-                    timer = Timer::GpuTimestamps;
-                    samples.push(s);
-                }
-                _ => samples.push(wall),
-            }
-        }
-        samples.sort_by(f64::total_cmp);
+        let (seconds, timer) = time_repeats(repeats, || {
+            kernel.refine_into(ctx, &uploaded, level, &mut out, true)
+        })?;
         let o = out.as_ref().expect("refine_into allocates");
         rows.push(BenchRow {
             level,
-            coarse_triangles: u64::from(uploaded.topology.triangle_count),
+            coarse_triangles: coarse,
             output_triangles: u64::from(o.triangle_count),
             output_vertices: u64::from(o.vertex_count),
-            seconds: samples[samples.len() / 2],
+            seconds,
             timer,
             bytes_written: o.bytes_written(),
         });
     }
     Ok(rows)
+}
+
+/// Times the Loop subdivision kernel (three dispatches: per-triangle patches with positions and
+/// normals, faces with HCE decoding, vertex colours) on `object`, whose control mesh must carry
+/// its adjacency tables, at each level, `repeats` times after one warm-up, reusing the output
+/// buffers as a viewer would. Bytes written count the outputs, not the patches' scratch.
+pub fn bench_loop(
+    ctx: &GpuContext,
+    object: &Object,
+    levels: &[u32],
+    repeats: u32,
+) -> Result<Vec<BenchRow>, GpuError> {
+    let kernel = LoopKernel::new(ctx);
+    let uploaded = kernel.upload(ctx, object)?;
+    let coarse = u64::from(uploaded.triangle_count);
+    let mut rows = Vec::new();
+    for &level in levels {
+        let mut out = None;
+        let (seconds, timer) = time_repeats(repeats, || {
+            kernel.refine_into(ctx, &uploaded, level, &mut out, true)
+        })?;
+        let o = out.as_ref().expect("refine_into allocates");
+        rows.push(BenchRow {
+            level,
+            coarse_triangles: coarse,
+            output_triangles: u64::from(o.triangle_count),
+            output_vertices: u64::from(o.vertex_count),
+            seconds,
+            timer,
+            bytes_written: o.bytes_written(),
+        });
+    }
+    Ok(rows)
+}
+
+/// Runs `refine` once to warm up, then `repeats` times; the median time and where it came from
+/// (GPU timestamps when every sample had them, wall time around submit-and-wait otherwise).
+fn time_repeats(
+    repeats: u32,
+    mut refine: impl FnMut() -> Result<KernelTiming, GpuError>,
+) -> Result<(f64, Timer), GpuError> {
+    refine()?;
+    let mut samples = Vec::new();
+    let mut timer = Timer::Wall;
+    for _ in 0..repeats.max(1) {
+        let start = Instant::now();
+        let timing = refine()?;
+        let wall = start.elapsed().as_secs_f64();
+        match timing.gpu_seconds {
+            Some(s) if s > 0.0 => {
+                timer = Timer::GpuTimestamps;
+                samples.push(s);
+            }
+            _ => samples.push(wall),
+        }
+    }
+    samples.sort_by(f64::total_cmp);
+    Ok((samples[samples.len() / 2], timer))
 }

@@ -19,8 +19,10 @@
 //! `[coarse vertices (V)] [edge points: E × (n − 1)] [interior points: F × (n − 1)(n − 2) / 2]`.
 //! Edge `id`'s point `k` (`1 ≤ k < n`) is `V + id (n − 1) + k − 1`, counted from the owning
 //! triangle's `v_e` towards its `v_{e+1}` ([`ControlMesh::edges`]). Triangle `t`'s interior point
-//! `(b, c)` is `V + E (n − 1) + t (n − 1)(n − 2) / 2 + j (j − 1) / 2 + b − 1` with `j = n − 1 − c`
-//! (rows of constant `c`, the row nearest `v2` first). Fine triangle `t · 4^L + path`.
+//! `(b, c)` is `V + E (n − 1) + t I + I − j (j + 1) / 2 + b − 1` with `I = (n − 1)(n − 2) / 2`
+//! and `j = n − 1 − c` (rows of constant `c` in increasing `c`, each in increasing `b`: the
+//! numbering of [`crate::subdivide`], so flat and Loop refinements number vertices alike).
+//! Fine triangle `t · 4^L + path`.
 
 use hce_format::{rgb9e5, ControlMesh, Object, TriangleRecord};
 
@@ -477,7 +479,7 @@ pub fn vertex_index(
             return topo.vertex_count
                 + topo.edge_count * (n as u32 - 1)
                 + t * ip
-                + j * (j - 1) / 2
+                + (ip - j * (j + 1) / 2)
                 + (b as u32 - 1);
         }
     };
@@ -629,15 +631,19 @@ pub fn refine_flat_cpu(object: &Object, topo: &FlatTopology, level: u32) -> Refi
 
 /// `(b, c)` of interior point `local` (inverse of the numbering in the module docs).
 pub fn interior_coords(n: i32, local: u32) -> (i32, i32) {
-    // Largest j with j (j − 1) / 2 <= local: start from the float root, correct exactly.
-    let mut j = ((1.0 + (1.0 + 8.0 * local as f64).sqrt()) / 2.0).floor() as u32;
-    while j * (j - 1) / 2 > local {
+    let ip = interior_per_triangle(n as u64) as u32;
+    // Counted from the last point, rows have 1, 2, 3, ... points: the row of length j holds
+    // r = ip − 1 − local when j (j − 1) / 2 <= r < j (j + 1) / 2. Start from the float root,
+    // correct exactly.
+    let r = ip - 1 - local;
+    let mut j = ((1.0 + (1.0 + 8.0 * r as f64).sqrt()) / 2.0).floor() as u32;
+    while j * (j - 1) / 2 > r {
         j -= 1;
     }
-    while (j + 1) * j / 2 <= local {
+    while (j + 1) * j / 2 <= r {
         j += 1;
     }
-    let b = (local - j * (j - 1) / 2) as i32 + 1;
+    let b = (local - (ip - j * (j + 1) / 2)) as i32 + 1;
     (b, n - 1 - j as i32)
 }
 
@@ -732,9 +738,15 @@ mod tests {
                 let (b, c) = interior_coords(n, local);
                 assert!(b >= 1 && c >= 1 && b + c < n, "({b}, {c}) at level {level}");
                 let j = (n - 1 - c) as u32;
-                assert_eq!(j * (j - 1) / 2 + b as u32 - 1, local);
+                assert_eq!(ip - j * (j + 1) / 2 + b as u32 - 1, local);
                 assert!(seen.insert((b, c)));
             }
+            // The order of crate::subdivide: rows of increasing c, each of increasing b.
+            let order: Vec<(i32, i32)> = (1..n)
+                .flat_map(|c| (1..n - c).map(move |b| (b, c)))
+                .collect();
+            let ours: Vec<(i32, i32)> = (0..ip).map(|l| interior_coords(n, l)).collect();
+            assert_eq!(ours, order, "level {level}");
         }
     }
 

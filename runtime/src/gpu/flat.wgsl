@@ -5,7 +5,8 @@
 //
 // Numbering (cpu_reference.rs has the same in prose): with n = 2^L, a point of coarse triangle
 // (v0, v1, v2) has lattice coordinates (b, c), a = n − b − c; position (a p0 + b p1 + c p2) / n.
-// Vertices: [coarse][edge points, E × (n − 1), from the owner's v_e][interior, F × I];
+// Vertices: [coarse][edge points, E × (n − 1), from the owner's v_e][interior, F × I], interior
+// points in rows of increasing c, each in increasing b (the numbering of subdivide.rs);
 // fine triangle t · 4^L + path. A lattice triangle is (C0, σ, s): corners C0, C0 + σ s e_b,
 // C0 + σ s e_c; the children Top, Left, Center, Right keep σ except Center, which flips it.
 
@@ -67,16 +68,20 @@ fn lattice_position(p0: vec3<f32>, p1: vec3<f32>, p2: vec3<f32>, b: i32, c: i32)
     );
 }
 
-// Interior point `local` → (b, c): rows of constant c, row j = n − 1 − c holding j points.
+// Interior point `local` → (b, c): rows of constant c in increasing c, each in increasing b
+// (the numbering of subdivide.rs and loop.wgsl); row c holds j = n − 1 − c points, so counted
+// from the last point, r = I − 1 − local lies in the row with j (j − 1) / 2 <= r < j (j + 1) / 2.
 fn interior_coords(local: u32) -> vec2<i32> {
-    var j = u32(floor((1.0 + sqrt(1.0 + 8.0 * f32(local))) * 0.5));
-    while (j * (j - 1u) / 2u > local) {
+    let ip = params.interior_per_triangle;
+    let r = ip - 1u - local;
+    var j = u32(floor((1.0 + sqrt(1.0 + 8.0 * f32(r))) * 0.5));
+    while (j * (j - 1u) / 2u > r) {
         j -= 1u;
     }
-    while ((j + 1u) * j / 2u <= local) {
+    while ((j + 1u) * j / 2u <= r) {
         j += 1u;
     }
-    let b = i32(local - j * (j - 1u) / 2u) + 1;
+    let b = i32(local - (ip - j * (j + 1u) / 2u)) + 1;
     return vec2<i32>(b, i32(params.n) - 1 - i32(j));
 }
 
@@ -98,7 +103,8 @@ fn vertex_index(t: u32, b: i32, c: i32) -> u32 {
     } else {
         let j = u32(n - 1 - c);
         return params.coarse_vertices + params.edge_count * (params.n - 1u)
-            + t * params.interior_per_triangle + j * (j - 1u) / 2u + u32(b - 1);
+            + t * params.interior_per_triangle
+            + (params.interior_per_triangle - j * (j + 1u) / 2u) + u32(b - 1);
     }
     let id = topo[params.edges_off + 3u * t + e];
     var kk = k;

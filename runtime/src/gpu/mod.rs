@@ -1,9 +1,11 @@
 //! The GPU side of the runtime (feature `gpu`): a wgpu context that prefers a hardware adapter
-//! and falls back to a software one, compute kernels that decode HCE colours and refine flat
-//! objects, a level-of-detail rule, and a headless renderer.
+//! and falls back to a software one, compute kernels that decode HCE colours, refine flat
+//! objects ([`flat`]) and Loop-subdivide multiresolution objects with their colours
+//! ([`loop_kernel`]), a level-of-detail rule, and a headless renderer.
 //!
-//! Every kernel has a plain-Rust twin in [`cpu_reference`] that follows the same steps in the
-//! same order, so that tests can compare GPU output with it value by value.
+//! Every kernel has a plain-Rust twin that follows the same steps in the same order, so that
+//! tests can compare GPU output with it value by value: [`cpu_reference`] for decoding and flat
+//! refinement, [`crate::subdivide`] and [`crate::colour`] for the Loop kernel.
 //!
 //! The method is Concheiro et al., "Synthesis of multiresolution scenes with global illumination
 //! on a GPU" (GRAPP 2012): colours are chosen per subtriangle by walking the coarse triangle's
@@ -15,6 +17,7 @@ pub mod cpu_reference;
 pub mod decode;
 pub mod flat;
 pub mod lod;
+pub mod loop_kernel;
 pub mod plain_mesh;
 pub mod render;
 pub mod testing;
@@ -25,6 +28,7 @@ pub use cpu_reference::RefinedMesh;
 pub use decode::{decode_colours, ColourQuery, DecodedColour};
 pub use flat::{refine_flat, FlatKernel, FlatObject, FlatOutput, KernelTiming};
 pub use lod::{choose_level, Camera, LodParams};
+pub use loop_kernel::{refine_loop, LoopKernel, LoopMesh, LoopObject, LoopOutput};
 pub use render::{
     render_gpu_mesh, render_mesh, tone_map_aces, Framing, GpuMesh, RenderParams, RenderedImage,
 };

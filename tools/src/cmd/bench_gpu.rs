@@ -1,8 +1,10 @@
-//! `hce bench-gpu`: throughput of the GPU kernels per level on the adapter at hand.
+//! `hce bench-gpu`: throughput of the GPU kernels per level on the adapter at hand: the flat
+//! refinement kernel and the Loop subdivision kernel (`--kernel`).
 //!
-//! The input is either a mesh file (previewed as a flat object, as `hce render` does) or, by
-//! default, a built-in 32×32 bumpy grid with random HCE trees (depth 4, up to 5 normals per
-//! triangle), so the colour decoding walks real trees.
+//! The input is either a mesh file or, by default, a built-in 32×32 bumpy grid, with random HCE
+//! trees (depth 4, up to 5 normals per triangle) so the colour decoding walks real trees. For
+//! the flat kernel a mesh is previewed as a flat object, as `hce render` does; for the Loop
+//! kernel it is welded and its control mesh built as `hce subdivide` does (no creases).
 
 use std::path::PathBuf;
 
@@ -23,6 +25,9 @@ pub struct BenchGpuArgs {
     /// Use a software adapter even if a GPU is present.
     #[arg(long)]
     pub software: bool,
+    /// Kernels to measure: flat, loop or both.
+    #[arg(long, default_value = "both", value_parser = ["flat", "loop", "both"])]
+    pub kernel: String,
 }
 
 #[cfg(not(feature = "gpu"))]
@@ -33,7 +38,7 @@ pub fn run(_args: BenchGpuArgs) -> Result<()> {
 #[cfg(feature = "gpu")]
 pub fn run(args: BenchGpuArgs) -> Result<()> {
     use anyhow::Context;
-    use hce_runtime::gpu::bench::{bench_flat, Timer};
+    use hce_runtime::gpu::bench::{bench_flat, bench_loop, BenchRow, Timer};
     use hce_runtime::gpu::testing::{grid, random_object, RandomTrees};
     use hce_runtime::gpu::{plain_mesh, ContextOptions, GpuContext};
 
@@ -43,46 +48,94 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
         .map(|s| s.trim().parse::<u32>())
         .collect::<Result<_, _>>()
         .with_context(|| format!("--levels {:?}: expected e.g. 1,2,3", args.levels))?;
-    let (label, object) = match &args.mesh {
-        Some(path) => {
-            let mesh = plain_mesh::load_plain_mesh(path)?;
-            (
-                path.display().to_string(),
-                plain_mesh::to_flat_object("mesh", &mesh).0,
-            )
-        }
-        None => {
-            let (p, t) = grid(32, 32);
-            (
-                "built-in 32x32 grid, random trees".to_string(),
-                random_object("grid", p, t, RandomTrees::default(), 7),
-            )
-        }
-    };
     let ctx = GpuContext::new(&ContextOptions {
         force_software: args.software,
     })?;
     println!("adapter: {}", ctx.description);
-    println!("kernel: flat refinement (positions, faces + HCE decoding, vertex colours)");
+    let label = match &args.mesh {
+        Some(path) => path.display().to_string(),
+        None => "built-in 32x32 grid, random trees".to_string(),
+    };
     println!("input: {label}");
-    println!(
-        "{:>5} {:>8} {:>11} {:>11} {:>11} {:>9} {:>14} {:>10}",
-        "level", "coarse", "out tris", "out verts", "time ms", "timer", "Mtris/s", "GB/s"
-    );
-    for row in bench_flat(&ctx, &object, &levels, args.repeats)? {
+    let print = |title: &str, rows: Vec<BenchRow>| {
+        println!("kernel: {title}");
         println!(
-            "{:>5} {:>8} {:>11} {:>11} {:>11.3} {:>9} {:>14.2} {:>10.3}",
-            row.level,
-            row.coarse_triangles,
-            row.output_triangles,
-            row.output_vertices,
-            row.seconds * 1e3,
-            match row.timer {
-                Timer::GpuTimestamps => "gpu-ts",
-                Timer::Wall => "wall",
-            },
-            row.triangles_per_second() / 1e6,
-            row.bytes_per_second() / 1e9
+            "{:>5} {:>8} {:>11} {:>11} {:>11} {:>9} {:>14} {:>10}",
+            "level", "coarse", "out tris", "out verts", "time ms", "timer", "Mtris/s", "GB/s"
+        );
+        for row in rows {
+            println!(
+                "{:>5} {:>8} {:>11} {:>11} {:>11.3} {:>9} {:>14.2} {:>10.3}",
+                row.level,
+                row.coarse_triangles,
+                row.output_triangles,
+                row.output_vertices,
+                row.seconds * 1e3,
+                match row.timer {
+                    Timer::GpuTimestamps => "gpu-ts",
+                    Timer::Wall => "wall",
+                },
+                row.triangles_per_second() / 1e6,
+                row.bytes_per_second() / 1e9
+            );
+        }
+    };
+    if args.kernel != "loop" {
+        let object = match &args.mesh {
+            Some(path) => {
+                let mesh = plain_mesh::load_plain_mesh(path)?;
+                plain_mesh::to_flat_object("mesh", &mesh).0
+            }
+            None => {
+                let (p, t) = grid(32, 32);
+                random_object("grid", p, t, RandomTrees::default(), 7)
+            }
+        };
+        print(
+            "flat refinement (positions, faces + HCE decoding, vertex colours)",
+            bench_flat(&ctx, &object, &levels, args.repeats)?,
+        );
+    }
+    if args.kernel != "flat" {
+        let (positions, triangles, normals) = match &args.mesh {
+            Some(path) => {
+                let input = hce_runtime::import::load_mesh(path)?;
+                let welded = hce_runtime::import::weld(&input.positions, 0.0);
+                let tris: Vec<[u32; 3]> = input
+                    .triangles
+                    .iter()
+                    .map(|t| t.map(|i| welded.input_to_welded[i as usize]))
+                    .collect();
+                (welded.positions, tris, input.corner_normals)
+            }
+            None => {
+                let (p, t) = grid(32, 32);
+                (
+                    p.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+                    t.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+                    None,
+                )
+            }
+        };
+        let topo = hce_runtime::topology::build_control_mesh(
+            &positions,
+            &triangles,
+            normals.as_deref(),
+            &Default::default(),
+        )
+        .with_context(|| format!("{label}: cannot build the control mesh"))?;
+        let mut object = random_object(
+            "mesh",
+            topo.mesh.positions.clone(),
+            topo.mesh.triangles.clone(),
+            RandomTrees::default(),
+            7,
+        );
+        object.kind = hce_format::ObjectKind::Multiresolution;
+        object.mesh = topo.mesh;
+        print(
+            "Loop subdivision (patches: positions + normals, faces + HCE decoding, vertex colours)",
+            bench_loop(&ctx, &object, &levels, args.repeats)?,
         );
     }
     Ok(())

@@ -1,0 +1,691 @@
+// Loop subdivision of a multiresolution object to level L with HCE colours: a port of the CPU
+// reference in runtime/src/subdivide.rs (local patch, order of arithmetic, output numbering) and
+// of runtime/src/colour.rs (colour per subtriangle, area-weighted vertex colours).
+//
+// Three dispatches, each a pure gather or an owned write, so the result does not depend on
+// scheduling (no atomics):
+//   patch_main   one invocation per coarse triangle (grid-stride over scratch slots): refines
+//                the triangle's local patch to level L in a scratch region of a storage buffer
+//                and writes the positions and normals of the output vertices it owns.
+//   faces_main   one invocation per fine triangle: its indices, area and HCE colour.
+//   colours_main one invocation per output vertex: area-weighted mean of the incident fine
+//                triangles, across coarse edges and vertices.
+//
+// The patch lives in storage memory rather than workgroup memory: at level 5 the two squares of
+// the CPU port alone take 2 x 35^2 x 12 = 29 KiB per triangle, above the 16 KiB of workgroup
+// memory WebGPU guarantees, and level 6 needs 105 KiB. A per-slot region of a storage buffer
+// works at every level on lavapipe and on real GPUs; the Rust side bounds the number of slots.
+//
+// The CPU reference rounds every product and sum separately. SPIR-V from naga lets the driver
+// contract a * b + c into a fused multiply-add (Mesa does), which moves positions by an ulp, so
+// every product by a factor that is not a power of two goes through `keep`, a select on a
+// uniform the compiler cannot see through; products by 0.5, 0.25 and 0.125 are exact and need
+// no guard (a fused and an unfused sum of an exact product round alike).
+
+struct Params {
+    level: u32,
+    m: u32,
+    coarse_vertices: u32,
+    edge_count: u32,
+    triangle_count: u32,
+    per_edge: u32,
+    per_tri: u32,
+    vertex_total: u32,
+    fine_total: u32,
+    slots: u32,
+    // Floats per scratch square and per ring set (3 corners x ring_cap points).
+    square_floats: u32,
+    ring_cap: u32,
+    // Offsets (in u32 words) of the sections packed into `topo`.
+    tri_off: u32,
+    ring_offsets_off: u32,
+    ring_off: u32,
+    spoke_flags_off: u32,
+    vertex_flags_off: u32,
+    corner_spokes_off: u32,
+    edges_off: u32,
+    tri_flags_off: u32,
+    crease_off: u32,
+    weights_off: u32,
+    edge_side_offsets_off: u32,
+    edge_sides_off: u32,
+    vertex_corner_offsets_off: u32,
+    vertex_corners_off: u32,
+    // Always 1: the opaque condition of `keep`.
+    exact: u32,
+    _pad1: u32,
+}
+
+// Bits of the per-triangle flags word the Rust side derives from the tables.
+const OWNS_EDGE: u32 = 1u;       // << e: the triangle owns edge e (writes its points)
+const OWNS_VERTEX: u32 = 8u;     // << c: the triangle's corner c writes coarse vertex v_c
+const INTERIOR: u32 = 64u;       // << e: edge e has a neighbour (a band)
+const SHARP: u32 = 512u;         // << e: edge e is infinitely sharp
+
+const RULE_CREASE: u32 = 1u;
+const RULE_CORNER: u32 = 2u;
+const SPOKE_SHARP: u32 = 1u;
+const VERTEX_BOUNDARY: u32 = 1u;
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> coarse_positions: array<f32>;
+@group(0) @binding(2) var<storage, read> topo: array<u32>;
+@group(0) @binding(3) var<storage, read> hce_records: array<TriRecord>;
+@group(0) @binding(4) var<storage, read> hce_bits: array<u32>;
+@group(0) @binding(5) var<storage, read> hce_normals: array<f32>;
+@group(0) @binding(6) var<storage, read> hce_colours: array<u32>;
+@group(0) @binding(7) var<storage, read_write> scratch: array<f32>;
+@group(0) @binding(8) var<storage, read_write> out_positions: array<f32>;
+@group(0) @binding(9) var<storage, read_write> out_normals: array<f32>;
+@group(0) @binding(10) var<storage, read_write> out_indices: array<u32>;
+@group(0) @binding(11) var<storage, read_write> out_faces: array<vec4<f32>>;
+@group(0) @binding(12) var<storage, read_write> out_colours: array<vec4<f32>>;
+
+fn linear_id(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
+    return gid.x + gid.y * groups.x * 64u;
+}
+
+fn coarse_position(v: u32) -> vec3<f32> {
+    return vec3<f32>(coarse_positions[3u * v], coarse_positions[3u * v + 1u], coarse_positions[3u * v + 2u]);
+}
+
+fn corner(t: u32, c: u32) -> u32 {
+    return topo[params.tri_off + 3u * t + c];
+}
+
+// ---------------------------------------------------------------------------------------------
+// The Loop rules, in the CPU's order of arithmetic.
+
+// `x`, rounded on its own: no fused multiply-add may absorb the product that produced it.
+fn keep(x: vec3<f32>) -> vec3<f32> {
+    return select(vec3<f32>(0.0), x, params.exact != 0u);
+}
+
+fn mid(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
+    return (a + b) * 0.5;
+}
+
+fn odd_smooth(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
+    return keep((a + b) * 0.375) + (c + d) * 0.125;
+}
+
+fn even_crease(v: vec3<f32>, a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
+    return keep(v * 0.75) + (a + b) * 0.125;
+}
+
+// `w` is 0.75 / k rounded once on the CPU (a WGSL division need not be correctly rounded).
+fn even_smooth(v: vec3<f32>, sum_mid: vec3<f32>, w: f32, cf: f32) -> vec3<f32> {
+    let avg = v * 0.25 + keep(sum_mid * w);
+    return v + keep((avg - v) * cf);
+}
+
+fn cf_of(k: u32) -> f32 {
+    return bitcast<f32>(topo[params.weights_off + 2u * k]);
+}
+
+fn w_of(k: u32) -> f32 {
+    return bitcast<f32>(topo[params.weights_off + 2u * k + 1u]);
+}
+
+fn cross3(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+
+fn normalize_or_z(s: vec3<f32>) -> vec3<f32> {
+    let l = sqrt(s.x * s.x + s.y * s.y + s.z * s.z);
+    // l == l and l < inf: finite (the CPU's `is_finite`).
+    if (l > 0.0 && l < 3.402823e38) {
+        return s * (1.0 / l);
+    }
+    return vec3<f32>(0.0, 0.0, 1.0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The patch in scratch memory. A slot holds two squares (current and next level) over lattice
+// points -1 ..= n + 1, index (i + 1) + (j + 1)(n + 3), three floats each, and two ring sets
+// (3 corners x ring_cap points). Lattice point (i, j) is v0 + i/n (v1 - v0) + j/n (v2 - v0).
+
+fn sq_at(base: u32, n: i32, i: i32, j: i32) -> vec3<f32> {
+    let k = base + 3u * u32((i + 1) + (j + 1) * (n + 3));
+    return vec3<f32>(scratch[k], scratch[k + 1u], scratch[k + 2u]);
+}
+
+fn sq_set(base: u32, n: i32, i: i32, j: i32, p: vec3<f32>) {
+    let k = base + 3u * u32((i + 1) + (j + 1) * (n + 3));
+    scratch[k] = p.x;
+    scratch[k + 1u] = p.y;
+    scratch[k + 2u] = p.z;
+}
+
+fn ring_at(base: u32, c: u32, s: u32) -> vec3<f32> {
+    let k = base + 3u * (c * params.ring_cap + s);
+    return vec3<f32>(scratch[k], scratch[k + 1u], scratch[k + 2u]);
+}
+
+fn ring_set(base: u32, c: u32, s: u32, p: vec3<f32>) {
+    let k = base + 3u * (c * params.ring_cap + s);
+    scratch[k] = p.x;
+    scratch[k + 1u] = p.y;
+    scratch[k + 2u] = p.z;
+}
+
+// Lattice point of corner c, of point m of edge e (from v_e), and of band point m of edge e.
+fn corner_lattice(n: i32, c: u32) -> vec2<i32> {
+    if (c == 0u) { return vec2<i32>(0, 0); }
+    if (c == 1u) { return vec2<i32>(n, 0); }
+    return vec2<i32>(0, n);
+}
+
+fn edge_lattice(n: i32, e: u32, m: i32) -> vec2<i32> {
+    if (e == 0u) { return vec2<i32>(m, 0); }
+    if (e == 1u) { return vec2<i32>(n - m, m); }
+    return vec2<i32>(0, n - m);
+}
+
+fn band_lattice(n: i32, e: u32, m: i32) -> vec2<i32> {
+    if (e == 0u) { return vec2<i32>(m + 1, -1); }
+    if (e == 1u) { return vec2<i32>(n - m, m + 1); }
+    return vec2<i32>(-1, n - m);
+}
+
+// Per-corner constants of the current triangle, read from the tables once.
+struct Corner {
+    off: u32,
+    n: u32,
+    k: u32,
+    closed: bool,
+    rule: u32,
+    crease0: u32,
+    crease1: u32,
+}
+
+fn load_corner(t: u32, c: u32) -> Corner {
+    let v = corner(t, c);
+    let off = topo[params.ring_offsets_off + v];
+    let n = topo[params.ring_offsets_off + v + 1u] - off;
+    let vf = topo[params.vertex_flags_off + v];
+    return Corner(off, n, topo[params.corner_spokes_off + 3u * t + c], (vf & VERTEX_BOUNDARY) == 0u,
+                  (vf >> 1u) & 3u, topo[params.crease_off + 2u * v], topo[params.crease_off + 2u * v + 1u]);
+}
+
+fn spoke_sharp(cr: Corner, s: u32) -> bool {
+    return (topo[params.spoke_flags_off + cr.off + s] & SPOKE_SHARP) != 0u;
+}
+
+// One level, n segments to 2n: rings and corners, then the grid in rows of increasing j, then
+// the bands (subdivide.rs, `Patch::step`).
+fn refine_step(sq: u32, nsq: u32, rg: u32, nrg: u32, corners: array<Corner, 3>, flags: u32, n: i32) {
+    // Indexed dynamically below: a variable, not a value (naga copies a value array to a
+    // temporary at every dynamic index).
+    var cs = corners;
+    var new_corner: array<vec3<f32>, 3>;
+    for (var c = 0u; c < 3u; c++) {
+        let cr = cs[c];
+        let lc = corner_lattice(n, c);
+        let v = sq_at(sq, n, lc.x, lc.y);
+        for (var s = 0u; s < cr.n; s++) {
+            let r = ring_at(rg, c, s);
+            var p: vec3<f32>;
+            if (spoke_sharp(cr, s)) {
+                p = mid(v, r);
+            } else {
+                p = odd_smooth(v, r, ring_at(rg, c, (s + cr.n - 1u) % cr.n), ring_at(rg, c, (s + 1u) % cr.n));
+            }
+            ring_set(nrg, c, s, p);
+        }
+        if (cr.rule == RULE_CORNER) {
+            new_corner[c] = v;
+        } else if (cr.rule == RULE_CREASE) {
+            new_corner[c] = even_crease(v, ring_at(rg, c, cr.crease0), ring_at(rg, c, cr.crease1));
+        } else {
+            var s = vec3<f32>(0.0);
+            for (var q = 0u; q < cr.n; q++) {
+                s = s + mid(v, ring_at(rg, c, q));
+            }
+            new_corner[c] = even_smooth(v, s, w_of(cr.n), cf_of(cr.n));
+        }
+    }
+    let sharp0 = (flags & (SHARP << 0u)) != 0u;
+    let sharp1 = (flags & (SHARP << 1u)) != 0u;
+    let sharp2 = (flags & (SHARP << 2u)) != 0u;
+    let cf6 = cf_of(6u);
+    let w6 = w_of(6u);
+    let m2 = 2 * n;
+    for (var jj = 0; jj <= m2; jj++) {
+        for (var ii = 0; ii <= m2 - jj; ii++) {
+            let i = ii / 2;
+            let j = jj / 2;
+            var p: vec3<f32>;
+            if ((ii & 1) == 0 && (jj & 1) == 0) {
+                if (i == 0 && j == 0) {
+                    p = new_corner[0];
+                } else if (i == n && j == 0) {
+                    p = new_corner[1];
+                } else if (i == 0 && j == n) {
+                    p = new_corner[2];
+                } else {
+                    let v = sq_at(sq, n, i, j);
+                    if (j == 0 && sharp0) {
+                        p = even_crease(v, sq_at(sq, n, i - 1, j), sq_at(sq, n, i + 1, j));
+                    } else if (i + j == n && sharp1) {
+                        p = even_crease(v, sq_at(sq, n, i + 1, j - 1), sq_at(sq, n, i - 1, j + 1));
+                    } else if (i == 0 && sharp2) {
+                        p = even_crease(v, sq_at(sq, n, i, j - 1), sq_at(sq, n, i, j + 1));
+                    } else {
+                        var s = mid(v, sq_at(sq, n, i + 1, j));
+                        s = s + mid(v, sq_at(sq, n, i, j + 1));
+                        s = s + mid(v, sq_at(sq, n, i - 1, j + 1));
+                        s = s + mid(v, sq_at(sq, n, i - 1, j));
+                        s = s + mid(v, sq_at(sq, n, i, j - 1));
+                        s = s + mid(v, sq_at(sq, n, i + 1, j - 1));
+                        p = even_smooth(v, s, w6, cf6);
+                    }
+                }
+            } else if ((jj & 1) == 0) {
+                // (1, 0): between (i, j) and (i + 1, j).
+                let a = sq_at(sq, n, i, j);
+                let b = sq_at(sq, n, i + 1, j);
+                if (j == 0 && sharp0) {
+                    p = mid(a, b);
+                } else {
+                    p = odd_smooth(a, b, sq_at(sq, n, i, j + 1), sq_at(sq, n, i + 1, j - 1));
+                }
+            } else if ((ii & 1) == 0) {
+                // (0, 1): between (i, j) and (i, j + 1).
+                let a = sq_at(sq, n, i, j);
+                let b = sq_at(sq, n, i, j + 1);
+                if (i == 0 && sharp2) {
+                    p = mid(a, b);
+                } else {
+                    p = odd_smooth(a, b, sq_at(sq, n, i + 1, j), sq_at(sq, n, i - 1, j + 1));
+                }
+            } else {
+                // (1, 1): between (i + 1, j) and (i, j + 1).
+                let a = sq_at(sq, n, i + 1, j);
+                let b = sq_at(sq, n, i, j + 1);
+                if (i + j + 1 == n && sharp1) {
+                    p = mid(a, b);
+                } else {
+                    p = odd_smooth(a, b, sq_at(sq, n, i, j), sq_at(sq, n, i + 1, j + 1));
+                }
+            }
+            sq_set(nsq, m2, ii, jj, p);
+        }
+    }
+    for (var e = 0u; e < 3u; e++) {
+        if ((flags & (INTERIOR << e)) == 0u) {
+            continue;
+        }
+        let c0 = cs[e];
+        let c1 = cs[(e + 1u) % 3u];
+        var q = 0;
+        var l = band_lattice(m2, e, q);
+        sq_set(nsq, m2, l.x, l.y, ring_at(nrg, e, (c0.k + c0.n - 1u) % c0.n));
+        q++;
+        for (var m = 0; m < n; m++) {
+            let bl = band_lattice(n, e, m);
+            let band_m = sq_at(sq, n, bl.x, bl.y);
+            let em = edge_lattice(n, e, m);
+            let em1 = edge_lattice(n, e, m + 1);
+            if (m >= 1) {
+                let bp = band_lattice(n, e, m - 1);
+                l = band_lattice(m2, e, q);
+                sq_set(nsq, m2, l.x, l.y, odd_smooth(sq_at(sq, n, em.x, em.y), band_m,
+                                                     sq_at(sq, n, em1.x, em1.y), sq_at(sq, n, bp.x, bp.y)));
+                q++;
+            }
+            if (m + 2 <= n) {
+                let bn = band_lattice(n, e, m + 1);
+                l = band_lattice(m2, e, q);
+                sq_set(nsq, m2, l.x, l.y, odd_smooth(sq_at(sq, n, em1.x, em1.y), band_m,
+                                                     sq_at(sq, n, em.x, em.y), sq_at(sq, n, bn.x, bn.y)));
+                q++;
+            }
+        }
+        l = band_lattice(m2, e, q);
+        sq_set(nsq, m2, l.x, l.y, ring_at(nrg, (e + 1u) % 3u, (c1.k + 2u) % c1.n));
+    }
+}
+
+// Whether lattice neighbour (a, b) of the patch exists (is not across a boundary edge).
+fn available(flags: u32, n: i32, a: i32, b: i32) -> bool {
+    return (b >= 0 || (flags & (INTERIOR << 0u)) != 0u)
+        && (a >= 0 || (flags & (INTERIOR << 2u)) != 0u)
+        && (a + b <= n || (flags & (INTERIOR << 1u)) != 0u);
+}
+
+// Area-weighted normal at lattice point (i, j), not a corner: the six neighbours in
+// counter-clockwise order, skipping faces across boundary edges (`Patch::grid_normal`).
+fn grid_normal(sq: u32, flags: u32, n: i32, i: i32, j: i32) -> vec3<f32> {
+    var d = array<vec2<i32>, 6>(vec2<i32>(1, 0), vec2<i32>(0, 1), vec2<i32>(-1, 1),
+                                vec2<i32>(-1, 0), vec2<i32>(0, -1), vec2<i32>(1, -1));
+    let v = sq_at(sq, n, i, j);
+    var s = vec3<f32>(0.0);
+    for (var k = 0u; k < 6u; k++) {
+        let d0 = d[k];
+        let d1 = d[(k + 1u) % 6u];
+        if (available(flags, n, i + d0.x, j + d0.y) && available(flags, n, i + d1.x, j + d1.y)) {
+            let a = sq_at(sq, n, i + d0.x, j + d0.y) - v;
+            let b = sq_at(sq, n, i + d1.x, j + d1.y) - v;
+            s = s + cross3(a, b);
+        }
+    }
+    return s;
+}
+
+fn corner_normal(sq: u32, rg: u32, cr: Corner, n: i32, c: u32) -> vec3<f32> {
+    let lc = corner_lattice(n, c);
+    let v = sq_at(sq, n, lc.x, lc.y);
+    var faces = cr.n;
+    if (!cr.closed) {
+        faces = cr.n - 1u;
+    }
+    var s = vec3<f32>(0.0);
+    for (var f = 0u; f < faces; f++) {
+        s = s + cross3(ring_at(rg, c, f) - v, ring_at(rg, c, (f + 1u) % cr.n) - v);
+    }
+    return s;
+}
+
+fn write_vertex(index: u32, p: vec3<f32>, nrm: vec3<f32>) {
+    out_positions[3u * index] = p.x;
+    out_positions[3u * index + 1u] = p.y;
+    out_positions[3u * index + 2u] = p.z;
+    out_normals[3u * index] = nrm.x;
+    out_normals[3u * index + 1u] = nrm.y;
+    out_normals[3u * index + 2u] = nrm.z;
+}
+
+// Step 1 (one invocation per scratch slot, striding over the coarse triangles): refine the
+// triangle's patch from level 0 to L and write the vertices it owns.
+@compute @workgroup_size(64)
+fn patch_main(@builtin(global_invocation_id) gid: vec3<u32>,
+              @builtin(num_workgroups) groups: vec3<u32>) {
+    let slot = linear_id(gid, groups);
+    if (slot >= params.slots) {
+        return;
+    }
+    let ring_floats = 9u * params.ring_cap;
+    let base = slot * (2u * params.square_floats + 2u * ring_floats);
+    let sq_a = base;
+    let sq_b = base + params.square_floats;
+    let rg_a = base + 2u * params.square_floats;
+    let rg_b = rg_a + ring_floats;
+    let mm = i32(params.m);
+    for (var t = slot; t < params.triangle_count; t += params.slots) {
+        var cs = array<Corner, 3>(load_corner(t, 0u), load_corner(t, 1u), load_corner(t, 2u));
+        let flags = topo[params.tri_flags_off + t];
+        // Level 0: the three corners, their rings and the one opposite vertex per band.
+        for (var c = 0u; c < 3u; c++) {
+            let lc = corner_lattice(1, c);
+            sq_set(sq_a, 1, lc.x, lc.y, coarse_position(corner(t, c)));
+            for (var s = 0u; s < cs[c].n; s++) {
+                ring_set(rg_a, c, s, coarse_position(topo[params.ring_off + cs[c].off + s]));
+            }
+        }
+        for (var e = 0u; e < 3u; e++) {
+            if ((flags & (INTERIOR << e)) != 0u) {
+                let cr = cs[e];
+                let l = band_lattice(1, e, 0);
+                sq_set(sq_a, 1, l.x, l.y, ring_at(rg_a, e, (cr.k + cr.n - 1u) % cr.n));
+            }
+        }
+        // Ping-pong between the two squares and ring sets.
+        var sq = sq_a;
+        var nsq = sq_b;
+        var rg = rg_a;
+        var nrg = rg_b;
+        var n = 1;
+        while (n < mm) {
+            refine_step(sq, nsq, rg, nrg, cs, flags, n);
+            let ts = sq;
+            sq = nsq;
+            nsq = ts;
+            let tr = rg;
+            rg = nrg;
+            nrg = tr;
+            n *= 2;
+        }
+        // Owned output vertices, numbered as subdivide.rs numbers them.
+        for (var c = 0u; c < 3u; c++) {
+            if ((flags & (OWNS_VERTEX << c)) != 0u) {
+                let lc = corner_lattice(mm, c);
+                write_vertex(corner(t, c), sq_at(sq, mm, lc.x, lc.y),
+                             normalize_or_z(corner_normal(sq, rg, cs[c], mm, c)));
+            }
+        }
+        for (var e = 0u; e < 3u; e++) {
+            if ((flags & (OWNS_EDGE << e)) == 0u) {
+                continue;
+            }
+            let ebase = params.coarse_vertices + topo[params.edges_off + 3u * t + e] * params.per_edge;
+            for (var k = 1; k < mm; k++) {
+                let l = edge_lattice(mm, e, k);
+                write_vertex(ebase + u32(k - 1), sq_at(sq, mm, l.x, l.y),
+                             normalize_or_z(grid_normal(sq, flags, mm, l.x, l.y)));
+            }
+        }
+        var q = params.coarse_vertices + params.edge_count * params.per_edge + t * params.per_tri;
+        for (var j = 1; j < mm; j++) {
+            for (var i = 1; i < mm - j; i++) {
+                write_vertex(q, sq_at(sq, mm, i, j), normalize_or_z(grid_normal(sq, flags, mm, i, j)));
+                q++;
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fine triangles. Their lattice corners come from the recursive 1-to-4 split (the same as
+// flat.wgsl and subdivide.rs `subtriangle_cells`): a triangle is (C0, sigma, s) with corners
+// C0, C0 + sigma s e_i, C0 + sigma s e_j; the Center child flips sigma.
+
+fn fine_corners(path: u32) -> array<vec2<i32>, 3> {
+    var c0 = vec2<i32>(0, 0);
+    var sigma = 1;
+    var s = i32(params.m);
+    for (var k = 0u; k < params.level; k++) {
+        let h = s / 2;
+        let child = (path >> (2u * (params.level - 1u - k))) & 3u;
+        if (child == 1u) {
+            c0.x += sigma * h;
+        } else if (child == 2u) {
+            c0 += vec2<i32>(sigma * h, sigma * h);
+            sigma = -sigma;
+        } else if (child == 3u) {
+            c0.y += sigma * h;
+        }
+        s = h;
+    }
+    return array<vec2<i32>, 3>(c0, c0 + vec2<i32>(sigma, 0), c0 + vec2<i32>(0, sigma));
+}
+
+// The path of the fine triangle whose centroid, times 3, is q.
+fn locate(q: vec2<i32>) -> u32 {
+    var c0 = vec2<i32>(0, 0);
+    var sigma = 1;
+    var s = i32(params.m);
+    var path = 0u;
+    for (var k = 0u; k < params.level; k++) {
+        let h = s / 2;
+        let l1 = sigma * (q.x - 3 * c0.x);
+        let l2 = sigma * (q.y - 3 * c0.y);
+        let l0 = 3 * s - l1 - l2;
+        var child = 2u;
+        if (l0 > 3 * h) {
+            child = 0u;
+        } else if (l1 > 3 * h) {
+            child = 1u;
+            c0.x += sigma * h;
+        } else if (l2 > 3 * h) {
+            child = 3u;
+            c0.y += sigma * h;
+        } else {
+            c0 += vec2<i32>(sigma * h, sigma * h);
+            sigma = -sigma;
+        }
+        path = path * 4u + child;
+        s = h;
+    }
+    return path;
+}
+
+// Output index of lattice point (i, j) of triangle t (subdivide.rs numbering): a corner is its
+// coarse vertex, an edge point is counted from the edge owner's v_e, an interior point lies in
+// rows of increasing j, each in increasing i.
+fn vertex_index(t: u32, i: i32, j: i32) -> u32 {
+    let mm = i32(params.m);
+    if (i == 0 && j == 0) { return corner(t, 0u); }
+    if (i == mm && j == 0) { return corner(t, 1u); }
+    if (i == 0 && j == mm) { return corner(t, 2u); }
+    var e = 3u;
+    var k = 0;
+    if (j == 0) {
+        e = 0u; k = i;
+    } else if (i + j == mm) {
+        e = 1u; k = j;
+    } else if (i == 0) {
+        e = 2u; k = mm - j;
+    }
+    if (e == 3u) {
+        let jm = u32(j - 1);
+        let row = jm * (params.m - 1u) - jm * (jm + 1u) / 2u;
+        return params.coarse_vertices + params.edge_count * params.per_edge + t * params.per_tri
+            + row + u32(i - 1);
+    }
+    let ebase = params.coarse_vertices + topo[params.edges_off + 3u * t + e] * params.per_edge;
+    if ((topo[params.tri_flags_off + t] & (OWNS_EDGE << e)) != 0u) {
+        return ebase + u32(k - 1);
+    }
+    return ebase + u32(mm - 1 - k);
+}
+
+fn out_position(v: u32) -> vec3<f32> {
+    return vec3<f32>(out_positions[3u * v], out_positions[3u * v + 1u], out_positions[3u * v + 2u]);
+}
+
+// Step 2 (one invocation per fine triangle): its indices, then its area and colour from the
+// positions of step 1: the tree node along its path and the representative normal with the
+// largest dot product with its (unnormalised) face normal, as colour.rs chooses them.
+@compute @workgroup_size(64)
+fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
+              @builtin(num_workgroups) groups: vec3<u32>) {
+    let g = linear_id(gid, groups);
+    if (g >= params.fine_total) {
+        return;
+    }
+    let per = 1u << (2u * params.level);
+    let t = g / per;
+    let path = g % per;
+    let cs = fine_corners(path);
+    let i0 = vertex_index(t, cs[0].x, cs[0].y);
+    let i1 = vertex_index(t, cs[1].x, cs[1].y);
+    let i2 = vertex_index(t, cs[2].x, cs[2].y);
+    out_indices[3u * g] = i0;
+    out_indices[3u * g + 1u] = i1;
+    out_indices[3u * g + 2u] = i2;
+
+    let p0 = out_position(i0);
+    let x = cross3(out_position(i1) - p0, out_position(i2) - p0);
+    let len = sqrt(x.x * x.x + x.y * x.y + x.z * x.z);
+    let rec = hce_records[t];
+    let node = hce_tree_node(rec, params.level, path);
+    let jn = hce_choose_normal(rec, x);
+    let rgb = hce_rgb9e5(hce_colours[rec.colour_start + node * rec.normal_count + jn]);
+    out_faces[g] = vec4<f32>(rgb, 0.5 * len);
+}
+
+// Area-weighted sums with a plain-mean fallback for zero-area neighbourhoods.
+struct Acc {
+    weighted: vec3<f32>,
+    area: f32,
+    plain: vec3<f32>,
+    count: f32,
+}
+
+fn acc_add(acc: ptr<function, Acc>, g: u32) {
+    let f = out_faces[g];
+    (*acc).weighted = (*acc).weighted + f.xyz * f.w;
+    (*acc).plain += f.xyz;
+    (*acc).area += f.w;
+    (*acc).count += 1.0;
+}
+
+// Adds the fine triangles of coarse triangle t around lattice point (i, j) in a fixed order: up
+// triangles anchored at (i, j), (i - 1, j), (i, j - 1), then down triangles at (i, j),
+// (i + 1, j), (i, j + 1).
+fn gather(acc: ptr<function, Acc>, t: u32, i: i32, j: i32) {
+    let mm = i32(params.m);
+    let base = t << (2u * params.level);
+    var ups = array<vec2<i32>, 3>(vec2<i32>(i, j), vec2<i32>(i - 1, j), vec2<i32>(i, j - 1));
+    for (var k = 0; k < 3; k++) {
+        let u = ups[k];
+        if (u.x >= 0 && u.y >= 0 && u.x + u.y < mm) {
+            acc_add(acc, base + locate(vec2<i32>(3 * u.x + 1, 3 * u.y + 1)));
+        }
+    }
+    var downs = array<vec2<i32>, 3>(vec2<i32>(i, j), vec2<i32>(i + 1, j), vec2<i32>(i, j + 1));
+    for (var k = 0; k < 3; k++) {
+        let d = downs[k];
+        if (d.x >= 1 && d.y >= 1 && d.x + d.y <= mm) {
+            acc_add(acc, base + locate(vec2<i32>(3 * d.x - 1, 3 * d.y - 1)));
+        }
+    }
+}
+
+// Step 3 (one invocation per output vertex): gather every incident fine triangle, from each
+// coarse triangle at a coarse vertex, from both sides of a coarse edge, or from the one
+// triangle of an interior point, and write the area-weighted mean colour.
+@compute @workgroup_size(64)
+fn colours_main(@builtin(global_invocation_id) gid: vec3<u32>,
+                @builtin(num_workgroups) groups: vec3<u32>) {
+    let v = linear_id(gid, groups);
+    if (v >= params.vertex_total) {
+        return;
+    }
+    let mm = i32(params.m);
+    let edge_base = params.coarse_vertices;
+    let interior_base = edge_base + params.edge_count * params.per_edge;
+    var acc = Acc(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0);
+    if (v < edge_base) {
+        let s = topo[params.vertex_corner_offsets_off + v];
+        let e = topo[params.vertex_corner_offsets_off + v + 1u];
+        for (var k = s; k < e; k++) {
+            let cr = topo[params.vertex_corners_off + k];
+            let l = corner_lattice(mm, cr % 3u);
+            gather(&acc, cr / 3u, l.x, l.y);
+        }
+    } else if (v < interior_base) {
+        let id = (v - edge_base) / params.per_edge;
+        let kk = i32((v - edge_base) % params.per_edge) + 1;
+        let s = topo[params.edge_side_offsets_off + id];
+        let e = topo[params.edge_side_offsets_off + id + 1u];
+        for (var q = s; q < e; q++) {
+            let side = topo[params.edge_sides_off + q];
+            let t = side / 3u;
+            let ed = side % 3u;
+            var k = kk;
+            if ((topo[params.tri_flags_off + t] & (OWNS_EDGE << ed)) == 0u) {
+                k = mm - kk;
+            }
+            let l = edge_lattice(mm, ed, k);
+            gather(&acc, t, l.x, l.y);
+        }
+    } else {
+        let t = (v - interior_base) / params.per_tri;
+        var q = (v - interior_base) % params.per_tri;
+        var j = 1u;
+        while (q >= params.m - 1u - j) {
+            q -= params.m - 1u - j;
+            j++;
+        }
+        gather(&acc, t, i32(q) + 1, i32(j));
+    }
+    var colour = vec3<f32>(0.0);
+    if (acc.area > 0.0) {
+        colour = acc.weighted / acc.area;
+    } else if (acc.count > 0.0) {
+        colour = acc.plain / acc.count;
+    }
+    out_colours[v] = vec4<f32>(colour, 1.0);
+}

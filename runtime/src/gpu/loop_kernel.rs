@@ -1,0 +1,571 @@
+//! Loop subdivision with HCE colours on the GPU (`loop.wgsl`): how
+//! [`ObjectKind::Multiresolution`](hce_format::ObjectKind::Multiresolution) objects are drawn
+//! (Concheiro et al., "Synthesis of multiresolution scenes with global illumination on a GPU",
+//! GRAPP 2012). The kernel is a port of the CPU reference, [`crate::subdivide`] followed by
+//! [`crate::colour::apply_baked_colours`], reading the same adjacency tables:
+//!
+//! 1. `patch_main`, one invocation per coarse triangle: the triangle's local patch (grid, bands,
+//!    corner rings) refined level by level in the CPU's order of arithmetic, then the positions
+//!    and normals of the output vertices the triangle owns (each vertex has exactly one owner,
+//!    so vertices shared across coarse edges are bitwise equal).
+//! 2. `faces_main`, one invocation per fine triangle: indices in the CPU's numbering, area, and
+//!    the HCE colour (tree node along the path, representative normal with the largest dot
+//!    product with the face normal).
+//! 3. `colours_main`, one invocation per output vertex: area-weighted mean colour of the incident
+//!    fine triangles, across coarse edges and vertices.
+//!
+//! The patch lives in a per-slot region of a storage buffer ("scratch"), not in workgroup
+//! memory: at level 5 it needs about 30 KiB per triangle and at level 6 about 110 KiB, more than
+//! the 16 KiB of workgroup memory WebGPU guarantees. Invocations stride over the coarse
+//! triangles, so the scratch buffer holds at most [`SCRATCH_BUDGET`] bytes whatever the mesh.
+//!
+//! Output numbering is exactly that of [`crate::subdivide`]:
+//! `[V coarse][E edges × (M − 1)][F × interior]`, fine triangle `t · 4^L + path`.
+//!
+//! Use: [`LoopKernel::new`] once per device, [`LoopKernel::upload`] once per object, then
+//! [`LoopKernel::refine_into`] whenever the level changes; it reuses the output buffers when they
+//! are large enough, so a viewer can refine every frame without reallocating. The shape of the
+//! API is that of [`FlatKernel`](super::FlatKernel).
+
+use hce_format::Object;
+
+use super::cpu_reference::{validate_tables, FlatTopology, RefinedMesh};
+use super::decode::{records_words, TREE_WGSL};
+use super::flat::KernelTiming;
+use super::util::{check_size, dispatch_size, read_back, storage_init, storage_output, WORKGROUP};
+use super::{GpuContext, GpuError};
+use crate::subdivide::{prepare, MAX_LEVEL};
+
+/// Upper bound of the scratch buffer (bytes): the number of coarse triangles refined at once is
+/// this divided by one triangle's patch size (or the device's storage-binding limit, if lower).
+pub const SCRATCH_BUDGET: u64 = 256 << 20;
+
+/// The kernel's uniform block (`Params` in `loop.wgsl`).
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+struct Params {
+    level: u32,
+    m: u32,
+    coarse_vertices: u32,
+    edge_count: u32,
+    triangle_count: u32,
+    per_edge: u32,
+    per_tri: u32,
+    vertex_total: u32,
+    fine_total: u32,
+    slots: u32,
+    square_floats: u32,
+    ring_cap: u32,
+    offsets: [u32; SECTIONS],
+    /// Always 1 (see `keep` in `loop.wgsl`).
+    exact: u32,
+    _pad: u32,
+}
+
+/// Sections packed into the `topo` buffer, in this order (see [`LoopKernel::upload`]).
+const SECTIONS: usize = 14;
+
+/// Bits of the per-triangle flags word (`OWNS_EDGE` … in `loop.wgsl`).
+const OWNS_EDGE: u32 = 1;
+const OWNS_VERTEX: u32 = 8;
+const INTERIOR: u32 = 64;
+const SHARP: u32 = 512;
+
+/// The compiled pipelines of the three steps.
+pub struct LoopKernel {
+    patch: wgpu::ComputePipeline,
+    faces: wgpu::ComputePipeline,
+    colours: wgpu::ComputePipeline,
+}
+
+/// An object's tables on the GPU, validated: every index the kernel reads was checked by
+/// [`LoopKernel::upload`].
+pub struct LoopObject {
+    pub name: String,
+    pub vertex_count: u32,
+    pub edge_count: u32,
+    pub triangle_count: u32,
+    /// Largest valence (ring length) of the control mesh: the ring capacity of a scratch slot.
+    pub max_valence: u32,
+    coarse_positions: wgpu::Buffer,
+    topo: wgpu::Buffer,
+    offsets: [u32; SECTIONS],
+    records: wgpu::Buffer,
+    bits: wgpu::Buffer,
+    normals: wgpu::Buffer,
+    colours: wgpu::Buffer,
+}
+
+/// Output buffers of a refinement: drawable as they are (`positions`, `normals` and `colours` as
+/// vertex buffers, `indices` as an index buffer), in the numbering of [`crate::subdivide`].
+pub struct LoopOutput {
+    pub level: u32,
+    pub vertex_count: u32,
+    pub triangle_count: u32,
+    /// `x, y, z` f32 per vertex (stride 12).
+    pub positions: wgpu::Buffer,
+    /// Unit `x, y, z` f32 per vertex (stride 12), as [`crate::subdivide::Refined::normals`].
+    pub normals: wgpu::Buffer,
+    /// Linear `r, g, b, 1` f32 per vertex (stride 16).
+    pub colours: wgpu::Buffer,
+    /// `u32` ×3 per fine triangle.
+    pub indices: wgpu::Buffer,
+    /// Linear `r, g, b`, area per fine triangle.
+    pub faces: wgpu::Buffer,
+    /// The patches of the coarse triangles in flight (kernel-private).
+    scratch: wgpu::Buffer,
+}
+
+/// A refined mesh read back from the GPU: [`RefinedMesh`] (positions, vertex and face colours,
+/// indices) plus the vertex normals.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoopMesh {
+    pub mesh: RefinedMesh,
+    /// Unit `x, y, z` per vertex.
+    pub normals: Vec<f32>,
+}
+
+impl LoopOutput {
+    /// Copies the refined mesh (without normals) back to the CPU.
+    pub fn read_back(&self, ctx: &GpuContext) -> Result<RefinedMesh, GpuError> {
+        let v = self.vertex_count as usize;
+        let f = self.triangle_count as usize;
+        Ok(RefinedMesh {
+            level: self.level,
+            positions: read_back(ctx, &self.positions, 3 * v)?,
+            colours: read_back(ctx, &self.colours, 4 * v)?,
+            indices: read_back(ctx, &self.indices, 3 * f)?,
+            face_colours: read_back(ctx, &self.faces, 4 * f)?,
+        })
+    }
+
+    /// Copies the vertex normals back to the CPU (`x, y, z` per vertex).
+    pub fn read_back_normals(&self, ctx: &GpuContext) -> Result<Vec<f32>, GpuError> {
+        read_back(ctx, &self.normals, 3 * self.vertex_count as usize)
+    }
+
+    /// Bytes the kernel writes to its outputs (positions, normals, colours, indices, face
+    /// colours); the scratch traffic of the patches is not counted.
+    pub fn bytes_written(&self) -> u64 {
+        u64::from(self.vertex_count) * (12 + 12 + 16) + u64::from(self.triangle_count) * (12 + 16)
+    }
+}
+
+/// Floats of one scratch square at `level` and of one slot (two squares, two ring sets).
+fn slot_floats(level: u32, max_valence: u32) -> (u64, u64) {
+    let w = (1u64 << level) + 3;
+    let square = 3 * w * w;
+    (square, 2 * square + 2 * 9 * u64::from(max_valence))
+}
+
+impl LoopKernel {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let source = format!("{TREE_WGSL}\n{}", include_str!("loop.wgsl"));
+        let module = ctx
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("hce loop"),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+        // Each entry point gets the layout of the bindings it uses, which keeps every step
+        // within the default limit of 8 storage buffers per stage.
+        let make = |entry: &str| {
+            ctx.device
+                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(entry),
+                    layout: None,
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
+        };
+        Self {
+            patch: make("patch_main"),
+            faces: make("faces_main"),
+            colours: make("colours_main"),
+        }
+    }
+
+    /// Validates `object` (adjacency tables as [`crate::subdivide`] reads them, edge and
+    /// vertex incidence, HCE records, trees, normals and colours) and uploads it. A malformed
+    /// table is an error here, never an out-of-bounds read on the GPU.
+    pub fn upload(&self, ctx: &GpuContext, object: &Object) -> Result<LoopObject, GpuError> {
+        let invalid = |reason: String| GpuError::InvalidObject {
+            object: object.name.clone(),
+            reason,
+        };
+        validate_tables(object)?;
+        let mesh = &object.mesh;
+        let prep = prepare(mesh).map_err(|e| invalid(e.to_string()))?;
+        let topology = FlatTopology::new(&object.name, mesh)?;
+        let nv = mesh.vertex_count();
+        let nf = mesh.triangle_count();
+        let max_valence = (0..nv)
+            .map(|v| mesh.ring_offsets[v + 1] - mesh.ring_offsets[v])
+            .max()
+            .unwrap_or(0);
+        let mut tri_flags = vec![0u32; nf];
+        for (t, flags) in tri_flags.iter_mut().enumerate() {
+            let tri = mesh.triangle(t);
+            // `e` is both a corner and an edge index (edge e starts at corner e).
+            #[allow(clippy::needless_range_loop)]
+            for e in 0..3 {
+                let s = 3 * t + e;
+                if prep.owns_edge[s] {
+                    *flags |= OWNS_EDGE << e;
+                }
+                if prep.vertex_owner[tri[e] as usize] == s as u32 {
+                    *flags |= OWNS_VERTEX << e;
+                }
+                if mesh.neighbours[s] != hce_format::NO_NEIGHBOUR {
+                    *flags |= INTERIOR << e;
+                }
+                let spoke = mesh.ring_offsets[tri[e] as usize] + mesh.corner_spokes[s];
+                if mesh.spoke_flags[spoke as usize] & hce_format::SPOKE_SHARP != 0 {
+                    *flags |= SHARP << e;
+                }
+            }
+        }
+        let crease: Vec<u32> = prep.crease_spokes.iter().flatten().copied().collect();
+        // Per valence k: cf(k) and 0.75 / k, both rounded on the CPU exactly as subdivide.rs
+        // rounds them (a WGSL division need not be correctly rounded).
+        let weights: Vec<u32> = (0..=max_valence.max(6) as usize)
+            .flat_map(|k| {
+                let w = if k < 2 { 0.0 } else { 0.75 / k as f32 };
+                [
+                    prep.cf.get(k).copied().unwrap_or(0.0).to_bits(),
+                    w.to_bits(),
+                ]
+            })
+            .collect();
+        let sections: [&[u32]; SECTIONS] = [
+            &mesh.triangles,
+            &mesh.ring_offsets,
+            &mesh.ring,
+            &mesh.spoke_flags,
+            &mesh.vertex_flags,
+            &mesh.corner_spokes,
+            &mesh.edges,
+            &tri_flags,
+            &crease,
+            &weights,
+            &topology.edge_side_offsets,
+            &topology.edge_sides,
+            &topology.vertex_corner_offsets,
+            &topology.vertex_corners,
+        ];
+        let mut packed = Vec::with_capacity(sections.iter().map(|s| s.len()).sum());
+        let mut offsets = [0u32; SECTIONS];
+        for (i, s) in sections.iter().enumerate() {
+            offsets[i] = u32::try_from(packed.len()).map_err(|_| GpuError::TooLarge {
+                what: "topology tables",
+                needed: packed.len() as u64 * 4,
+                limit: u64::from(u32::MAX),
+            })?;
+            packed.extend_from_slice(s);
+        }
+        check_size(ctx, "topology tables", packed.len() as u64 * 4)?;
+        check_size(ctx, "coarse positions", mesh.positions.len() as u64 * 4)?;
+        check_size(ctx, "HCE colours", object.colours.len() as u64 * 4)?;
+        check_size(ctx, "HCE bits", object.bits.len() as u64 * 4)?;
+        check_size(ctx, "HCE normals", object.normals.len() as u64 * 12)?;
+        Ok(LoopObject {
+            name: object.name.clone(),
+            vertex_count: topology.vertex_count,
+            edge_count: topology.edge_count,
+            triangle_count: topology.triangle_count,
+            max_valence,
+            coarse_positions: storage_init(ctx, "coarse positions", &mesh.positions),
+            topo: storage_init(ctx, "loop topology", &packed),
+            offsets,
+            records: storage_init(ctx, "records", &records_words(object)),
+            bits: storage_init(ctx, "bits", &object.bits),
+            normals: storage_init(ctx, "normals", object.normals.as_flattened()),
+            colours: storage_init(ctx, "colours", &object.colours),
+        })
+    }
+
+    /// Output buffers (and scratch) sized for `level`, checked against the device limits.
+    pub fn allocate(
+        &self,
+        ctx: &GpuContext,
+        object: &LoopObject,
+        level: u32,
+    ) -> Result<LoopOutput, GpuError> {
+        let (v, f) = counts(object, level)?;
+        let vertex = wgpu::BufferUsages::VERTEX;
+        let (_, slot_bytes, slots) = scratch_shape(ctx, object, level)?;
+        Ok(LoopOutput {
+            level,
+            vertex_count: v,
+            triangle_count: f,
+            positions: storage_output(
+                ctx,
+                "loop positions",
+                check_size(ctx, "refined positions", u64::from(v) * 12)?,
+                vertex,
+            ),
+            normals: storage_output(
+                ctx,
+                "loop normals",
+                check_size(ctx, "refined normals", u64::from(v) * 12)?,
+                vertex,
+            ),
+            colours: storage_output(
+                ctx,
+                "loop colours",
+                check_size(ctx, "refined colours", u64::from(v) * 16)?,
+                vertex,
+            ),
+            indices: storage_output(
+                ctx,
+                "loop indices",
+                check_size(ctx, "refined indices", u64::from(f) * 12)?,
+                wgpu::BufferUsages::INDEX,
+            ),
+            faces: storage_output(
+                ctx,
+                "loop faces",
+                check_size(ctx, "refined faces", u64::from(f) * 16)?,
+                wgpu::BufferUsages::empty(),
+            ),
+            scratch: storage_output(
+                ctx,
+                "loop scratch",
+                check_size(ctx, "subdivision scratch", slot_bytes * u64::from(slots))?,
+                wgpu::BufferUsages::empty(),
+            ),
+        })
+    }
+
+    /// Refines `object` to `level` (0..=6) into `out`, reallocating only when `out` is too
+    /// small (or absent). With `measure`, returns the GPU time of the three dispatches when the
+    /// adapter has timestamp queries (this waits for the GPU).
+    pub fn refine_into(
+        &self,
+        ctx: &GpuContext,
+        object: &LoopObject,
+        level: u32,
+        out: &mut Option<LoopOutput>,
+        measure: bool,
+    ) -> Result<KernelTiming, GpuError> {
+        let (v, f) = counts(object, level)?;
+        let (square_floats, slot_bytes, wanted_slots) = scratch_shape(ctx, object, level)?;
+        let fits = out.as_ref().is_some_and(|o| {
+            o.positions.size() >= u64::from(v) * 12
+                && o.normals.size() >= u64::from(v) * 12
+                && o.colours.size() >= u64::from(v) * 16
+                && o.indices.size() >= u64::from(f) * 12
+                && o.faces.size() >= u64::from(f) * 16
+                && o.scratch.size() >= slot_bytes
+        });
+        if !fits {
+            *out = Some(self.allocate(ctx, object, level)?);
+        }
+        let o = out.as_mut().expect("allocated above");
+        o.level = level;
+        o.vertex_count = v;
+        o.triangle_count = f;
+        // A reused scratch buffer may hold fewer slots at this level than a fresh one would.
+        let slots = wanted_slots
+            .min((o.scratch.size() / slot_bytes) as u32)
+            .max(1);
+
+        let m = 1u32 << level;
+        let params = Params {
+            level,
+            m,
+            coarse_vertices: object.vertex_count,
+            edge_count: object.edge_count,
+            triangle_count: object.triangle_count,
+            per_edge: m - 1,
+            per_tri: (m - 1) * m.saturating_sub(2) / 2,
+            vertex_total: v,
+            fine_total: f,
+            slots,
+            square_floats: square_floats as u32,
+            ring_cap: object.max_valence,
+            offsets: object.offsets,
+            exact: 1,
+            _pad: 0,
+        };
+        let uniform = super::util::uniform_init(ctx, "loop params", &params);
+        let group = |pipeline: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| {
+            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("hce loop"),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &buffers
+                    .iter()
+                    .map(|&(binding, b)| wgpu::BindGroupEntry {
+                        binding,
+                        resource: b.as_entire_binding(),
+                    })
+                    .collect::<Vec<_>>(),
+            })
+        };
+        let patch_group = group(
+            &self.patch,
+            &[
+                (0, &uniform),
+                (1, &object.coarse_positions),
+                (2, &object.topo),
+                (7, &o.scratch),
+                (8, &o.positions),
+                (9, &o.normals),
+            ],
+        );
+        let faces_group = group(
+            &self.faces,
+            &[
+                (0, &uniform),
+                (2, &object.topo),
+                (3, &object.records),
+                (4, &object.bits),
+                (5, &object.normals),
+                (6, &object.colours),
+                (8, &o.positions),
+                (10, &o.indices),
+                (11, &o.faces),
+            ],
+        );
+        let colours_group = group(
+            &self.colours,
+            &[
+                (0, &uniform),
+                (2, &object.topo),
+                (11, &o.faces),
+                (12, &o.colours),
+            ],
+        );
+        let timestamps = measure && ctx.description.timestamps;
+        let query = timestamps.then(|| {
+            ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("hce loop timing"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            })
+        });
+        let slot_groups = dispatch_size(ctx, u64::from(slots))?;
+        let face_groups = dispatch_size(ctx, u64::from(f))?;
+        let vertex_groups = dispatch_size(ctx, u64::from(v))?;
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("hce loop"),
+                timestamp_writes: query.as_ref().map(|q| wgpu::ComputePassTimestampWrites {
+                    query_set: q,
+                    beginning_of_pass_write_index: Some(0),
+                    end_of_pass_write_index: Some(1),
+                }),
+            });
+            // wgpu orders the dispatches: each one sees the previous one's writes.
+            pass.set_pipeline(&self.patch);
+            pass.set_bind_group(0, &patch_group, &[]);
+            pass.dispatch_workgroups(slot_groups.0, slot_groups.1, 1);
+            pass.set_pipeline(&self.faces);
+            pass.set_bind_group(0, &faces_group, &[]);
+            pass.dispatch_workgroups(face_groups.0, face_groups.1, 1);
+            pass.set_pipeline(&self.colours);
+            pass.set_bind_group(0, &colours_group, &[]);
+            pass.dispatch_workgroups(vertex_groups.0, vertex_groups.1, 1);
+        }
+        let resolve = query.as_ref().map(|q| {
+            let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps"),
+                size: 16,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            encoder.resolve_query_set(q, 0..2, &buf, 0);
+            buf
+        });
+        ctx.queue.submit([encoder.finish()]);
+        let mut timing = KernelTiming::default();
+        if let Some(buf) = resolve {
+            let ticks: Vec<u64> = read_back(ctx, &buf, 2)?;
+            let period = f64::from(ctx.queue.get_timestamp_period());
+            timing.gpu_seconds = Some(ticks[1].saturating_sub(ticks[0]) as f64 * period * 1e-9);
+        } else if measure {
+            ctx.wait()?;
+        }
+        Ok(timing)
+    }
+}
+
+/// Floats per square, bytes per slot and the number of slots (coarse triangles refined at once)
+/// at `level`, within [`SCRATCH_BUDGET`] and the device's storage-binding limit.
+fn scratch_shape(
+    ctx: &GpuContext,
+    object: &LoopObject,
+    level: u32,
+) -> Result<(u64, u64, u32), GpuError> {
+    let (square, slot) = slot_floats(level, object.max_valence);
+    let slot_bytes = slot * 4;
+    let limits = ctx.device.limits();
+    let budget = SCRATCH_BUDGET
+        .min(limits.max_storage_buffer_binding_size)
+        .min(limits.max_buffer_size);
+    if slot_bytes > budget {
+        return Err(GpuError::TooLarge {
+            what: "one triangle's subdivision scratch",
+            needed: slot_bytes,
+            limit: budget,
+        });
+    }
+    let slots = (budget / slot_bytes)
+        .min(u64::from(object.triangle_count))
+        .max(1);
+    // Whole workgroups where the budget allows, so no lane of the last group idles needlessly.
+    let slots = if slots > u64::from(WORKGROUP) {
+        slots / u64::from(WORKGROUP) * u64::from(WORKGROUP)
+    } else {
+        slots
+    };
+    Ok((square, slot_bytes, slots as u32))
+}
+
+/// Output vertex and triangle counts at `level`, checked to fit 32-bit indices as
+/// [`crate::subdivide`] checks them.
+fn counts(object: &LoopObject, level: u32) -> Result<(u32, u32), GpuError> {
+    if level > MAX_LEVEL {
+        return Err(GpuError::LevelTooHigh {
+            level,
+            max: MAX_LEVEL,
+        });
+    }
+    let m = 1u64 << level;
+    let per_tri = (m - 1) * m.saturating_sub(2) / 2;
+    let v = u64::from(object.vertex_count)
+        + u64::from(object.edge_count) * (m - 1)
+        + u64::from(object.triangle_count) * per_tri;
+    let f = u64::from(object.triangle_count) << (2 * level);
+    let too_large = |what, needed| GpuError::TooLarge {
+        what,
+        needed,
+        limit: u64::from(u32::MAX),
+    };
+    if f > u64::from(u32::MAX / 3) {
+        return Err(too_large("refined index count", f * 3));
+    }
+    Ok((
+        u32::try_from(v).map_err(|_| too_large("refined vertex count", v))?,
+        f as u32,
+    ))
+}
+
+/// One-shot convenience: upload `object`, Loop-refine it to `level` with its colours and read
+/// the mesh and normals back.
+pub fn refine_loop(ctx: &GpuContext, object: &Object, level: u32) -> Result<LoopMesh, GpuError> {
+    let kernel = LoopKernel::new(ctx);
+    let uploaded = kernel.upload(ctx, object)?;
+    let mut out = None;
+    kernel.refine_into(ctx, &uploaded, level, &mut out, false)?;
+    let out = out.expect("refine_into allocates");
+    Ok(LoopMesh {
+        mesh: out.read_back(ctx)?,
+        normals: out.read_back_normals(ctx)?,
+    })
+}
