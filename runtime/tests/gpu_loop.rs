@@ -235,7 +235,7 @@ fn gpu_loop_matches_cpu_on_built_in_meshes() {
         total.positions_bitwise += r.positions_bitwise;
         total.positions += r.positions;
     }
-    // The highest level, 6 (patch scratch of about 110 KiB per triangle), on the creased cube
+    // The highest level, 6 (patch scratch of about 105 KiB per triangle), on the creased cube
     // (48 triangles: crease and corner vertices at the deepest level).
     let object = baked("cube_creased", &meshes[7].1, 77);
     let r = compare(&ctx, &object, &[6]);

@@ -15,7 +15,7 @@
 //!    fine triangles, across coarse edges and vertices.
 //!
 //! The patch lives in a per-slot region of a storage buffer ("scratch"), not in workgroup
-//! memory: at level 5 it needs about 30 KiB per triangle and at level 6 about 110 KiB, more than
+//! memory: at level 5 it needs about 30 KiB per triangle and at level 6 about 105 KiB, more than
 //! the 16 KiB of workgroup memory WebGPU guarantees. Invocations stride over the coarse
 //! triangles, so the scratch buffer holds at most [`SCRATCH_BUDGET`] bytes whatever the mesh.
 //!
