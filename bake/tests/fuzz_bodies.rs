@@ -40,11 +40,26 @@ static SERIAL: Mutex<()> = Mutex::new(());
 /// Most bytes one input may make a body hold at once beyond what was live before it.
 const ALLOCATION_BOUND: usize = 256 << 20;
 
-/// Runs `body` on `input` and checks its allocation peak.
+/// The last panic, even one a reader caught (the glTF importer catches the `gltf` crate's
+/// panics and reports an error): libFuzzer counts those as crashes, and so does this test.
+static PANICKED: Mutex<Option<String>> = Mutex::new(None);
+
+/// Runs `body` on `input` and checks that nothing panicked and its allocation peak.
 fn run(name: &str, body: fn(&[u8]), input: &[u8]) {
+    static HOOK: std::sync::Once = std::sync::Once::new();
+    HOOK.call_once(|| {
+        std::panic::set_hook(Box::new(|info| {
+            if let Ok(mut p) = PANICKED.lock() {
+                *p = Some(info.to_string());
+            }
+        }))
+    });
     let before = CURRENT.load(Ordering::Relaxed);
     PEAK.store(before, Ordering::Relaxed);
     body(input);
+    if let Some(p) = PANICKED.lock().unwrap_or_else(|e| e.into_inner()).take() {
+        panic!("{name}: a {}-byte input panicked: {p}", input.len());
+    }
     let peak = PEAK.load(Ordering::Relaxed) - before;
     assert!(
         peak <= ALLOCATION_BOUND,

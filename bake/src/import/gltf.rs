@@ -65,11 +65,21 @@ pub(super) fn import_bytes(
 
 /// Checks the references that `gltf-json`'s own validation indexes without checking.
 fn precheck(bytes: &[u8]) -> Result<(), String> {
-    // A file that hce-format cannot even parse is left to the `gltf` crate's better message.
-    let Ok(asset) = hce_format::gltf::Asset::parse(bytes) else {
+    // Parsed leniently (invalid UTF-8 replaced), because the `gltf` crate's parser accepts
+    // invalid UTF-8 in content it skips; a file that still does not parse is left to that
+    // crate's better message.
+    let text = if bytes.starts_with(b"glTF") {
+        let len = bytes
+            .get(12..16)
+            .map_or(0, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize);
+        bytes.get(20..20usize.saturating_add(len)).unwrap_or(&[])
+    } else {
+        bytes
+    };
+    let Ok(json) = serde_json::from_str::<serde_json::Value>(&String::from_utf8_lossy(text)) else {
         return Ok(());
     };
-    let json = &asset.json;
+    let json = &json;
     let accessors = json
         .get("accessors")
         .and_then(|a| a.as_array())
