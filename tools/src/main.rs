@@ -25,7 +25,8 @@ enum Command {
     /// Bake global illumination into a glTF or OBJ scene (.glb/.gltf with the extension, or .hce).
     #[command(after_help = EXIT_CODES)]
     Bake(cmd::bake::BakeArgs),
-    /// Refine a mesh on the GPU and render it headless to PNG or EXR.
+    /// Render a baked asset (its HCE colours, refined on the GPU) or preview a mesh, headless,
+    /// to PNG or EXR.
     #[command(after_help = EXIT_CODES)]
     Render(cmd::render::RenderArgs),
     /// Measure the GPU kernels' throughput per level.
@@ -68,6 +69,7 @@ fn exit_status(e: &anyhow::Error) -> i32 {
             || c.is::<hce_runtime::SubdivError>()
             || c.is::<hce_format::ReadError>()
             || c.is::<hce_format::gltf::GltfError>()
+            || c.is::<hce_runtime::AssetError>()
     });
     if invalid_input {
         3

@@ -1,6 +1,7 @@
 //! The GPU side of the runtime (feature `gpu`): a wgpu context that prefers a hardware adapter
 //! and falls back to a software one, compute kernels that decode HCE colours and refine flat
-//! objects, a level-of-detail rule, and a headless renderer.
+//! objects, a level-of-detail rule, a headless renderer, and [`scene::GpuScene`], the GPU
+//! resources of a loaded [`crate::asset::Asset`].
 //!
 //! Every kernel has a plain-Rust twin in [`cpu_reference`] that follows the same steps in the
 //! same order, so that tests can compare GPU output with it value by value.
@@ -14,9 +15,11 @@ pub mod context;
 pub mod cpu_reference;
 pub mod decode;
 pub mod flat;
+pub mod framing;
 pub mod lod;
 pub mod plain_mesh;
 pub mod render;
+pub mod scene;
 pub mod testing;
 mod util;
 
@@ -26,7 +29,12 @@ pub use decode::{decode_colours, ColourQuery, DecodedColour};
 pub use flat::{refine_flat, FlatKernel, FlatObject, FlatOutput, KernelTiming};
 pub use lod::{choose_level, Camera, LodParams};
 pub use render::{
-    render_gpu_mesh, render_mesh, tone_map_aces, Framing, GpuMesh, RenderParams, RenderedImage,
+    render_draws, render_gpu_mesh, render_mesh, tone_map_aces, Framing, GpuMesh, MeshDraw,
+    RenderParams, RenderedImage,
+};
+pub use scene::{
+    render_asset, AssetRender, AssetRenderOptions, CameraChoice, GpuScene, LevelChoice,
+    MultiresPath, SceneOptions,
 };
 
 /// Everything that can go wrong on the GPU path.
