@@ -342,8 +342,7 @@ impl Asset {
             let key = std::fs::canonicalize(&file).unwrap_or_else(|_| file.clone());
             if !seen.insert(key) {
                 return Err(
-                    "another buffer already uses this file; each buffer file is loaded once"
-                        .into(),
+                    "another buffer already uses this file; each buffer file is loaded once".into(),
                 );
             }
             std::fs::read(&file).map_err(|e| e.to_string())
@@ -498,11 +497,7 @@ impl Loader {
         instances: Vec<Instance>,
     ) -> Result<AssetObject, AssetError> {
         let mesh = &object.mesh;
-        let computed = geometry_hash(
-            mesh.triangles
-                .iter()
-                .map(|&v| mesh.position(v)),
-        );
+        let computed = geometry_hash(mesh.triangles.iter().map(|&v| mesh.position(v)));
         if computed != object.geometry_hash {
             return Err(AssetError::StaleGeometry {
                 path: self.path.clone(),
@@ -715,10 +710,16 @@ impl Loader {
                 .as_array()
                 .ok_or_else(|| self.scene_err("nodes", "not an array"))?,
         };
+        let path = self.path.clone();
+        let scene_err = move |location: String, message: String| AssetError::Scene {
+            path: path.clone(),
+            location,
+            message,
+        };
         let index_list = |v: &Value, at: &str| -> Result<Vec<usize>, AssetError> {
-            let list = v
-                .as_array()
-                .ok_or_else(|| self.scene_err(at, "not an array of node indices"))?;
+            let list = v.as_array().ok_or_else(|| {
+                scene_err(at.to_owned(), "not an array of node indices".to_owned())
+            })?;
             list.iter()
                 .enumerate()
                 .map(|(k, i)| {
@@ -726,7 +727,7 @@ impl Loader {
                         .map(|i| i as usize)
                         .filter(|&i| i < nodes.len())
                         .ok_or_else(|| {
-                            self.scene_err(
+                            scene_err(
                                 format!("{at}[{k}]"),
                                 format!("{i} is not a node index (the file has {})", nodes.len()),
                             )
@@ -742,9 +743,9 @@ impl Loader {
             .or(scenes.filter(|s| !s.is_empty()).map(|_| 0));
         let roots = match (scene, scenes) {
             (Some(s), Some(list)) => {
-                let sc = list.get(s).ok_or_else(|| {
-                    self.scene_err("scene", format!("scene {s} does not exist"))
-                })?;
+                let sc = list
+                    .get(s)
+                    .ok_or_else(|| self.scene_err("scene", format!("scene {s} does not exist")))?;
                 match sc.get("nodes") {
                     Some(n) => index_list(n, &format!("scenes[{s}].nodes"))?,
                     None => Vec::new(),
@@ -767,8 +768,11 @@ impl Loader {
         };
         let mut visited = vec![false; nodes.len()];
         let mut out = Vec::new();
-        let mut stack: Vec<(usize, Mat4)> =
-            roots.into_iter().rev().map(|n| (n, Mat4::IDENTITY)).collect();
+        let mut stack: Vec<(usize, Mat4)> = roots
+            .into_iter()
+            .rev()
+            .map(|n| (n, Mat4::IDENTITY))
+            .collect();
         while let Some((node, parent)) = stack.pop() {
             if std::mem::replace(&mut visited[node], true) {
                 self.warnings.push(format!(
@@ -964,7 +968,10 @@ mod tests {
         bin[12..16].copy_from_slice(&0.5f32.to_le_bytes());
         let glb = hgltf::write_glb(&a.json, &bin).unwrap();
         let e = open_glb(&glb, &OpenOptions::default()).unwrap_err();
-        assert!(matches!(e, AssetError::StaleGeometry { object: 0, .. }), "{e}");
+        assert!(
+            matches!(e, AssetError::StaleGeometry { object: 0, .. }),
+            "{e}"
+        );
         assert!(e.to_string().contains("bake it again"), "{e}");
         let lenient = open_glb(&glb, &OpenOptions { strict: false }).unwrap();
         assert!(lenient.objects[0].instances.is_empty());
@@ -985,7 +992,11 @@ mod tests {
         });
         let asset = open_glb(&cycle, &OpenOptions::default()).unwrap();
         assert_eq!(asset.objects[0].instances.len(), 1);
-        assert!(asset.warnings[0].contains("reached twice"), "{:?}", asset.warnings);
+        assert!(
+            asset.warnings[0].contains("reached twice"),
+            "{:?}",
+            asset.warnings
+        );
         let plain = edited_glb(|j| {
             j.as_object_mut().unwrap().remove("extensions");
         });
@@ -1046,7 +1057,11 @@ mod tests {
                 b[i] ^= 1 << bit;
                 let r = open_glb(&b, &OpenOptions::default());
                 if (start..start + container.len()).contains(&i) {
-                    assert!(r.is_err(), "flip of bit {bit} at container byte {}", i - start);
+                    assert!(
+                        r.is_err(),
+                        "flip of bit {bit} at container byte {}",
+                        i - start
+                    );
                 } else if r.is_ok() {
                     accepted_outside += 1;
                 }

@@ -160,7 +160,12 @@ mod gpu {
     }
 
     /// Mean of the pixels of a rectangle, as linear RGB.
-    fn mean(pixels: &[f32], width: u32, x: std::ops::Range<u32>, y: std::ops::Range<u32>) -> [f32; 3] {
+    fn mean(
+        pixels: &[f32],
+        width: u32,
+        x: std::ops::Range<u32>,
+        y: std::ops::Range<u32>,
+    ) -> [f32; 3] {
         let mut s = [0f32; 3];
         let n = (x.len() * y.len()) as f32;
         for yy in y {

@@ -173,7 +173,11 @@ impl GpuContext {
     /// the kernels and [`super::scene::GpuScene`] work on it. The handles are shared, not
     /// copied: work submitted here goes to the caller's queue. Kernel timing is on when the
     /// device was created with `TIMESTAMP_QUERY`.
-    pub fn from_existing(adapter: &wgpu::Adapter, device: &wgpu::Device, queue: &wgpu::Queue) -> Self {
+    pub fn from_existing(
+        adapter: &wgpu::Adapter,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Self {
         let info = adapter.get_info();
         let kind = if info.device_type == wgpu::DeviceType::Cpu {
             AdapterKind::Software

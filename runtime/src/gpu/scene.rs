@@ -445,7 +445,10 @@ impl GpuScene {
 
     /// Fine triangles drawn per frame at the current levels, instances counted.
     pub fn drawn_triangles(&self) -> u64 {
-        self.draws().iter().map(|d| u64::from(d.index_count / 3)).sum()
+        self.draws()
+            .iter()
+            .map(|d| u64::from(d.index_count / 3))
+            .sum()
     }
 
     /// Draws the refined scene headless with `camera` (no lighting: the colours are the baked
@@ -500,7 +503,12 @@ fn upload_cpu(
     let vertex_count = u32::try_from(v).map_err(|_| too_large("refined vertex count"))?;
     let triangle_count = u32::try_from(f).map_err(|_| too_large("refined triangle count"))?;
     let (p, n, c, i) = match old {
-        Some(o) => (Some(o.positions), Some(o.normals), Some(o.colours), Some(o.indices)),
+        Some(o) => (
+            Some(o.positions),
+            Some(o.normals),
+            Some(o.colours),
+            Some(o.indices),
+        ),
         None => (None, None, None, None),
     };
     let vertex = wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE;
@@ -516,7 +524,10 @@ fn upload_cpu(
     )?;
     let rgba: Vec<[f32; 4]> = colours.iter().map(|c| [c[0], c[1], c[2], 1.0]).collect();
     for (buffer, bytes) in [
-        (&positions, bytemuck::cast_slice::<[f32; 3], u8>(&refined.positions)),
+        (
+            &positions,
+            bytemuck::cast_slice::<[f32; 3], u8>(&refined.positions),
+        ),
         (&normals, bytemuck::cast_slice(&refined.normals)),
         (&colour_buf, bytemuck::cast_slice(&rgba)),
         (&indices, bytemuck::cast_slice(&refined.indices)),
