@@ -56,31 +56,20 @@ pub const MMAP_THRESHOLD: u64 = 16 << 20;
 /// Problems listed in an [`AssetError::Invalid`] message before the rest are only counted.
 const PROBLEMS_SHOWN: usize = 5;
 
-/// Why an asset cannot be opened. Every message names the file and the part of it at fault.
+/// Why an asset cannot be opened. Every message names the file and the part of it at fault, and
+/// carries the underlying error's text itself (no `source` chain to print twice).
 #[derive(Debug, thiserror::Error)]
 pub enum AssetError {
-    #[error("{path}: {source}")]
-    Io {
-        path: String,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error("{path}: {error}")]
+    Io { path: String, error: std::io::Error },
     #[error("{path}: not a baked asset: expected a .glb or .gltf with {ext} or a .hce container", ext = hgltf::EXTENSION_NAME)]
     UnknownFormat { path: String },
-    #[error("{path}: {source}")]
-    Gltf {
-        path: String,
-        #[source]
-        source: GltfError,
-    },
+    #[error("{path}: {error}")]
+    Gltf { path: String, error: GltfError },
     #[error("{path}: the asset does not use {ext}; bake it with `hce bake` first", ext = hgltf::EXTENSION_NAME)]
     NotBaked { path: String },
-    #[error("{path}: container: {source}")]
-    Container {
-        path: String,
-        #[source]
-        source: ReadError,
-    },
+    #[error("{path}: container: {error}")]
+    Container { path: String, error: ReadError },
     #[error("{path}: the container fails validation with {} problem(s): {}; run `hce validate` for the full list",
         problems.len(), summary(problems))]
     Invalid {
@@ -323,9 +312,9 @@ impl Asset {
     pub fn open_with(path: impl AsRef<Path>, options: &OpenOptions) -> Result<Self, AssetError> {
         let path = path.as_ref();
         let shown = path.display().to_string();
-        let bytes = read_file(path).map_err(|source| AssetError::Io {
+        let bytes = read_file(path).map_err(|error| AssetError::Io {
             path: shown.clone(),
-            source,
+            error,
         })?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let is_gltf_ext = path
@@ -459,7 +448,7 @@ impl Loader {
     fn gltf_err(&self, source: GltfError) -> AssetError {
         AssetError::Gltf {
             path: self.path.clone(),
-            source,
+            error: source,
         }
     }
 
@@ -473,9 +462,9 @@ impl Loader {
 
     /// Reads (checksums included) and validates a container.
     fn container(&self, bytes: &[u8]) -> Result<hce_format::Container, AssetError> {
-        let container = hce_format::read(bytes).map_err(|source| AssetError::Container {
+        let container = hce_format::read(bytes).map_err(|error| AssetError::Container {
             path: self.path.clone(),
-            source,
+            error,
         })?;
         // From the bytes, not the model: zero padding between sections is checked too, so a
         // flipped bit anywhere in the container is reported.

@@ -129,8 +129,65 @@ fn damaged_baked_files_are_errors_not_panics() {
 
 mod gpu {
     use super::*;
+    use hce_runtime::gpu::scene::{GpuScene, SceneOptions};
     use hce_runtime::gpu::testing::context_or_skip;
     use hce_runtime::gpu::{render_asset, AssetRenderOptions, Camera, CameraChoice};
+
+    #[test]
+    fn gpu_scene_matches_the_cpu_reference_and_reuses_buffers() {
+        let Some(ctx) = context_or_skip("gpu_scene_matches_the_cpu_reference_and_reuses_buffers")
+        else {
+            return;
+        };
+        let asset = Asset::open(baked("teatime.glb")).unwrap();
+        let mut scene = GpuScene::new(&ctx, &asset, &SceneOptions::default()).unwrap();
+        let i = asset
+            .objects
+            .iter()
+            .position(|o| o.name().contains("teapot"))
+            .unwrap();
+        let object = &asset.objects[i].object;
+        let check = |scene: &GpuScene, level: u32| {
+            let got = scene.read_back(&ctx, i).unwrap();
+            let refined = hce_runtime::subdivide(&object.mesh, level).unwrap();
+            let colours =
+                hce_runtime::colour::apply_baked_colours(object, &refined, level).unwrap();
+            assert_eq!(got.level, level);
+            assert_eq!(got.positions, refined.positions.as_flattened());
+            assert_eq!(got.indices, refined.indices.as_flattened());
+            let want: Vec<f32> = colours
+                .iter()
+                .flat_map(|c| [c[0], c[1], c[2], 1.0])
+                .collect();
+            assert_eq!(got.colours, want);
+            assert_eq!(got.normals.unwrap(), refined.normals.as_flattened());
+        };
+        scene.refine(&ctx, i, 2).unwrap();
+        check(&scene, 2);
+        let buffer = scene.buffers(i).unwrap().positions.clone();
+        // A lower level fits in the same buffers: no reallocation.
+        scene.refine(&ctx, i, 1).unwrap();
+        check(&scene, 1);
+        assert!(scene.buffers(i).unwrap().positions == &buffer);
+        scene.refine(&ctx, i, 3).unwrap();
+        check(&scene, 3);
+        assert!(scene.buffers(i).unwrap().positions != &buffer);
+        // Flat objects go to their tree depth whatever level is asked for.
+        let flat = asset
+            .objects
+            .iter()
+            .position(|o| o.kind() == ObjectKind::Flat)
+            .unwrap();
+        let depth = asset.objects[flat]
+            .tree_depth
+            .min(SceneOptions::default().flat_max_level);
+        let levels = scene
+            .refine_all(&ctx, &hce_runtime::gpu::LevelChoice::Fixed(1))
+            .unwrap();
+        assert_eq!(levels[flat], Some(depth));
+        assert_eq!(levels[i], Some(1));
+        assert_eq!(scene.draws().len(), asset.instance_count());
+    }
 
     fn read_png(path: &Path) -> (u32, u32, Vec<u8>) {
         let file = std::fs::File::open(path).unwrap_or_else(|e| {

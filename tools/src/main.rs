@@ -60,7 +60,13 @@ fn main() {
 /// The documented exit status (see [`EXIT_CODES`]) of a command's error: 4 when reading or
 /// writing a file failed, 3 when input bytes were read but are not acceptable, 1 otherwise.
 fn exit_status(e: &anyhow::Error) -> i32 {
-    if e.chain().any(|c| c.is::<std::io::Error>()) {
+    let asset_io = |c: &(dyn std::error::Error + 'static)| {
+        matches!(
+            c.downcast_ref::<hce_runtime::AssetError>(),
+            Some(hce_runtime::AssetError::Io { .. })
+        )
+    };
+    if e.chain().any(|c| c.is::<std::io::Error>() || asset_io(c)) {
         return 4;
     }
     let invalid_input = e.chain().any(|c| {
