@@ -148,9 +148,9 @@ impl Bounds {
         let mut out: Option<Bounds> = None;
         for p in points {
             let b = out.get_or_insert(Bounds { min: p, max: p });
-            for k in 0..3 {
-                b.min[k] = b.min[k].min(p[k]);
-                b.max[k] = b.max[k].max(p[k]);
+            for (k, &c) in p.iter().enumerate() {
+                b.min[k] = b.min[k].min(c);
+                b.max[k] = b.max[k].max(c);
             }
         }
         out
