@@ -25,7 +25,8 @@ enum Command {
     /// Bake global illumination into a glTF or OBJ scene (.glb/.gltf with the extension, or .hce).
     #[command(after_help = EXIT_CODES)]
     Bake(cmd::bake::BakeArgs),
-    /// Refine a mesh on the GPU and render it headless to PNG or EXR.
+    /// Render a baked asset (its HCE colours, refined on the GPU) or preview a mesh, headless,
+    /// to PNG or EXR.
     #[command(after_help = EXIT_CODES)]
     Render(cmd::render::RenderArgs),
     /// Measure the GPU kernels' throughput per level.
@@ -59,7 +60,13 @@ fn main() {
 /// The documented exit status (see [`EXIT_CODES`]) of a command's error: 4 when reading or
 /// writing a file failed, 3 when input bytes were read but are not acceptable, 1 otherwise.
 fn exit_status(e: &anyhow::Error) -> i32 {
-    if e.chain().any(|c| c.is::<std::io::Error>()) {
+    let asset_io = |c: &(dyn std::error::Error + 'static)| {
+        matches!(
+            c.downcast_ref::<hce_runtime::AssetError>(),
+            Some(hce_runtime::AssetError::Io { .. })
+        )
+    };
+    if e.chain().any(|c| c.is::<std::io::Error>() || asset_io(c)) {
         return 4;
     }
     let invalid_input = e.chain().any(|c| {
@@ -68,6 +75,7 @@ fn exit_status(e: &anyhow::Error) -> i32 {
             || c.is::<hce_runtime::SubdivError>()
             || c.is::<hce_format::ReadError>()
             || c.is::<hce_format::gltf::GltfError>()
+            || c.is::<hce_runtime::AssetError>()
     });
     if invalid_input {
         3

@@ -169,6 +169,42 @@ impl GpuContext {
         })
     }
 
+    /// Wraps a device and queue the caller already owns (a viewer's own renderer), so that
+    /// the kernels and [`super::scene::GpuScene`] work on it. The handles are shared, not
+    /// copied: work submitted here goes to the caller's queue. Kernel timing is on when the
+    /// device was created with `TIMESTAMP_QUERY`.
+    pub fn from_existing(
+        adapter: &wgpu::Adapter,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Self {
+        let info = adapter.get_info();
+        let kind = if info.device_type == wgpu::DeviceType::Cpu {
+            AdapterKind::Software
+        } else {
+            AdapterKind::Hardware
+        };
+        let description = AdapterDescription {
+            name: info.name.clone(),
+            backend: format!("{:?}", info.backend),
+            device_type: format!("{:?}", info.device_type),
+            driver: [info.driver.as_str(), info.driver_info.as_str()]
+                .iter()
+                .filter(|s| !s.is_empty())
+                .cloned()
+                .collect::<Vec<_>>()
+                .join(" "),
+            kind,
+            timestamps: device.features().contains(wgpu::Features::TIMESTAMP_QUERY),
+        };
+        Self {
+            adapter: adapter.clone(),
+            device: device.clone(),
+            queue: queue.clone(),
+            description,
+        }
+    }
+
     /// Blocks until all submitted work is done, turning a device loss into an error.
     pub fn wait(&self) -> Result<(), GpuError> {
         self.device

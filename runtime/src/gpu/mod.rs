@@ -1,7 +1,8 @@
 //! The GPU side of the runtime (feature `gpu`): a wgpu context that prefers a hardware adapter
 //! and falls back to a software one, compute kernels that decode HCE colours, refine flat
 //! objects ([`flat`]) and Loop-subdivide multiresolution objects with their colours
-//! ([`loop_kernel`]), a level-of-detail rule, and a headless renderer.
+//! ([`loop_kernel`]), a level-of-detail rule, a headless renderer, and [`scene::GpuScene`], the
+//! GPU resources of a loaded [`crate::asset::Asset`].
 //!
 //! Every kernel has a plain-Rust twin that follows the same steps in the same order, so that
 //! tests can compare GPU output with it value by value: [`cpu_reference`] for decoding and flat
@@ -16,10 +17,12 @@ pub mod context;
 pub mod cpu_reference;
 pub mod decode;
 pub mod flat;
+pub mod framing;
 pub mod lod;
 pub mod loop_kernel;
 pub mod plain_mesh;
 pub mod render;
+pub mod scene;
 pub mod testing;
 mod util;
 
@@ -30,7 +33,12 @@ pub use flat::{refine_flat, FlatKernel, FlatObject, FlatOutput, KernelTiming};
 pub use lod::{choose_level, Camera, LodParams};
 pub use loop_kernel::{refine_loop, LoopKernel, LoopMesh, LoopObject, LoopOutput};
 pub use render::{
-    render_gpu_mesh, render_mesh, tone_map_aces, Framing, GpuMesh, RenderParams, RenderedImage,
+    render_draws, render_gpu_mesh, render_mesh, tone_map_aces, Framing, GpuMesh, MeshDraw,
+    RenderParams, RenderedImage,
+};
+pub use scene::{
+    render_asset, AssetRender, AssetRenderOptions, CameraChoice, GpuScene, LevelChoice,
+    MultiresPath, SceneOptions,
 };
 
 /// Everything that can go wrong on the GPU path.

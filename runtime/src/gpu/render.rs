@@ -228,6 +228,38 @@ pub fn render_gpu_mesh(
     mesh: &GpuMesh<'_>,
     params: &RenderParams,
 ) -> Result<RenderedImage, GpuError> {
+    render_draws(
+        ctx,
+        &[MeshDraw {
+            positions: mesh.positions,
+            colours: mesh.colours,
+            indices: mesh.indices,
+            index_count: mesh.index_count,
+            transform: Mat4::IDENTITY,
+        }],
+        mesh.bounds,
+        params,
+    )
+}
+
+/// One draw of a scene: a mesh on the GPU (`positions` f32 ×3, linear `colours` f32 ×4, `u32`
+/// indices) placed in the world by `transform` (object to world).
+pub struct MeshDraw<'a> {
+    pub positions: &'a wgpu::Buffer,
+    pub colours: &'a wgpu::Buffer,
+    pub indices: &'a wgpu::Buffer,
+    pub index_count: u32,
+    pub transform: Mat4,
+}
+
+/// Draws several placed meshes into one image and reads it back. `bounds` (world space) place
+/// the near and far planes and, with [`Framing::Auto`], the camera.
+pub fn render_draws(
+    ctx: &GpuContext,
+    draws: &[MeshDraw<'_>],
+    bounds: ([f32; 3], [f32; 3]),
+    params: &RenderParams,
+) -> Result<RenderedImage, GpuError> {
     let (w, h) = (params.width, params.height);
     let max_dim = ctx.device.limits().max_texture_dimension_2d;
     if w == 0 || h == 0 || w > max_dim || h > max_dim {
@@ -236,7 +268,7 @@ pub fn render_gpu_mesh(
         )));
     }
     let aspect = w as f32 / h as f32;
-    let (lo, hi) = mesh.bounds;
+    let (lo, hi) = bounds;
     let camera = match params.framing {
         Framing::Auto => auto_camera(lo, hi, aspect),
         Framing::Camera(c) => c,
@@ -253,7 +285,6 @@ pub fn render_gpu_mesh(
         ));
     }
     let view_proj = view_projection(&camera, lo, hi, aspect);
-    let uniform = uniform_init(ctx, "view projection", &view_proj.to_cols_array());
 
     let format = wgpu::TextureFormat::Rgba32Float;
     let extent = wgpu::Extent3d {
@@ -335,14 +366,26 @@ pub fn render_gpu_mesh(
             multiview_mask: None,
             cache: None,
         });
-    let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("hce render"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[wgpu::BindGroupEntry {
-            binding: 0,
-            resource: uniform.as_entire_binding(),
-        }],
-    });
+    // One uniform per draw: the shader's matrix is view-projection times the draw's transform.
+    let layout = pipeline.get_bind_group_layout(0);
+    let bind_groups: Vec<wgpu::BindGroup> = draws
+        .iter()
+        .map(|d| {
+            let uniform = uniform_init(
+                ctx,
+                "view projection",
+                &(view_proj * d.transform).to_cols_array(),
+            );
+            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("hce render"),
+                layout: &layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: uniform.as_entire_binding(),
+                }],
+            })
+        })
+        .collect();
 
     let row_bytes = u64::from(w) * 16;
     let padded_row = row_bytes.next_multiple_of(u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT));
@@ -383,11 +426,16 @@ pub fn render_gpu_mesh(
             multiview_mask: None,
         });
         pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.set_vertex_buffer(0, mesh.positions.slice(..));
-        pass.set_vertex_buffer(1, mesh.colours.slice(..));
-        pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed(0..mesh.index_count, 0, 0..1);
+        for (d, bind_group) in draws.iter().zip(&bind_groups) {
+            if d.index_count == 0 {
+                continue;
+            }
+            pass.set_bind_group(0, bind_group, &[]);
+            pass.set_vertex_buffer(0, d.positions.slice(..));
+            pass.set_vertex_buffer(1, d.colours.slice(..));
+            pass.set_index_buffer(d.indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..d.index_count, 0, 0..1);
+        }
     }
     encoder.copy_texture_to_buffer(
         wgpu::TexelCopyTextureInfo {

@@ -4,6 +4,7 @@
 // applies no lighting: it writes the interpolated linear colour into a floating-point target,
 // and tone mapping happens on the CPU after read-back.
 
+// One per draw: the view-projection matrix times the draw's object-to-world transform.
 struct Uniforms {
     view_proj: mat4x4<f32>,
 }

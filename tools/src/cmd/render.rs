@@ -1,10 +1,18 @@
-//! `hce render`: refine a mesh on the GPU and draw it headless to PNG (tone-mapped) or EXR
+//! `hce render`: refine a scene on the GPU and draw it headless to PNG (tone-mapped) or EXR
 //! (linear).
 //!
-//! For now the input is a plain mesh (OBJ, glTF, GLB) previewed as a flat object: one colour per
-//! coarse triangle (its `COLOR_0` mean, or grey under a fixed preview light), refined linearly by
-//! the flat kernel and averaged at the vertices. Baked `.hce`/glTF input plugs in here once the
-//! format reader lands.
+//! A baked asset (`.glb`/`.gltf` with `EXT_hce_baked_lighting`, or `.hce`) is opened with
+//! [`hce_runtime::asset::Asset`] and drawn by [`hce_runtime::gpu::render_asset`]: every object
+//! refined (multiresolution objects to the chosen level, flat ones to their tree depth), with its
+//! baked HCE colours and no other lighting, each instance at its node's transform, through the
+//! scene's camera when the file has one.
+//!
+//! Any other mesh (OBJ, or glTF without the extension) is previewed as a flat object: one colour
+//! per coarse triangle (its `COLOR_0` mean, or grey under a fixed preview light), refined
+//! linearly by the flat kernel and averaged at the vertices.
+//!
+//! PNG output is tone-mapped: exposure `2^--exposure`, the ACES filmic fit of Narkowicz (2016),
+//! then sRGB encoding ([`hce_runtime::gpu::tone_map_aces`]). EXR output is the linear radiance.
 
 // Without the GPU the command only explains how to get it; its helpers stay compiled and tested.
 #![cfg_attr(not(feature = "gpu"), allow(dead_code))]
@@ -16,12 +24,15 @@ use clap::Args;
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// Mesh to render (.obj, .gltf, .glb).
+    /// Baked asset (.glb/.gltf with EXT_hce_baked_lighting, or .hce) drawn with its baked
+    /// colours, or a plain mesh (.obj, .gltf, .glb) previewed flat.
     pub file: PathBuf,
-    /// Output image: .png (tone-mapped, 8-bit sRGB) or .exr (linear, 32-bit float).
+    /// Output image: .png (exposure, ACES filmic tone curve, 8-bit sRGB) or .exr (linear,
+    /// 32-bit float).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Refine every object to this level (0 = coarse mesh).
+    /// Refine every multiresolution object to this level (0 = coarse mesh); flat objects of a
+    /// baked asset are always refined to their tree depth.
     #[arg(long, conflicts_with = "auto")]
     pub level: Option<u32>,
     /// Choose the level from the view (the default): edges of about 8 pixels.
@@ -30,10 +41,12 @@ pub struct RenderArgs {
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, default_value = "800x600")]
     pub size: String,
-    /// `auto`, or EYE:TARGET[:FOV] with EYE and TARGET as x,y,z and FOV the vertical field of
-    /// view in degrees (default 40), e.g. `3,2,5:0,0,0:35`.
-    #[arg(long, default_value = "auto")]
-    pub camera: String,
+    /// `scene` (the file's camera), `auto` (inside a closed room, in front of an open box, or
+    /// outside an object), or EYE:TARGET[:FOV] with EYE and TARGET as x,y,z and FOV the
+    /// vertical field of view in degrees (default 40), e.g. `3,2,5:0,0,0:35`. Default: the
+    /// file's camera when it has one, else `auto`.
+    #[arg(long)]
+    pub camera: Option<String>,
     /// Exposure in stops applied before tone mapping (PNG only).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub exposure: f32,
@@ -188,18 +201,150 @@ pub fn run(_args: RenderArgs) -> Result<()> {
     bail!("this `hce` was built without the `gpu` feature; rebuild with default features to render")
 }
 
+/// The camera `--camera` asks for.
+#[cfg(feature = "gpu")]
+pub fn camera_choice(arg: Option<&str>) -> Result<hce_runtime::gpu::CameraChoice> {
+    use hce_runtime::gpu::CameraChoice;
+    Ok(match arg {
+        None => CameraChoice::SceneOrAuto,
+        Some("scene") => CameraChoice::Scene,
+        Some(s) => match parse_camera(s)? {
+            None => CameraChoice::Auto,
+            Some(c) => CameraChoice::Explicit(c),
+        },
+    })
+}
+
+#[cfg(feature = "gpu")]
+fn open_context(software: bool) -> Result<hce_runtime::gpu::GpuContext> {
+    use hce_runtime::gpu::{AdapterKind, ContextOptions, GpuContext};
+    let ctx = GpuContext::new(&ContextOptions {
+        force_software: software,
+    })?;
+    println!("adapter: {}", ctx.description);
+    if ctx.description.kind == AdapterKind::Software {
+        println!(
+            "note: rendering on a software rasteriser (no hardware GPU in use); expect it to be slow"
+        );
+    }
+    Ok(ctx)
+}
+
+#[cfg(feature = "gpu")]
+fn write_image(args: &RenderArgs, image: &hce_runtime::gpu::RenderedImage) -> Result<()> {
+    let (w, h) = (image.width, image.height);
+    match output_format(&args.output)? {
+        Format::Png => write_png(&args.output, w, h, &image.to_srgb8(args.exposure))?,
+        Format::Exr => write_exr(&args.output, w, h, &image.pixels)?,
+    }
+    let c = image.camera;
+    println!(
+        "wrote {} ({w}x{h}, camera {},{},{}:{},{},{}:{})",
+        args.output.display(),
+        c.eye[0],
+        c.eye[1],
+        c.eye[2],
+        c.target[0],
+        c.target[1],
+        c.target[2],
+        c.fov_y_degrees
+    );
+    Ok(())
+}
+
 #[cfg(feature = "gpu")]
 pub fn run(args: RenderArgs) -> Result<()> {
+    use hce_runtime::asset::{Asset, AssetError};
+
+    output_format(&args.output)?;
+    parse_size(&args.size)?;
+    let choice = camera_choice(args.camera.as_deref())?;
+    let is_obj = args
+        .file
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    if is_obj {
+        return run_plain(&args, choice);
+    }
+    match Asset::open(&args.file) {
+        Ok(asset) => run_baked(&args, &asset, choice),
+        Err(AssetError::NotBaked { .. }) => {
+            println!(
+                "{}: no baked lighting; previewing the plain mesh flat",
+                args.file.display()
+            );
+            run_plain(&args, choice)
+        }
+        Err(e) => Err(e.into()),
+    }
+}
+
+/// Draws a baked asset with its HCE colours.
+#[cfg(feature = "gpu")]
+fn run_baked(
+    args: &RenderArgs,
+    asset: &hce_runtime::asset::Asset,
+    camera: hce_runtime::gpu::CameraChoice,
+) -> Result<()> {
+    use hce_runtime::gpu::scene::CameraSource;
+    use hce_runtime::gpu::{render_asset, AssetRenderOptions};
+
+    let (width, height) = parse_size(&args.size)?;
+    for w in &asset.warnings {
+        eprintln!("warning: {w}");
+    }
+    if args.level.is_some_and(|l| l > 15) {
+        bail!("--level must be 0 to 15");
+    }
+    let ctx = open_context(args.software)?;
+    let result = render_asset(
+        &ctx,
+        asset,
+        &AssetRenderOptions {
+            width,
+            height,
+            camera,
+            level: args.level,
+            max_triangles: args.max_triangles,
+            ..Default::default()
+        },
+    )?;
+    for n in &result.notes {
+        eprintln!("note: {n}");
+    }
+    match &result.camera_source {
+        CameraSource::Scene(name) => println!("camera: the scene's camera '{name}'"),
+        CameraSource::Auto(p) => println!("camera: automatic ({p:?})"),
+        CameraSource::Explicit => println!("camera: as given"),
+    }
+    for (name, kind, level, triangles, instances) in &result.objects {
+        println!(
+            "  {name}: {kind:?}, level {level}, {triangles} triangles{}",
+            if *instances == 1 {
+                String::new()
+            } else {
+                format!(" x {instances} instances")
+            }
+        );
+    }
+    println!(
+        "{}: {} objects, {} triangles drawn with their baked colours",
+        args.file.display(),
+        result.objects.len(),
+        result.triangles
+    );
+    write_image(args, &result.image)
+}
+
+/// Previews a plain mesh as a flat object.
+#[cfg(feature = "gpu")]
+fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Result<()> {
     use hce_runtime::gpu::{
-        choose_level, plain_mesh, render::auto_camera, render::bounds, render_gpu_mesh,
-        AdapterKind, ContextOptions, FlatKernel, Framing, GpuContext, GpuMesh, LodParams,
-        RenderParams,
+        choose_level, framing::auto_scene_camera, plain_mesh, render::bounds, render_gpu_mesh,
+        CameraChoice, FlatKernel, Framing, GpuMesh, LodParams, RenderParams,
     };
 
-    let format = output_format(&args.output)?;
     let (width, height) = parse_size(&args.size)?;
-    let camera = parse_camera(&args.camera)?;
-
     let mesh = plain_mesh::load_plain_mesh(&args.file)?;
     let name = args
         .file
@@ -216,18 +361,24 @@ pub fn run(args: RenderArgs) -> Result<()> {
             args.file.display()
         );
     }
-
-    let ctx = GpuContext::new(&ContextOptions {
-        force_software: args.software,
-    })?;
-    println!("adapter: {}", ctx.description);
-    if ctx.description.kind == AdapterKind::Software {
-        println!("note: rendering on a software rasteriser (no hardware GPU in use); expect it to be slow");
-    }
+    let ctx = open_context(args.software)?;
 
     let (lo, hi) = bounds(&object.mesh.positions).context("mesh has no finite positions")?;
     let aspect = width as f32 / height as f32;
-    let view = camera.unwrap_or_else(|| auto_camera(lo, hi, aspect));
+    let view = match camera {
+        CameraChoice::Explicit(c) => c,
+        CameraChoice::Scene => bail!(
+            "--camera scene: {} is previewed as a plain mesh, without its cameras",
+            args.file.display()
+        ),
+        CameraChoice::Auto | CameraChoice::SceneOrAuto => {
+            let m = &object.mesh;
+            let triangles: Vec<[[f32; 3]; 3]> = (0..m.triangle_count())
+                .map(|t| m.triangle(t).map(|v| m.position(v)))
+                .collect();
+            auto_scene_camera(&triangles, lo, hi, aspect).0
+        }
+    };
     let f = object.triangles.len() as u64;
     let level = match args.level {
         Some(level) => {
@@ -276,30 +427,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
         &RenderParams {
             width,
             height,
-            framing: match camera {
-                Some(c) => Framing::Camera(c),
-                None => Framing::Auto,
-            },
+            framing: Framing::Camera(view),
             background: [0.0; 3],
         },
     )?;
-    match format {
-        Format::Png => write_png(&args.output, width, height, &image.to_srgb8(args.exposure))?,
-        Format::Exr => write_exr(&args.output, width, height, &image.pixels)?,
-    }
-    let c = image.camera;
-    println!(
-        "wrote {} ({width}x{height}, camera {},{},{}:{},{},{}:{})",
-        args.output.display(),
-        c.eye[0],
-        c.eye[1],
-        c.eye[2],
-        c.target[0],
-        c.target[1],
-        c.target[2],
-        c.fov_y_degrees
-    );
-    Ok(())
+    write_image(args, &image)
 }
 
 fn mean_edge_length(positions: &[f32], triangles: &[u32]) -> f32 {
@@ -345,6 +477,15 @@ mod tests {
             assert!(parse_camera("1,1:0,0,0").is_err());
             assert!(parse_camera("1,1,1:1,1,1").is_err());
             assert!(parse_camera("1,1,1:0,0,0:200").is_err());
+            use hce_runtime::gpu::CameraChoice;
+            assert_eq!(camera_choice(None).unwrap(), CameraChoice::SceneOrAuto);
+            assert_eq!(camera_choice(Some("scene")).unwrap(), CameraChoice::Scene);
+            assert_eq!(camera_choice(Some("auto")).unwrap(), CameraChoice::Auto);
+            assert!(matches!(
+                camera_choice(Some("1,1,1:0,0,0")).unwrap(),
+                CameraChoice::Explicit(c) if c.eye == [1.0; 3]
+            ));
+            assert!(camera_choice(Some("sceen")).is_err());
         }
     }
 

@@ -1,0 +1,1063 @@
+//! Baked assets: open a `.glb` / `.gltf` that carries `EXT_hce_baked_lighting`, or a bare `.hce`
+//! container, check everything a refinement kernel will index, and expose the objects with their
+//! instances (glTF node world transforms), bounds and the scene's camera.
+//!
+//! This module has no GPU dependency (it builds with `--no-default-features`); the GPU resources
+//! of a loaded asset are [`crate::gpu::scene`]'s business.
+//!
+//! # What is checked
+//!
+//! * The container, byte for byte (SPEC.md Appendix A, checksums and padding included), then
+//!   every content rule of Appendix C through [`hce_format::validate_bytes`]: indices, adjacency tables, record ranges
+//!   into `NRML`/`COLR`, trees inside the bitstream and at most 12 deep. A kernel that reads a
+//!   validated object cannot index out of bounds.
+//! * Each object's geometry hash (SPEC.md 2.5) against its control mesh (`POSN` through `TRIS`),
+//!   and, for glTF, each linked primitive's recomputed hash against its `geometryHash` and the
+//!   object's; each primitive's triangle range inside its object, ranges not overlapping.
+//! * The glTF scene graph: node indices in range, finite transforms, camera parameters.
+//!
+//! With [`OpenOptions::strict`] (the default) any of these problems is an error. Without it,
+//! problems with single primitives follow SPEC.md 3.5: the primitive's link is ignored, with a
+//! warning in [`Asset::warnings`], and the rest of the asset loads.
+//!
+//! # Where the mesh of a `.hce` file comes from
+//!
+//! A bare container is self-contained: each object's control mesh (`POSN`, `TRIS`) *is* the mesh
+//! that was baked (its geometry hash is checked against it), so nothing else is looked up. A
+//! container carries no scene graph, so each object gets one instance with the identity
+//! transform: the objects appear in their own object spaces, which is the scene's layout only
+//! when the baked scene had no node transforms. Bake to `.glb` to keep instances and cameras.
+//!
+//! # Instances
+//!
+//! The default scene (`scene`, else the first of `scenes`, else every node without a parent) is
+//! walked depth first in child order, as `hce bake` walks it. Every node whose mesh has a
+//! primitive linked to object `k` adds one [`Instance`] of object `k` with the node's world
+//! transform (several primitives of one mesh that share an object add it once). `hce bake`
+//! copies meshes per node, so each of its objects has exactly one instance.
+//!
+//! # Memory
+//!
+//! Files of [`MMAP_THRESHOLD`] bytes or more are memory-mapped rather than read, so that opening
+//! a large asset does not first copy it whole into the heap; the container's arrays are then
+//! copied once into [`Object`]s, the form the kernels upload.
+
+use std::collections::{HashMap, HashSet};
+use std::path::{Path, PathBuf};
+
+use glam::{Mat4, Quat, Vec3};
+use hce_format::gltf::{self as hgltf, GltfError, PrimitiveLink};
+use hce_format::{geometry_hash, Metadata, Object, ObjectKind, Problem, ReadError};
+use serde_json::Value;
+
+/// Files at least this large (16 MiB) are memory-mapped instead of read into memory.
+pub const MMAP_THRESHOLD: u64 = 16 << 20;
+
+/// Problems listed in an [`AssetError::Invalid`] message before the rest are only counted.
+const PROBLEMS_SHOWN: usize = 5;
+
+/// Why an asset cannot be opened. Every message names the file and the part of it at fault, and
+/// carries the underlying error's text itself (no `source` chain to print twice).
+#[derive(Debug, thiserror::Error)]
+pub enum AssetError {
+    #[error("{path}: {error}")]
+    Io { path: String, error: std::io::Error },
+    #[error("{path}: not a baked asset: expected a .glb or .gltf with {ext} or a .hce container", ext = hgltf::EXTENSION_NAME)]
+    UnknownFormat { path: String },
+    #[error("{path}: {error}")]
+    Gltf { path: String, error: GltfError },
+    #[error("{path}: the asset does not use {ext}; bake it with `hce bake` first", ext = hgltf::EXTENSION_NAME)]
+    NotBaked { path: String },
+    #[error("{path}: container: {error}")]
+    Container { path: String, error: ReadError },
+    #[error("{path}: the container fails validation with {} problem(s): {}; run `hce validate` for the full list",
+        problems.len(), summary(problems))]
+    Invalid {
+        path: String,
+        problems: Vec<Problem>,
+    },
+    #[error("{path}: {location}: {message}")]
+    Link {
+        path: String,
+        location: String,
+        message: String,
+    },
+    #[error("{path}: {location} (object {object} '{name}'): geometry hash {computed:016x} differs from the baked {stored:016x}: the mesh was edited after baking; bake it again (SPEC.md 3.5)")]
+    StaleGeometry {
+        path: String,
+        location: String,
+        object: u32,
+        name: String,
+        stored: u64,
+        computed: u64,
+    },
+    #[error("{path}: {location}: {message}")]
+    Scene {
+        path: String,
+        location: String,
+        message: String,
+    },
+}
+
+fn summary(problems: &[Problem]) -> String {
+    let mut s = problems
+        .iter()
+        .take(PROBLEMS_SHOWN)
+        .map(ToString::to_string)
+        .collect::<Vec<_>>()
+        .join("; ");
+    if problems.len() > PROBLEMS_SHOWN {
+        s.push_str(&format!("; and {} more", problems.len() - PROBLEMS_SHOWN));
+    }
+    s
+}
+
+/// Options of [`Asset::open_with`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct OpenOptions {
+    /// Reject the asset on any bad primitive link or geometry-hash mismatch (default `true`).
+    /// When `false`, such primitives are ignored with a warning, as SPEC.md 3.5 allows, and
+    /// objects left without a primitive get no instance.
+    pub strict: bool,
+}
+
+impl Default for OpenOptions {
+    fn default() -> Self {
+        Self { strict: true }
+    }
+}
+
+/// The kind of file an asset came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AssetFormat {
+    Glb,
+    Gltf,
+    Hce,
+}
+
+/// An axis-aligned box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    pub min: [f32; 3],
+    pub max: [f32; 3],
+}
+
+impl Bounds {
+    /// The box around `x, y, z` triples; `None` when there are none.
+    pub fn of_points(points: impl IntoIterator<Item = [f32; 3]>) -> Option<Self> {
+        let mut out: Option<Bounds> = None;
+        for p in points {
+            let b = out.get_or_insert(Bounds { min: p, max: p });
+            for (k, &c) in p.iter().enumerate() {
+                b.min[k] = b.min[k].min(c);
+                b.max[k] = b.max[k].max(c);
+            }
+        }
+        out
+    }
+
+    pub fn union(self, other: Bounds) -> Bounds {
+        Bounds {
+            min: std::array::from_fn(|k| self.min[k].min(other.min[k])),
+            max: std::array::from_fn(|k| self.max[k].max(other.max[k])),
+        }
+    }
+
+    /// The box around this one's eight corners carried by `m`.
+    pub fn transformed(&self, m: &Mat4) -> Bounds {
+        let corners = (0..8).map(|i| {
+            let p = Vec3::new(
+                if i & 1 == 0 { self.min[0] } else { self.max[0] },
+                if i & 2 == 0 { self.min[1] } else { self.max[1] },
+                if i & 4 == 0 { self.min[2] } else { self.max[2] },
+            );
+            m.transform_point3(p).to_array()
+        });
+        // Eight corners: never empty.
+        Bounds::of_points(corners).unwrap_or(*self)
+    }
+
+    pub fn centre(&self) -> [f32; 3] {
+        std::array::from_fn(|k| 0.5 * (self.min[k] + self.max[k]))
+    }
+
+    /// Half the diagonal: the radius of the bounding sphere around [`Bounds::centre`].
+    pub fn radius(&self) -> f32 {
+        0.5 * (Vec3::from(self.max) - Vec3::from(self.min)).length()
+    }
+}
+
+/// One placement of an object in the scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instance {
+    /// The glTF node, `None` for a `.hce` file.
+    pub node: Option<usize>,
+    /// The node's name, or the object's for a `.hce` file.
+    pub name: String,
+    /// Object space (the control mesh's) to world.
+    pub transform: Mat4,
+}
+
+/// A container object with where it is drawn.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AssetObject {
+    /// Index in the container's object table.
+    pub index: u32,
+    /// The validated object: control mesh, adjacency tables, trees, normals, colours.
+    pub object: Object,
+    /// Empty when no node of the scene uses the object (it is then not drawn).
+    pub instances: Vec<Instance>,
+    /// Bounds of the control points in object space. Loop subdivision keeps the surface inside
+    /// the control points' convex hull, so they bound every level.
+    pub bounds: Bounds,
+    /// Mean length of the control triangles' edges in object space (for level of detail).
+    pub mean_edge_length: f32,
+    /// Depth of the deepest HCE tree: the level at which every element has its own triangles.
+    pub tree_depth: u32,
+}
+
+impl AssetObject {
+    pub fn name(&self) -> &str {
+        &self.object.name
+    }
+
+    pub fn kind(&self) -> ObjectKind {
+        self.object.kind
+    }
+
+    /// Bounds of every instance in world space; `None` without instances.
+    pub fn world_bounds(&self) -> Option<Bounds> {
+        self.instances
+            .iter()
+            .map(|i| self.bounds.transformed(&i.transform))
+            .reduce(Bounds::union)
+    }
+}
+
+/// The scene's perspective camera (glTF: the first camera node met in the walk of the scene).
+/// The camera looks along its local −Z with +Y up.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneCamera {
+    pub node: usize,
+    pub name: String,
+    pub eye: [f32; 3],
+    /// Unit view direction.
+    pub forward: [f32; 3],
+    /// Unit up direction (perpendicular to `forward`).
+    pub up: [f32; 3],
+    /// Vertical field of view in degrees.
+    pub fov_y_degrees: f32,
+    /// The aspect ratio the camera was authored for, when the file says.
+    pub aspect_ratio: Option<f32>,
+}
+
+/// A loaded, validated baked asset.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Asset {
+    /// The file it came from, as given to [`Asset::open`].
+    pub path: PathBuf,
+    pub format: AssetFormat,
+    pub metadata: Metadata,
+    /// Every container object, in container order.
+    pub objects: Vec<AssetObject>,
+    pub camera: Option<SceneCamera>,
+    /// Parts of the file that were skipped, each naming the part and why.
+    pub warnings: Vec<String>,
+}
+
+/// The bytes of a file: read, or mapped when large.
+enum FileBytes {
+    Read(Vec<u8>),
+    Mapped(memmap2::Mmap),
+}
+
+impl std::ops::Deref for FileBytes {
+    type Target = [u8];
+    fn deref(&self) -> &[u8] {
+        match self {
+            FileBytes::Read(v) => v,
+            FileBytes::Mapped(m) => m,
+        }
+    }
+}
+
+fn read_file(path: &Path) -> Result<FileBytes, std::io::Error> {
+    let file = std::fs::File::open(path)?;
+    let len = file.metadata()?.len();
+    if len >= MMAP_THRESHOLD {
+        // SAFETY: the map is read-only and lives only while the asset is parsed; everything
+        // kept is copied out of it. Another process truncating the file during that window
+        // could fault the read, the usual caveat of memory-mapped input, accepted here for
+        // large files because reading them would double their memory for no benefit.
+        let map = unsafe { memmap2::Mmap::map(&file)? };
+        Ok(FileBytes::Mapped(map))
+    } else {
+        let mut v = Vec::with_capacity(len as usize);
+        std::io::Read::read_to_end(&mut std::io::BufReader::new(file), &mut v)?;
+        Ok(FileBytes::Read(v))
+    }
+}
+
+const HCE_IDENTIFIER: &[u8; 4] = b"\x89HCE";
+
+impl Asset {
+    /// Opens a `.glb`, `.gltf` or `.hce` file with the default (strict) options.
+    pub fn open(path: impl AsRef<Path>) -> Result<Self, AssetError> {
+        Self::open_with(path, &OpenOptions::default())
+    }
+
+    /// Opens a `.glb`, `.gltf` or `.hce` file. The format is recognised from the first bytes
+    /// (GLB and container identifiers), else from the extension (`.gltf` JSON). External
+    /// buffers of a `.gltf` are read from its folder (plain relative names only).
+    pub fn open_with(path: impl AsRef<Path>, options: &OpenOptions) -> Result<Self, AssetError> {
+        let path = path.as_ref();
+        let shown = path.display().to_string();
+        let bytes = read_file(path).map_err(|error| AssetError::Io {
+            path: shown.clone(),
+            error,
+        })?;
+        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let is_gltf_ext = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("gltf"));
+        let mut seen = HashSet::new();
+        let resolve = |uri: &str| -> Result<Vec<u8>, String> {
+            // A URI must not reach outside the asset's folder.
+            if uri.contains("..") || uri.contains(':') || uri.starts_with('/') {
+                return Err("only relative paths inside the asset's folder are followed".into());
+            }
+            let file = dir.join(uri);
+            // Each file once: many buffers naming one big file must not multiply memory.
+            let key = std::fs::canonicalize(&file).unwrap_or_else(|_| file.clone());
+            if !seen.insert(key) {
+                return Err(
+                    "another buffer already uses this file; each buffer file is loaded once".into(),
+                );
+            }
+            std::fs::read(&file).map_err(|e| e.to_string())
+        };
+        let format = if bytes.starts_with(b"glTF") {
+            AssetFormat::Glb
+        } else if bytes.starts_with(HCE_IDENTIFIER) {
+            AssetFormat::Hce
+        } else if is_gltf_ext || bytes.first() == Some(&b'{') {
+            AssetFormat::Gltf
+        } else if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("hce"))
+        {
+            // Let the container reader say what is wrong with the identifier.
+            AssetFormat::Hce
+        } else {
+            return Err(AssetError::UnknownFormat { path: shown });
+        };
+        Self::from_bytes(path, format, &bytes, resolve, options)
+    }
+
+    /// Builds an asset from bytes already in memory; `resolve` loads a `.gltf`'s external
+    /// buffers by URI. `path` only names the asset in messages.
+    pub fn from_bytes(
+        path: &Path,
+        format: AssetFormat,
+        bytes: &[u8],
+        resolve: impl FnMut(&str) -> Result<Vec<u8>, String>,
+        options: &OpenOptions,
+    ) -> Result<Self, AssetError> {
+        let shown = path.display().to_string();
+        let mut loader = Loader {
+            path: shown,
+            strict: options.strict,
+            warnings: Vec::new(),
+        };
+        let (metadata, objects, camera) = match format {
+            AssetFormat::Hce => {
+                let container = loader.container(bytes)?;
+                let objects = container
+                    .objects
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, object)| {
+                        let name = object.name.clone();
+                        loader.finish_object(
+                            i as u32,
+                            object,
+                            vec![Instance {
+                                node: None,
+                                name,
+                                transform: Mat4::IDENTITY,
+                            }],
+                        )
+                    })
+                    .collect::<Result<Vec<_>, _>>()?;
+                (container.metadata, objects, None)
+            }
+            AssetFormat::Glb | AssetFormat::Gltf => loader.gltf(bytes, resolve)?,
+        };
+        Ok(Asset {
+            path: path.to_path_buf(),
+            format,
+            metadata,
+            objects,
+            camera,
+            warnings: loader.warnings,
+        })
+    }
+
+    /// World bounds of every instance of every object; `None` when nothing is drawn.
+    pub fn bounds(&self) -> Option<Bounds> {
+        self.objects
+            .iter()
+            .filter_map(AssetObject::world_bounds)
+            .reduce(Bounds::union)
+    }
+
+    /// Number of (object, instance) pairs: the draws of one frame.
+    pub fn instance_count(&self) -> usize {
+        self.objects.iter().map(|o| o.instances.len()).sum()
+    }
+
+    /// Every control triangle of every instance, in world space (coarse geometry, e.g. for
+    /// placing a camera).
+    pub fn world_triangles(&self) -> Vec<[[f32; 3]; 3]> {
+        let mut out = Vec::new();
+        for o in &self.objects {
+            let m = &o.object.mesh;
+            for inst in &o.instances {
+                for t in 0..m.triangle_count() {
+                    let tri = m.triangle(t);
+                    out.push(tri.map(|v| {
+                        inst.transform
+                            .transform_point3(Vec3::from(m.position(v)))
+                            .to_array()
+                    }));
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Opening state: the file name for messages, the policy and the warnings so far.
+struct Loader {
+    path: String,
+    strict: bool,
+    warnings: Vec<String>,
+}
+
+impl Loader {
+    fn gltf_err(&self, source: GltfError) -> AssetError {
+        AssetError::Gltf {
+            path: self.path.clone(),
+            error: source,
+        }
+    }
+
+    fn scene_err(&self, location: impl Into<String>, message: impl Into<String>) -> AssetError {
+        AssetError::Scene {
+            path: self.path.clone(),
+            location: location.into(),
+            message: message.into(),
+        }
+    }
+
+    /// Reads (checksums included) and validates a container.
+    fn container(&self, bytes: &[u8]) -> Result<hce_format::Container, AssetError> {
+        let container = hce_format::read(bytes).map_err(|error| AssetError::Container {
+            path: self.path.clone(),
+            error,
+        })?;
+        // From the bytes, not the model: zero padding between sections is checked too, so a
+        // flipped bit anywhere in the container is reported.
+        let problems = hce_format::validate_bytes(bytes);
+        if !problems.is_empty() {
+            return Err(AssetError::Invalid {
+                path: self.path.clone(),
+                problems,
+            });
+        }
+        Ok(container)
+    }
+
+    /// Checks the object's own geometry hash and computes what the renderer needs.
+    fn finish_object(
+        &self,
+        index: u32,
+        object: Object,
+        instances: Vec<Instance>,
+    ) -> Result<AssetObject, AssetError> {
+        let mesh = &object.mesh;
+        let computed = geometry_hash(mesh.triangles.iter().map(|&v| mesh.position(v)));
+        if computed != object.geometry_hash {
+            return Err(AssetError::StaleGeometry {
+                path: self.path.clone(),
+                location: format!("objects[{index}].mesh"),
+                object: index,
+                name: object.name.clone(),
+                stored: object.geometry_hash,
+                computed,
+            });
+        }
+        let points = mesh.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]);
+        let bounds = Bounds::of_points(points).unwrap_or(Bounds {
+            min: [0.0; 3],
+            max: [0.0; 3],
+        });
+        let mut sum = 0f64;
+        for t in 0..mesh.triangle_count() {
+            let c = mesh.triangle(t).map(|v| Vec3::from(mesh.position(v)));
+            for e in 0..3 {
+                sum += f64::from((c[e] - c[(e + 1) % 3]).length());
+            }
+        }
+        let mean_edge_length = (sum / (3 * mesh.triangle_count()).max(1) as f64) as f32;
+        // Validation decoded every tree already, so none fails here.
+        let tree_depth = hce_format::triangle_trees(&object)
+            .iter()
+            .filter_map(|t| t.as_ref().ok().map(|s| s.depth))
+            .max()
+            .unwrap_or(0);
+        Ok(AssetObject {
+            index,
+            object,
+            instances,
+            bounds,
+            mean_edge_length,
+            tree_depth,
+        })
+    }
+
+    /// Either an error (strict) or a warning and `None` (lenient) for a bad primitive.
+    fn bad_link(&mut self, error: AssetError) -> Result<(), AssetError> {
+        if self.strict {
+            Err(error)
+        } else {
+            self.warnings
+                .push(format!("{error}; the primitive is ignored (SPEC.md 3.5)"));
+            Ok(())
+        }
+    }
+
+    fn gltf(
+        &mut self,
+        bytes: &[u8],
+        resolve: impl FnMut(&str) -> Result<Vec<u8>, String>,
+    ) -> Result<(Metadata, Vec<AssetObject>, Option<SceneCamera>), AssetError> {
+        let asset = hgltf::Asset::parse(bytes).map_err(|e| self.gltf_err(e))?;
+        let buffers = asset.buffers(resolve).map_err(|e| self.gltf_err(e))?;
+        let container_bytes = hgltf::container_bytes(&asset.json, &buffers)
+            .map_err(|e| self.gltf_err(e))?
+            .ok_or_else(|| AssetError::NotBaked {
+                path: self.path.clone(),
+            })?;
+        let container = self.container(container_bytes)?;
+        let links = hgltf::primitive_links(&asset.json).map_err(|e| self.gltf_err(e))?;
+        let geometries = hgltf::linked_geometries(&asset.json, &buffers, &links);
+        drop(buffers);
+        let good = self.check_links(&container, &links, geometries)?;
+
+        // Objects of each mesh, in first-primitive order, from the links that passed.
+        let mut mesh_objects: HashMap<usize, Vec<u32>> = HashMap::new();
+        for l in &good {
+            let list = mesh_objects.entry(l.mesh).or_default();
+            if !list.contains(&l.object) {
+                list.push(l.object);
+            }
+        }
+        let walk = self.walk_scene(&asset.json)?;
+        let mut instances: Vec<Vec<Instance>> = vec![Vec::new(); container.objects.len()];
+        let mut camera = None;
+        for (node, world) in &walk {
+            let n = &asset.json["nodes"][*node];
+            let name = n
+                .get("name")
+                .and_then(Value::as_str)
+                .map(str::to_owned)
+                .unwrap_or_else(|| format!("nodes[{node}]"));
+            if let Some(m) = n.get("mesh") {
+                let m = m
+                    .as_u64()
+                    .ok_or_else(|| self.scene_err(format!("nodes[{node}].mesh"), "not an index"))?
+                    as usize;
+                for &o in mesh_objects.get(&m).map(Vec::as_slice).unwrap_or(&[]) {
+                    instances[o as usize].push(Instance {
+                        node: Some(*node),
+                        name: name.clone(),
+                        transform: *world,
+                    });
+                }
+            }
+            if camera.is_none() {
+                if let Some(c) = n.get("camera") {
+                    camera = self.camera(&asset.json, *node, &name, c, world)?;
+                }
+            }
+        }
+        let mut objects = Vec::with_capacity(container.objects.len());
+        for (i, (object, inst)) in container.objects.into_iter().zip(instances).enumerate() {
+            if inst.is_empty() {
+                self.warnings.push(format!(
+                    "objects[{i}] '{}' is used by no node of the scene; it is not drawn",
+                    object.name
+                ));
+            }
+            objects.push(self.finish_object(i as u32, object, inst)?);
+        }
+        Ok((container.metadata, objects, camera))
+    }
+
+    /// SPEC.md 3.3 and 3.5 for every primitive link; returns the links that passed.
+    fn check_links(
+        &mut self,
+        container: &hce_format::Container,
+        links: &[PrimitiveLink],
+        geometries: Vec<Result<(u64, usize), GltfError>>,
+    ) -> Result<Vec<PrimitiveLink>, AssetError> {
+        let mut good: Vec<PrimitiveLink> = Vec::new();
+        let mut ranges: Vec<(u32, u64, u64, String)> = Vec::new();
+        for (l, g) in links.iter().zip(geometries) {
+            let at = format!("meshes[{}].primitives[{}]", l.mesh, l.primitive);
+            let link_err = |message: String| AssetError::Link {
+                path: self.path.clone(),
+                location: at.clone(),
+                message,
+            };
+            let Some(object) = container.objects.get(l.object as usize) else {
+                let e = link_err(format!(
+                    "object {} is out of range; the container has {} objects",
+                    l.object,
+                    container.objects.len()
+                ));
+                self.bad_link(e)?;
+                continue;
+            };
+            let (hash, triangles) = match g {
+                Ok(g) => g,
+                Err(e) => {
+                    let e = link_err(format!("cannot read its geometry: {e}"));
+                    self.bad_link(e)?;
+                    continue;
+                }
+            };
+            let end = u64::from(l.first_triangle) + triangles as u64;
+            if end > object.triangles.len() as u64 {
+                let e = link_err(format!(
+                    "triangles {}..{end} exceed object {} '{}' with {} triangles",
+                    l.first_triangle,
+                    l.object,
+                    object.name,
+                    object.triangles.len()
+                ));
+                self.bad_link(e)?;
+                continue;
+            }
+            let whole = l.first_triangle == 0 && triangles == object.triangles.len();
+            let stored = if hash != l.geometry_hash {
+                Some(l.geometry_hash)
+            } else if whole && hash != object.geometry_hash {
+                Some(object.geometry_hash)
+            } else {
+                None
+            };
+            if let Some(stored) = stored {
+                let e = AssetError::StaleGeometry {
+                    path: self.path.clone(),
+                    location: at.clone(),
+                    object: l.object,
+                    name: object.name.clone(),
+                    stored,
+                    computed: hash,
+                };
+                self.bad_link(e)?;
+                continue;
+            }
+            ranges.push((l.object, u64::from(l.first_triangle), end, at));
+            good.push(l.clone());
+        }
+        ranges.sort();
+        for w in ranges.windows(2) {
+            if w[0].0 == w[1].0 && w[1].1 < w[0].2 {
+                let e = AssetError::Link {
+                    path: self.path.clone(),
+                    location: w[1].3.clone(),
+                    message: format!(
+                        "its triangle range overlaps that of {} for object {} (SPEC.md 3.3)",
+                        w[0].3, w[0].0
+                    ),
+                };
+                self.bad_link(e)?;
+            }
+        }
+        Ok(good)
+    }
+
+    /// The nodes of the default scene with their world transforms, depth first in child
+    /// order (the order `hce bake` uses). A node reached twice is walked once, with a warning.
+    fn walk_scene(&mut self, json: &Value) -> Result<Vec<(usize, Mat4)>, AssetError> {
+        let nodes = match json.get("nodes") {
+            None => return Ok(Vec::new()),
+            Some(n) => n
+                .as_array()
+                .ok_or_else(|| self.scene_err("nodes", "not an array"))?,
+        };
+        let path = self.path.clone();
+        let scene_err = move |location: String, message: String| AssetError::Scene {
+            path: path.clone(),
+            location,
+            message,
+        };
+        let index_list = |v: &Value, at: &str| -> Result<Vec<usize>, AssetError> {
+            let list = v.as_array().ok_or_else(|| {
+                scene_err(at.to_owned(), "not an array of node indices".to_owned())
+            })?;
+            list.iter()
+                .enumerate()
+                .map(|(k, i)| {
+                    i.as_u64()
+                        .map(|i| i as usize)
+                        .filter(|&i| i < nodes.len())
+                        .ok_or_else(|| {
+                            scene_err(
+                                format!("{at}[{k}]"),
+                                format!("{i} is not a node index (the file has {})", nodes.len()),
+                            )
+                        })
+                })
+                .collect()
+        };
+        let scenes = json.get("scenes").and_then(Value::as_array);
+        let scene = json
+            .get("scene")
+            .and_then(Value::as_u64)
+            .map(|s| s as usize)
+            .or(scenes.filter(|s| !s.is_empty()).map(|_| 0));
+        let roots = match (scene, scenes) {
+            (Some(s), Some(list)) => {
+                let sc = list
+                    .get(s)
+                    .ok_or_else(|| self.scene_err("scene", format!("scene {s} does not exist")))?;
+                match sc.get("nodes") {
+                    Some(n) => index_list(n, &format!("scenes[{s}].nodes"))?,
+                    None => Vec::new(),
+                }
+            }
+            (Some(s), None) => {
+                return Err(self.scene_err("scene", format!("scene {s} does not exist")))
+            }
+            (None, _) => {
+                let mut is_child = vec![false; nodes.len()];
+                for (i, n) in nodes.iter().enumerate() {
+                    if let Some(c) = n.get("children") {
+                        for c in index_list(c, &format!("nodes[{i}].children"))? {
+                            is_child[c] = true;
+                        }
+                    }
+                }
+                (0..nodes.len()).filter(|&i| !is_child[i]).collect()
+            }
+        };
+        let mut visited = vec![false; nodes.len()];
+        let mut out = Vec::new();
+        let mut stack: Vec<(usize, Mat4)> = roots
+            .into_iter()
+            .rev()
+            .map(|n| (n, Mat4::IDENTITY))
+            .collect();
+        while let Some((node, parent)) = stack.pop() {
+            if std::mem::replace(&mut visited[node], true) {
+                self.warnings.push(format!(
+                    "nodes[{node}] is reached twice in the hierarchy; the second instance is ignored"
+                ));
+                continue;
+            }
+            let world = parent * self.local_transform(&nodes[node], node)?;
+            out.push((node, world));
+            if let Some(c) = nodes[node].get("children") {
+                for c in index_list(c, &format!("nodes[{node}].children"))?
+                    .into_iter()
+                    .rev()
+                {
+                    stack.push((c, world));
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    fn local_transform(&self, node: &Value, index: usize) -> Result<Mat4, AssetError> {
+        let numbers = |key: &str, len: usize| -> Result<Option<Vec<f32>>, AssetError> {
+            let Some(v) = node.get(key) else {
+                return Ok(None);
+            };
+            let at = format!("nodes[{index}].{key}");
+            let list: Option<Vec<f32>> = v.as_array().and_then(|a| {
+                a.iter()
+                    .map(|x| x.as_f64().map(|x| x as f32).filter(|x| x.is_finite()))
+                    .collect()
+            });
+            match list {
+                Some(l) if l.len() == len => Ok(Some(l)),
+                _ => Err(self.scene_err(at, format!("must be {len} finite numbers"))),
+            }
+        };
+        if let Some(m) = numbers("matrix", 16)? {
+            return Ok(Mat4::from_cols_slice(&m));
+        }
+        let t = numbers("translation", 3)?.unwrap_or(vec![0.0; 3]);
+        let s = numbers("scale", 3)?.unwrap_or(vec![1.0; 3]);
+        let r = match numbers("rotation", 4)? {
+            None => Quat::IDENTITY,
+            Some(q) => {
+                let q = Quat::from_xyzw(q[0], q[1], q[2], q[3]);
+                if q.length() < 1e-6 {
+                    return Err(self.scene_err(
+                        format!("nodes[{index}].rotation"),
+                        "is not a unit quaternion",
+                    ));
+                }
+                q.normalize()
+            }
+        };
+        Ok(Mat4::from_scale_rotation_translation(
+            Vec3::from_slice(&s),
+            r,
+            Vec3::from_slice(&t),
+        ))
+    }
+
+    /// The camera of a node, or `None` (with a warning) for cameras that cannot be used.
+    fn camera(
+        &mut self,
+        json: &Value,
+        node: usize,
+        name: &str,
+        index: &Value,
+        world: &Mat4,
+    ) -> Result<Option<SceneCamera>, AssetError> {
+        let at = format!("nodes[{node}].camera");
+        let c = index
+            .as_u64()
+            .and_then(|i| json.get("cameras")?.as_array()?.get(i as usize))
+            .ok_or_else(|| self.scene_err(&at, "does not name a camera of `cameras`"))?;
+        if c.get("type").and_then(Value::as_str) != Some("perspective") {
+            self.warnings.push(format!(
+                "{at}: only perspective cameras are used; this one is ignored"
+            ));
+            return Ok(None);
+        }
+        let p = c.get("perspective");
+        let yfov = p
+            .and_then(|p| p.get("yfov"))
+            .and_then(Value::as_f64)
+            .filter(|y| y.is_finite() && *y > 0.0 && *y < std::f64::consts::PI)
+            .ok_or_else(|| self.scene_err(&at, "perspective.yfov must be in (0, π) radians"))?;
+        let aspect_ratio = p
+            .and_then(|p| p.get("aspectRatio"))
+            .and_then(Value::as_f64)
+            .map(|a| a as f32)
+            .filter(|a| a.is_finite() && *a > 0.0);
+        let eye = world.transform_point3(Vec3::ZERO);
+        let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+        let up = world.transform_vector3(Vec3::Y);
+        let up = (up - forward * up.dot(forward)).normalize_or_zero();
+        if forward == Vec3::ZERO || up == Vec3::ZERO || !eye.is_finite() {
+            self.warnings.push(format!(
+                "{at}: the node's transform collapses the camera's axes; it is ignored"
+            ));
+            return Ok(None);
+        }
+        Ok(Some(SceneCamera {
+            node,
+            name: name.to_owned(),
+            eye: eye.to_array(),
+            forward: forward.to_array(),
+            up: up.to_array(),
+            fov_y_degrees: (yfov as f32).to_degrees(),
+            aspect_ratio,
+        }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use hce_format::example;
+
+    fn open_glb(bytes: &[u8], options: &OpenOptions) -> Result<Asset, AssetError> {
+        Asset::from_bytes(
+            Path::new("test.glb"),
+            AssetFormat::Glb,
+            bytes,
+            |_| Err("no external buffers".into()),
+            options,
+        )
+    }
+
+    #[test]
+    fn example_glb_opens_with_one_identity_instance() {
+        let asset = open_glb(&example::triangle_glb(), &OpenOptions::default()).unwrap();
+        assert_eq!(asset.objects.len(), 1);
+        let o = &asset.objects[0];
+        assert_eq!(o.name(), "tri");
+        assert_eq!(o.instances.len(), 1);
+        assert_eq!(o.instances[0].node, Some(0));
+        assert_eq!(o.instances[0].transform, Mat4::IDENTITY);
+        assert_eq!(o.tree_depth, 2);
+        assert_eq!(
+            asset.bounds().unwrap(),
+            Bounds {
+                min: [0.0; 3],
+                max: [1.0, 1.0, 0.0]
+            }
+        );
+        // Edges 1, √2, 1.
+        assert!((o.mean_edge_length - (2.0 + 2f32.sqrt()) / 3.0).abs() < 1e-6);
+        assert!(asset.camera.is_none());
+        assert!(asset.warnings.is_empty(), "{:?}", asset.warnings);
+    }
+
+    /// Edits the example GLB's JSON (its BIN chunk is kept).
+    fn edited_glb(edit: impl FnOnce(&mut Value)) -> Vec<u8> {
+        let a = hgltf::Asset::from_glb(&example::triangle_glb()).unwrap();
+        let mut json = a.json;
+        edit(&mut json);
+        hgltf::write_glb(&json, a.bin.as_deref().unwrap_or(&[])).unwrap()
+    }
+
+    #[test]
+    fn node_transforms_and_camera_are_read() {
+        let glb = edited_glb(|j| {
+            j["nodes"] = serde_json::json!([
+                { "children": [1, 2], "translation": [0.0, 0.0, 5.0] },
+                { "mesh": 0, "scale": [2.0, 2.0, 2.0], "name": "big" },
+                { "camera": 0, "rotation": [0.0, 1.0, 0.0, 0.0] }
+            ]);
+            j["scenes"] = serde_json::json!([{ "nodes": [0] }]);
+            j["cameras"] = serde_json::json!([
+                { "type": "perspective", "perspective": { "yfov": 0.5, "znear": 0.1 } }
+            ]);
+        });
+        let asset = open_glb(&glb, &OpenOptions::default()).unwrap();
+        let inst = &asset.objects[0].instances;
+        assert_eq!(inst.len(), 1);
+        assert_eq!(inst[0].name, "big");
+        let b = asset.bounds().unwrap();
+        assert_eq!((b.min, b.max), ([0.0, 0.0, 5.0], [2.0, 2.0, 5.0]));
+        let cam = asset.camera.unwrap();
+        assert_eq!(cam.eye, [0.0, 0.0, 5.0]);
+        // Turned half around Y: looks along +Z.
+        assert!((Vec3::from(cam.forward) - Vec3::Z).length() < 1e-6);
+        assert!((cam.fov_y_degrees - 0.5f32.to_degrees()).abs() < 1e-4);
+    }
+
+    #[test]
+    fn edited_mesh_is_stale_unless_lenient() {
+        // Move one vertex of the primitive: its hash no longer matches the baked one.
+        let a = hgltf::Asset::from_glb(&example::triangle_glb()).unwrap();
+        let mut bin = a.bin.unwrap();
+        bin[12..16].copy_from_slice(&0.5f32.to_le_bytes());
+        let glb = hgltf::write_glb(&a.json, &bin).unwrap();
+        let e = open_glb(&glb, &OpenOptions::default()).unwrap_err();
+        assert!(
+            matches!(e, AssetError::StaleGeometry { object: 0, .. }),
+            "{e}"
+        );
+        assert!(e.to_string().contains("bake it again"), "{e}");
+        let lenient = open_glb(&glb, &OpenOptions { strict: false }).unwrap();
+        assert!(lenient.objects[0].instances.is_empty());
+        assert_eq!(lenient.warnings.len(), 2, "{:?}", lenient.warnings);
+    }
+
+    #[test]
+    fn bad_scene_graphs_are_errors_or_warnings() {
+        let out_of_range = edited_glb(|j| j["scenes"] = serde_json::json!([{ "nodes": [7] }]));
+        let e = open_glb(&out_of_range, &OpenOptions::default()).unwrap_err();
+        assert!(e.to_string().contains("scenes[0].nodes[0]"), "{e}");
+        let bad_matrix = edited_glb(|j| j["nodes"][0]["matrix"] = serde_json::json!([1.0, 2.0]));
+        let e = open_glb(&bad_matrix, &OpenOptions::default()).unwrap_err();
+        assert!(e.to_string().contains("nodes[0].matrix"), "{e}");
+        // A cycle is walked once, with a warning, not forever.
+        let cycle = edited_glb(|j| {
+            j["nodes"] = serde_json::json!([{ "mesh": 0, "children": [1] }, { "children": [0] }]);
+        });
+        let asset = open_glb(&cycle, &OpenOptions::default()).unwrap();
+        assert_eq!(asset.objects[0].instances.len(), 1);
+        assert!(
+            asset.warnings[0].contains("reached twice"),
+            "{:?}",
+            asset.warnings
+        );
+        let plain = edited_glb(|j| {
+            j.as_object_mut().unwrap().remove("extensions");
+        });
+        assert!(matches!(
+            open_glb(&plain, &OpenOptions::default()),
+            Err(AssetError::NotBaked { .. })
+        ));
+    }
+
+    #[test]
+    fn hce_container_opens_with_its_own_mesh() {
+        let bytes = hce_format::write(&example::two_triangles()).unwrap();
+        let asset = Asset::from_bytes(
+            Path::new("two.hce"),
+            AssetFormat::Hce,
+            &bytes,
+            |_| Err(String::new()),
+            &OpenOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(asset.objects[0].instances[0].transform, Mat4::IDENTITY);
+        assert_eq!(asset.instance_count(), 1);
+        assert_eq!(asset.world_triangles().len(), 2);
+        // A container whose stored hash does not match its control mesh is refused.
+        let mut c = example::two_triangles();
+        c.objects[0].geometry_hash ^= 1;
+        let bytes = hce_format::write(&c).unwrap();
+        let e = Asset::from_bytes(
+            Path::new("two.hce"),
+            AssetFormat::Hce,
+            &bytes,
+            |_| Err(String::new()),
+            &OpenOptions::default(),
+        )
+        .unwrap_err();
+        assert!(e.to_string().starts_with("two.hce: objects[0].mesh"), "{e}");
+    }
+
+    #[test]
+    fn truncated_and_bit_flipped_files_are_errors_not_panics() {
+        let glb = example::triangle_glb();
+        for len in 0..glb.len() {
+            assert!(
+                open_glb(&glb[..len], &OpenOptions::default()).is_err(),
+                "truncated to {len} bytes"
+            );
+        }
+        // Where the container lies in the GLB: a flip there must be caught by its checksums.
+        let container = hce_format::write(&example::single_triangle()).unwrap();
+        let start = glb
+            .windows(container.len())
+            .position(|w| w == container.as_slice())
+            .unwrap();
+        let mut accepted_outside = 0;
+        for i in 0..glb.len() {
+            for bit in [0, 3, 7] {
+                let mut b = glb.clone();
+                b[i] ^= 1 << bit;
+                let r = open_glb(&b, &OpenOptions::default());
+                if (start..start + container.len()).contains(&i) {
+                    assert!(
+                        r.is_err(),
+                        "flip of bit {bit} at container byte {}",
+                        i - start
+                    );
+                } else if r.is_ok() {
+                    accepted_outside += 1;
+                }
+            }
+        }
+        // Some flips outside the container are harmless (JSON whitespace, the generator
+        // string, padding); most are not, but none may panic.
+        assert!(accepted_outside < glb.len() * 3, "{accepted_outside}");
+    }
+}

@@ -1,0 +1,768 @@
+//! GPU resources for a loaded [`Asset`], on a device and queue the caller owns: per object, its
+//! sections uploaded once, refinement to a level (forced, or chosen from the view by
+//! [`choose_level`]) into output buffers that are reused while the level does not grow, and the
+//! buffers to draw (positions, normals, colours, indices) or to read back.
+//!
+//! Each object is refined by one of these paths (one variant of a private enum per object):
+//!
+//! * **Flat** objects ([`ObjectKind::Flat`]) by the [`FlatKernel`]: linear 1-to-4 split, colours
+//!   from their HCE trees, no smoothing. They are refined to their tree depth (the level at
+//!   which every radiosity element has its own triangles), capped by
+//!   [`SceneOptions::flat_max_level`], whatever level the view asks for: a coarser level would
+//!   blur the baked lighting and a finer one adds nothing.
+//! * **Multiresolution** objects by [`MultiresPath::CpuReference`]: the CPU Loop subdivision
+//!   ([`crate::subdivide`]) and CPU colour application ([`crate::colour`]), uploaded as buffers.
+//!   It is the reference the GPU Loop kernel is checked against, kept as an explicit option
+//!   (never a silent fallback). The GPU Loop kernel (`LoopKernel`, same methods as
+//!   [`FlatKernel`]) plugs in as one more variant of [`MultiresPath`] and of the per-object
+//!   refiner.
+//!
+//! # A viewer loop
+//!
+//! ```no_run
+//! use hce_runtime::asset::Asset;
+//! use hce_runtime::gpu::scene::{GpuScene, LevelChoice, SceneOptions};
+//! use hce_runtime::gpu::{Camera, ContextOptions, GpuContext, LodParams};
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let asset = Asset::open("baked.glb")?;
+//! // A viewer usually owns its device already: `GpuContext::from_existing(&adapter, &device,
+//! // &queue)` wraps it.
+//! let ctx = GpuContext::new(&ContextOptions::default())?;
+//! let mut scene = GpuScene::new(&ctx, &asset, &SceneOptions::default())?;
+//! let mut camera = Camera { eye: [0.0, 1.0, 3.0], target: [0.0, 0.5, 0.0], fov_y_degrees: 45.0 };
+//! for _frame in 0..3 {
+//!     camera.eye[2] -= 0.5; // the user walks in
+//!     // Re-refine only the objects whose level changed; buffers are reused unless they grow.
+//!     scene.refine_all(
+//!         &ctx,
+//!         &LevelChoice::Auto { camera, viewport_height: 720, lod: LodParams::default() },
+//!     )?;
+//!     for draw in scene.draws() {
+//!         // Bind draw.positions (stride 12) and draw.colours (stride 16, linear RGBA) as
+//!         // vertex buffers, draw.indices as a u32 index buffer, draw.transform as the model
+//!         // matrix, and draw draw.index_count indices with no lighting: the colours are the
+//!         // baked lighting.
+//!         let _ = (draw.positions, draw.colours, draw.indices, draw.transform);
+//!     }
+//! }
+//! # Ok(())
+//! # }
+//! ```
+
+use glam::{Mat4, Vec3};
+use hce_format::{Object, ObjectKind};
+
+use super::framing::{auto_scene_camera, Placement};
+use super::lod::{choose_level, Camera, LodParams};
+use super::render::{render_draws, MeshDraw, RenderParams, RenderedImage};
+use super::util::{check_size, read_back};
+use super::{FlatKernel, FlatObject, FlatOutput, Framing, GpuContext, GpuError};
+use crate::asset::{Asset, Bounds};
+use crate::subdivide::{subdivide_into, Refined};
+
+/// How multiresolution objects are refined.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MultiresPath {
+    /// CPU Loop subdivision and CPU colour application, uploaded as buffers (levels up to
+    /// [`crate::subdivide::MAX_LEVEL`]). The reference for checking the GPU kernel.
+    #[default]
+    CpuReference,
+}
+
+/// Options of [`GpuScene::new`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SceneOptions {
+    pub multires: MultiresPath,
+    /// Highest level a flat object is refined to; below it, its tree depth. Default 7
+    /// (16 384 fine triangles per coarse one).
+    pub flat_max_level: u32,
+}
+
+impl Default for SceneOptions {
+    fn default() -> Self {
+        Self {
+            multires: MultiresPath::default(),
+            flat_max_level: 7,
+        }
+    }
+}
+
+/// The level each multiresolution object is refined to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LevelChoice {
+    /// This level for every multiresolution object.
+    Fixed(u32),
+    /// [`choose_level`] for the instance nearest to `camera` on a viewport
+    /// `viewport_height` pixels high.
+    Auto {
+        camera: Camera,
+        viewport_height: u32,
+        lod: LodParams,
+    },
+}
+
+/// Output buffers of the CPU path, shaped like the kernels' outputs.
+struct CpuOutput {
+    level: u32,
+    vertex_count: u32,
+    triangle_count: u32,
+    positions: wgpu::Buffer,
+    normals: wgpu::Buffer,
+    colours: wgpu::Buffer,
+    indices: wgpu::Buffer,
+}
+
+/// How one object is refined, with its uploaded data and its current output.
+enum Refiner {
+    Flat {
+        object: Box<FlatObject>,
+        out: Option<FlatOutput>,
+    },
+    CpuReference {
+        object: Box<Object>,
+        scratch: Refined,
+        out: Option<CpuOutput>,
+    },
+}
+
+struct SceneObject {
+    name: String,
+    kind: ObjectKind,
+    coarse_triangles: u64,
+    tree_depth: u32,
+    bounds: Bounds,
+    mean_edge_length: f32,
+    instances: Vec<Mat4>,
+    refiner: Refiner,
+}
+
+/// The buffers of a refined object, ready to draw.
+#[derive(Clone, Copy, Debug)]
+pub struct ObjectBuffers<'a> {
+    pub level: u32,
+    pub vertex_count: u32,
+    pub triangle_count: u32,
+    /// `x, y, z` f32 per vertex (stride 12), object space.
+    pub positions: &'a wgpu::Buffer,
+    /// Unit `x, y, z` f32 per vertex (stride 12) on the Loop paths. `None` for flat objects,
+    /// whose shared vertices have no single normal; they are drawn unlit anyway.
+    pub normals: Option<&'a wgpu::Buffer>,
+    /// Linear `r, g, b, 1` f32 per vertex (stride 16): the baked lighting.
+    pub colours: &'a wgpu::Buffer,
+    /// `u32` ×3 per fine triangle, counter-clockwise.
+    pub indices: &'a wgpu::Buffer,
+}
+
+/// One draw of a frame: an object's buffers and one of its instances' transforms.
+#[derive(Clone, Copy, Debug)]
+pub struct SceneDraw<'a> {
+    pub object: usize,
+    pub positions: &'a wgpu::Buffer,
+    pub colours: &'a wgpu::Buffer,
+    pub indices: &'a wgpu::Buffer,
+    pub index_count: u32,
+    /// Object to world.
+    pub transform: Mat4,
+}
+
+/// A refined object copied back to the CPU.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ObjectMesh {
+    pub level: u32,
+    /// `x, y, z` per vertex.
+    pub positions: Vec<f32>,
+    /// Unit `x, y, z` per vertex (Loop paths only).
+    pub normals: Option<Vec<f32>>,
+    /// Linear `r, g, b, 1` per vertex.
+    pub colours: Vec<f32>,
+    pub indices: Vec<u32>,
+}
+
+/// An asset's GPU resources. See the module documentation.
+pub struct GpuScene {
+    objects: Vec<SceneObject>,
+    flat: Option<FlatKernel>,
+    flat_max_level: u32,
+    bounds: Option<Bounds>,
+}
+
+fn invalid(name: &str, reason: impl std::fmt::Display) -> GpuError {
+    GpuError::InvalidObject {
+        object: name.to_owned(),
+        reason: reason.to_string(),
+    }
+}
+
+/// A vertex or index buffer at least `bytes` long: `slot`'s when it is large enough.
+fn ensure_buffer(
+    ctx: &GpuContext,
+    slot: Option<wgpu::Buffer>,
+    label: &'static str,
+    bytes: u64,
+    usage: wgpu::BufferUsages,
+) -> Result<wgpu::Buffer, GpuError> {
+    let bytes = check_size(ctx, label, bytes)?;
+    match slot {
+        Some(b) if b.size() >= bytes => Ok(b),
+        _ => Ok(ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: bytes,
+            usage: usage | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        })),
+    }
+}
+
+/// The scale by which `m` can at most lengthen an edge (its largest column norm).
+fn max_scale(m: &Mat4) -> f32 {
+    [m.x_axis, m.y_axis, m.z_axis]
+        .iter()
+        .map(|c| c.truncate().length())
+        .fold(0.0, f32::max)
+}
+
+impl GpuScene {
+    /// Uploads every object of `asset` (validated by [`Asset::open`]; the kernels check their
+    /// tables again before upload). Nothing is refined yet: call [`GpuScene::refine_all`] or
+    /// [`GpuScene::refine`].
+    pub fn new(ctx: &GpuContext, asset: &Asset, options: &SceneOptions) -> Result<Self, GpuError> {
+        let mut flat = None;
+        let mut objects = Vec::with_capacity(asset.objects.len());
+        for o in &asset.objects {
+            let refiner = match (o.kind(), options.multires) {
+                (ObjectKind::Flat, _) => {
+                    let kernel = flat.get_or_insert_with(|| FlatKernel::new(ctx));
+                    Refiner::Flat {
+                        object: Box::new(kernel.upload(ctx, &o.object)?),
+                        out: None,
+                    }
+                }
+                (ObjectKind::Multiresolution, MultiresPath::CpuReference) => {
+                    Refiner::CpuReference {
+                        object: Box::new(o.object.clone()),
+                        scratch: Refined::default(),
+                        out: None,
+                    }
+                }
+            };
+            objects.push(SceneObject {
+                name: o.name().to_owned(),
+                kind: o.kind(),
+                coarse_triangles: o.object.triangles.len() as u64,
+                tree_depth: o.tree_depth,
+                bounds: o.bounds,
+                mean_edge_length: o.mean_edge_length,
+                instances: o.instances.iter().map(|i| i.transform).collect(),
+                refiner,
+            });
+        }
+        Ok(Self {
+            objects,
+            flat,
+            flat_max_level: options.flat_max_level,
+            bounds: asset.bounds(),
+        })
+    }
+
+    pub fn object_count(&self) -> usize {
+        self.objects.len()
+    }
+
+    /// World bounds of everything drawn.
+    pub fn bounds(&self) -> Option<Bounds> {
+        self.bounds
+    }
+
+    pub fn object_name(&self, object: usize) -> Option<&str> {
+        self.objects.get(object).map(|o| o.name.as_str())
+    }
+
+    /// The level `choice` gives `object` (flat objects: their capped tree depth).
+    pub fn level_for(&self, object: usize, choice: &LevelChoice) -> Option<u32> {
+        let o = self.objects.get(object)?;
+        if o.kind == ObjectKind::Flat {
+            return Some(o.tree_depth.min(self.flat_max_level));
+        }
+        Some(match choice {
+            LevelChoice::Fixed(level) => *level,
+            LevelChoice::Auto {
+                camera,
+                viewport_height,
+                lod,
+            } => o
+                .instances
+                .iter()
+                .map(|m| {
+                    let b = o.bounds.transformed(m);
+                    let edge = o.mean_edge_length * max_scale(m);
+                    choose_level(b.min, b.max, edge, camera, *viewport_height, lod)
+                })
+                .max()
+                .unwrap_or(lod.min_level),
+        })
+    }
+
+    /// Fine triangles of `object` at `level` (per instance).
+    pub fn triangles_at(&self, object: usize, level: u32) -> u64 {
+        self.objects
+            .get(object)
+            .map_or(0, |o| o.coarse_triangles << (2 * level.min(31)))
+    }
+
+    /// The level `object` is refined to now, if it has been refined.
+    pub fn level(&self, object: usize) -> Option<u32> {
+        self.buffers(object).map(|b| b.level)
+    }
+
+    /// Refines every object that has instances to the level `choice` gives it. Returns the
+    /// levels, `None` for objects not drawn.
+    pub fn refine_all(
+        &mut self,
+        ctx: &GpuContext,
+        choice: &LevelChoice,
+    ) -> Result<Vec<Option<u32>>, GpuError> {
+        let levels: Vec<Option<u32>> = (0..self.objects.len())
+            .map(|i| {
+                (!self.objects[i].instances.is_empty())
+                    .then(|| self.level_for(i, choice))
+                    .flatten()
+            })
+            .collect();
+        self.refine_to(ctx, &levels)?;
+        Ok(levels)
+    }
+
+    /// Refines object `i` to `levels[i]` for every `Some`.
+    pub fn refine_to(&mut self, ctx: &GpuContext, levels: &[Option<u32>]) -> Result<(), GpuError> {
+        for (i, level) in levels.iter().enumerate() {
+            if let Some(level) = *level {
+                self.refine(ctx, i, level)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Refines one object to `level`. Does nothing when it is already there; reuses its output
+    /// buffers when they are large enough.
+    pub fn refine(&mut self, ctx: &GpuContext, object: usize, level: u32) -> Result<(), GpuError> {
+        let count = self.objects.len();
+        let o = self.objects.get_mut(object).ok_or_else(|| {
+            GpuError::InvalidParams(format!("object {object} does not exist ({count} objects)"))
+        })?;
+        let name = o.name.clone();
+        match &mut o.refiner {
+            Refiner::Flat { object, out } => {
+                if out.as_ref().is_some_and(|b| b.level == level) {
+                    return Ok(());
+                }
+                let kernel = self
+                    .flat
+                    .as_ref()
+                    .ok_or_else(|| invalid(&name, "the flat kernel was not created"))?;
+                kernel.refine_into(ctx, object, level, out, false)?;
+            }
+            Refiner::CpuReference {
+                object,
+                scratch,
+                out,
+            } => {
+                if out.as_ref().is_some_and(|b| b.level == level) {
+                    return Ok(());
+                }
+                if level > crate::subdivide::MAX_LEVEL {
+                    return Err(GpuError::LevelTooHigh {
+                        level,
+                        max: crate::subdivide::MAX_LEVEL,
+                    });
+                }
+                subdivide_into(&object.mesh, level, scratch).map_err(|e| invalid(&name, e))?;
+                let colours = crate::colour::apply_baked_colours(object, scratch, level)
+                    .map_err(|e| invalid(&name, e))?;
+                *out = Some(upload_cpu(ctx, out.take(), scratch, &colours, level)?);
+            }
+        }
+        Ok(())
+    }
+
+    /// The current buffers of `object`, `None` before its first refinement.
+    pub fn buffers(&self, object: usize) -> Option<ObjectBuffers<'_>> {
+        match &self.objects.get(object)?.refiner {
+            Refiner::Flat { out, .. } => out.as_ref().map(|o| ObjectBuffers {
+                level: o.level,
+                vertex_count: o.vertex_count,
+                triangle_count: o.triangle_count,
+                positions: &o.positions,
+                normals: None,
+                colours: &o.colours,
+                indices: &o.indices,
+            }),
+            Refiner::CpuReference { out, .. } => out.as_ref().map(|o| ObjectBuffers {
+                level: o.level,
+                vertex_count: o.vertex_count,
+                triangle_count: o.triangle_count,
+                positions: &o.positions,
+                normals: Some(&o.normals),
+                colours: &o.colours,
+                indices: &o.indices,
+            }),
+        }
+    }
+
+    /// Copies `object`'s refined mesh back to the CPU.
+    pub fn read_back(&self, ctx: &GpuContext, object: usize) -> Result<ObjectMesh, GpuError> {
+        let b = self.buffers(object).ok_or_else(|| {
+            GpuError::InvalidParams(format!("object {object} has not been refined"))
+        })?;
+        let (v, f) = (b.vertex_count as usize, b.triangle_count as usize);
+        Ok(ObjectMesh {
+            level: b.level,
+            positions: read_back(ctx, b.positions, 3 * v)?,
+            normals: b.normals.map(|n| read_back(ctx, n, 3 * v)).transpose()?,
+            colours: read_back(ctx, b.colours, 4 * v)?,
+            indices: read_back(ctx, b.indices, 3 * f)?,
+        })
+    }
+
+    /// One draw per instance of every refined object.
+    pub fn draws(&self) -> Vec<SceneDraw<'_>> {
+        let mut out = Vec::new();
+        for (i, o) in self.objects.iter().enumerate() {
+            let Some(b) = self.buffers(i) else { continue };
+            for &transform in &o.instances {
+                out.push(SceneDraw {
+                    object: i,
+                    positions: b.positions,
+                    colours: b.colours,
+                    indices: b.indices,
+                    index_count: b.triangle_count * 3,
+                    transform,
+                });
+            }
+        }
+        out
+    }
+
+    /// Fine triangles drawn per frame at the current levels, instances counted.
+    pub fn drawn_triangles(&self) -> u64 {
+        self.draws()
+            .iter()
+            .map(|d| u64::from(d.index_count / 3))
+            .sum()
+    }
+
+    /// Draws the refined scene headless with `camera` (no lighting: the colours are the baked
+    /// lighting) and reads the image back.
+    pub fn render(
+        &self,
+        ctx: &GpuContext,
+        camera: Camera,
+        params: &RenderParams,
+    ) -> Result<RenderedImage, GpuError> {
+        let bounds = self
+            .bounds
+            .ok_or_else(|| GpuError::InvalidParams("the asset has nothing to draw".into()))?;
+        let draws: Vec<MeshDraw<'_>> = self
+            .draws()
+            .iter()
+            .map(|d| MeshDraw {
+                positions: d.positions,
+                colours: d.colours,
+                indices: d.indices,
+                index_count: d.index_count,
+                transform: d.transform,
+            })
+            .collect();
+        render_draws(
+            ctx,
+            &draws,
+            (bounds.min, bounds.max),
+            &RenderParams {
+                framing: Framing::Camera(camera),
+                ..*params
+            },
+        )
+    }
+}
+
+/// Uploads a CPU-refined mesh into `old`'s buffers when they are large enough.
+fn upload_cpu(
+    ctx: &GpuContext,
+    old: Option<CpuOutput>,
+    refined: &Refined,
+    colours: &[[f32; 3]],
+    level: u32,
+) -> Result<CpuOutput, GpuError> {
+    let v = refined.positions.len() as u64;
+    let f = refined.indices.len() as u64;
+    let too_large = |what| GpuError::TooLarge {
+        what,
+        needed: v.max(f),
+        limit: u64::from(u32::MAX),
+    };
+    let vertex_count = u32::try_from(v).map_err(|_| too_large("refined vertex count"))?;
+    let triangle_count = u32::try_from(f).map_err(|_| too_large("refined triangle count"))?;
+    let (p, n, c, i) = match old {
+        Some(o) => (
+            Some(o.positions),
+            Some(o.normals),
+            Some(o.colours),
+            Some(o.indices),
+        ),
+        None => (None, None, None, None),
+    };
+    let vertex = wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE;
+    let positions = ensure_buffer(ctx, p, "refined positions", v * 12, vertex)?;
+    let normals = ensure_buffer(ctx, n, "refined normals", v * 12, vertex)?;
+    let colour_buf = ensure_buffer(ctx, c, "refined colours", v * 16, vertex)?;
+    let indices = ensure_buffer(
+        ctx,
+        i,
+        "refined indices",
+        f * 12,
+        wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE,
+    )?;
+    let rgba: Vec<[f32; 4]> = colours.iter().map(|c| [c[0], c[1], c[2], 1.0]).collect();
+    for (buffer, bytes) in [
+        (
+            &positions,
+            bytemuck::cast_slice::<[f32; 3], u8>(&refined.positions),
+        ),
+        (&normals, bytemuck::cast_slice(&refined.normals)),
+        (&colour_buf, bytemuck::cast_slice(&rgba)),
+        (&indices, bytemuck::cast_slice(&refined.indices)),
+    ] {
+        if !bytes.is_empty() {
+            ctx.queue.write_buffer(buffer, 0, bytes);
+        }
+    }
+    Ok(CpuOutput {
+        level,
+        vertex_count,
+        triangle_count,
+        positions,
+        normals,
+        colours: colour_buf,
+        indices,
+    })
+}
+
+/// Which camera [`render_asset`] uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum CameraChoice {
+    /// The scene's camera when the file has one, else [`CameraChoice::Auto`].
+    #[default]
+    SceneOrAuto,
+    /// The scene's camera; an error when the file has none.
+    Scene,
+    /// Placed from the scene's geometry ([`auto_scene_camera`]): inside a closed room, in front
+    /// of a box's opening, or outside an object.
+    Auto,
+    Explicit(Camera),
+}
+
+/// Where the camera of a render came from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum CameraSource {
+    /// The glTF camera node named here.
+    Scene(String),
+    Auto(Placement),
+    Explicit,
+}
+
+/// Options of [`render_asset`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AssetRenderOptions {
+    /// Image size in pixels. Default 800 × 600.
+    pub width: u32,
+    pub height: u32,
+    pub camera: CameraChoice,
+    /// Level of multiresolution objects. Default: chosen from the view with
+    /// [`LodParams::default`].
+    pub level: Option<u32>,
+    pub lod: LodParams,
+    /// Most fine triangles drawn (instances counted). Automatic levels are lowered, highest
+    /// first, to stay under it; a fixed level above it is an error. Default 16 000 000.
+    pub max_triangles: u64,
+    pub scene: SceneOptions,
+    /// Linear background colour. Default black.
+    pub background: [f32; 3],
+}
+
+impl Default for AssetRenderOptions {
+    fn default() -> Self {
+        Self {
+            width: 800,
+            height: 600,
+            camera: CameraChoice::default(),
+            level: None,
+            lod: LodParams::default(),
+            max_triangles: 16_000_000,
+            scene: SceneOptions::default(),
+            background: [0.0; 3],
+        }
+    }
+}
+
+/// What [`render_asset`] drew.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AssetRender {
+    pub image: RenderedImage,
+    pub camera: Camera,
+    pub camera_source: CameraSource,
+    /// `(object name, kind, level, fine triangles per instance, instances)` per drawn object.
+    pub objects: Vec<(String, ObjectKind, u32, u64, usize)>,
+    /// Fine triangles drawn, instances counted.
+    pub triangles: u64,
+    /// Adjustments made (levels lowered for the triangle budget).
+    pub notes: Vec<String>,
+}
+
+/// The camera `choice` gives for `asset`, on an image of aspect `aspect`.
+pub fn resolve_camera(
+    asset: &Asset,
+    choice: CameraChoice,
+    aspect: f32,
+) -> Result<(Camera, CameraSource), GpuError> {
+    let bounds = asset
+        .bounds()
+        .ok_or_else(|| GpuError::InvalidParams("the asset has nothing to draw".into()))?;
+    let scene = asset.camera.as_ref().map(|c| {
+        // The target only sets the direction; place it at the scene's scale.
+        let reach = bounds.radius().max(1e-3);
+        let target = Vec3::from(c.eye) + Vec3::from(c.forward) * reach;
+        (
+            Camera {
+                eye: c.eye,
+                target: target.into(),
+                fov_y_degrees: c.fov_y_degrees,
+            },
+            CameraSource::Scene(c.name.clone()),
+        )
+    });
+    let auto = || {
+        let (camera, placement) =
+            auto_scene_camera(&asset.world_triangles(), bounds.min, bounds.max, aspect);
+        (camera, CameraSource::Auto(placement))
+    };
+    Ok(match choice {
+        CameraChoice::SceneOrAuto => scene.unwrap_or_else(auto),
+        CameraChoice::Scene => scene.ok_or_else(|| {
+            GpuError::InvalidParams(format!(
+                "{} has no perspective camera; use the automatic camera or give one",
+                asset.path.display()
+            ))
+        })?,
+        CameraChoice::Auto => auto(),
+        CameraChoice::Explicit(c) => (c, CameraSource::Explicit),
+    })
+}
+
+/// Renders a baked asset to an image: uploads it, picks the camera and each object's level,
+/// keeps the triangle budget, refines and draws. `hce render` is this function plus file
+/// output; to render several levels of one asset, use a [`GpuScene`] directly and call
+/// [`GpuScene::refine_all`] and [`GpuScene::render`] per level.
+pub fn render_asset(
+    ctx: &GpuContext,
+    asset: &Asset,
+    options: &AssetRenderOptions,
+) -> Result<AssetRender, GpuError> {
+    if options.width == 0 || options.height == 0 {
+        return Err(GpuError::InvalidParams(format!(
+            "image size {}x{}: each side must be at least 1 pixel",
+            options.width, options.height
+        )));
+    }
+    let aspect = options.width as f32 / options.height as f32;
+    let (camera, camera_source) = resolve_camera(asset, options.camera, aspect)?;
+    let mut scene = GpuScene::new(ctx, asset, &options.scene)?;
+    let choice = match options.level {
+        Some(level) => LevelChoice::Fixed(level),
+        None => LevelChoice::Auto {
+            camera,
+            viewport_height: options.height,
+            lod: options.lod,
+        },
+    };
+    let mut levels: Vec<Option<u32>> = (0..scene.object_count())
+        .map(|i| {
+            (!scene.objects[i].instances.is_empty())
+                .then(|| scene.level_for(i, &choice))
+                .flatten()
+        })
+        .collect();
+    let total = |levels: &[Option<u32>]| -> u64 {
+        levels
+            .iter()
+            .enumerate()
+            .filter_map(|(i, l)| {
+                l.map(|l| scene.triangles_at(i, l) * scene.objects[i].instances.len() as u64)
+            })
+            .sum()
+    };
+    let mut notes = Vec::new();
+    while total(&levels) > options.max_triangles {
+        // Lower the object with the most triangles drawn; a forced level is not lowered.
+        let worst = levels
+            .iter()
+            .enumerate()
+            .filter(|(i, l)| {
+                l.is_some_and(|l| l > 0)
+                    && (options.level.is_none() || scene.objects[*i].kind == ObjectKind::Flat)
+            })
+            .max_by_key(|(i, l)| {
+                scene.triangles_at(*i, l.unwrap_or(0)) * scene.objects[*i].instances.len() as u64
+            })
+            .map(|(i, _)| i);
+        let Some(i) = worst else {
+            return Err(GpuError::InvalidParams(format!(
+                "{} triangles at the requested level exceed the budget of {}; choose a lower \
+                 level or raise the budget",
+                total(&levels),
+                options.max_triangles
+            )));
+        };
+        if let Some(l) = levels[i].as_mut() {
+            *l -= 1;
+            notes.push(format!(
+                "{}: level lowered to {l} to stay under {} triangles",
+                scene.objects[i].name, options.max_triangles
+            ));
+        }
+    }
+    scene.refine_to(ctx, &levels)?;
+    let image = scene.render(
+        ctx,
+        camera,
+        &RenderParams {
+            width: options.width,
+            height: options.height,
+            framing: Framing::Camera(camera),
+            background: options.background,
+        },
+    )?;
+    let objects = levels
+        .iter()
+        .enumerate()
+        .filter_map(|(i, l)| {
+            let o = &scene.objects[i];
+            l.map(|l| {
+                (
+                    o.name.clone(),
+                    o.kind,
+                    l,
+                    scene.triangles_at(i, l),
+                    o.instances.len(),
+                )
+            })
+        })
+        .collect();
+    Ok(AssetRender {
+        image,
+        camera,
+        camera_source,
+        objects,
+        triangles: scene.drawn_triangles(),
+        notes,
+    })
+}
