@@ -1,4 +1,4 @@
-//! `hce`: bake, inspect, validate, subdivide and render assets with baked global illumination.
+//! `hce`: bake, inspect, validate, subdivide, render and demo assets with baked global illumination.
 
 use clap::{Parser, Subcommand};
 
@@ -29,6 +29,9 @@ enum Command {
     /// to PNG or EXR.
     #[command(after_help = EXIT_CODES)]
     Render(cmd::render::RenderArgs),
+    /// Bake a bundled sample and render it at levels 0 to 3 side by side: a first look at hce.
+    #[command(after_help = EXIT_CODES)]
+    Demo(cmd::demo::DemoArgs),
     /// Measure the GPU kernels' throughput per level.
     BenchGpu(cmd::bench_gpu::BenchGpuArgs),
     /// Loop-subdivide a mesh on the CPU (OBJ, glTF or GLB in and out).
@@ -46,6 +49,7 @@ fn main() {
     let result = match cli.command {
         Command::Bake(args) => cmd::bake::run(args),
         Command::Render(args) => cmd::render::run(args),
+        Command::Demo(args) => cmd::demo::run(args),
         Command::BenchGpu(args) => cmd::bench_gpu::run(args),
         Command::Subdivide(args) => cmd::subdivide::run(args),
         Command::Inspect(args) => cmd::inspect::run(args),

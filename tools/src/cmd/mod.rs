@@ -2,6 +2,7 @@
 
 pub mod bake;
 pub mod bench_gpu;
+pub mod demo;
 pub mod inspect;
 pub mod render;
 pub mod subdivide;
