@@ -10,12 +10,12 @@
 //!   which every radiosity element has its own triangles), capped by
 //!   [`SceneOptions::flat_max_level`], whatever level the view asks for: a coarser level would
 //!   blur the baked lighting and a finer one adds nothing.
-//! * **Multiresolution** objects by [`MultiresPath::CpuReference`]: the CPU Loop subdivision
-//!   ([`crate::subdivide`]) and CPU colour application ([`crate::colour`]), uploaded as buffers.
-//!   It is the reference the GPU Loop kernel is checked against, kept as an explicit option
-//!   (never a silent fallback). The GPU Loop kernel (`LoopKernel`, same methods as
-//!   [`FlatKernel`]) plugs in as one more variant of [`MultiresPath`] and of the per-object
-//!   refiner.
+//! * **Multiresolution** objects by the [`LoopKernel`] ([`MultiresPath::Gpu`], the default):
+//!   Loop subdivision of every coarse triangle's patch, subtriangle colours decoded from the HCE
+//!   tree by normal, area-weighted vertex colours, all in compute shaders.
+//!   [`MultiresPath::CpuReference`] does the same on the CPU ([`crate::subdivide`] and
+//!   [`crate::colour`]) and uploads the result: it is the reference the kernel is checked
+//!   against, kept as an explicit option (never a silent fallback).
 //!
 //! # A viewer loop
 //!
@@ -57,16 +57,21 @@ use super::framing::{auto_scene_camera, Placement};
 use super::lod::{choose_level, Camera, LodParams};
 use super::render::{render_draws, MeshDraw, RenderParams, RenderedImage};
 use super::util::{check_size, read_back};
-use super::{FlatKernel, FlatObject, FlatOutput, Framing, GpuContext, GpuError};
+use super::{
+    FlatKernel, FlatObject, FlatOutput, Framing, GpuContext, GpuError, LoopKernel, LoopObject,
+    LoopOutput,
+};
 use crate::asset::{Asset, Bounds};
 use crate::subdivide::{subdivide_into, Refined};
 
 /// How multiresolution objects are refined.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum MultiresPath {
+    /// The GPU Loop kernel ([`LoopKernel`], levels up to [`crate::subdivide::MAX_LEVEL`]).
+    #[default]
+    Gpu,
     /// CPU Loop subdivision and CPU colour application, uploaded as buffers (levels up to
     /// [`crate::subdivide::MAX_LEVEL`]). The reference for checking the GPU kernel.
-    #[default]
     CpuReference,
 }
 
@@ -118,6 +123,10 @@ enum Refiner {
     Flat {
         object: Box<FlatObject>,
         out: Option<FlatOutput>,
+    },
+    Loop {
+        object: Box<LoopObject>,
+        out: Option<LoopOutput>,
     },
     CpuReference {
         object: Box<Object>,
@@ -183,6 +192,7 @@ pub struct ObjectMesh {
 pub struct GpuScene {
     objects: Vec<SceneObject>,
     flat: Option<FlatKernel>,
+    loop_kernel: Option<LoopKernel>,
     flat_max_level: u32,
     bounds: Option<Bounds>,
 }
@@ -228,12 +238,20 @@ impl GpuScene {
     /// [`GpuScene::refine`].
     pub fn new(ctx: &GpuContext, asset: &Asset, options: &SceneOptions) -> Result<Self, GpuError> {
         let mut flat = None;
+        let mut loop_kernel = None;
         let mut objects = Vec::with_capacity(asset.objects.len());
         for o in &asset.objects {
             let refiner = match (o.kind(), options.multires) {
                 (ObjectKind::Flat, _) => {
                     let kernel = flat.get_or_insert_with(|| FlatKernel::new(ctx));
                     Refiner::Flat {
+                        object: Box::new(kernel.upload(ctx, &o.object)?),
+                        out: None,
+                    }
+                }
+                (ObjectKind::Multiresolution, MultiresPath::Gpu) => {
+                    let kernel = loop_kernel.get_or_insert_with(|| LoopKernel::new(ctx));
+                    Refiner::Loop {
                         object: Box::new(kernel.upload(ctx, &o.object)?),
                         out: None,
                     }
@@ -260,6 +278,7 @@ impl GpuScene {
         Ok(Self {
             objects,
             flat,
+            loop_kernel,
             flat_max_level: options.flat_max_level,
             bounds: asset.bounds(),
         })
@@ -362,6 +381,16 @@ impl GpuScene {
                     .ok_or_else(|| invalid(&name, "the flat kernel was not created"))?;
                 kernel.refine_into(ctx, object, level, out, false)?;
             }
+            Refiner::Loop { object, out } => {
+                if out.as_ref().is_some_and(|b| b.level == level) {
+                    return Ok(());
+                }
+                let kernel = self
+                    .loop_kernel
+                    .as_ref()
+                    .ok_or_else(|| invalid(&name, "the Loop kernel was not created"))?;
+                kernel.refine_into(ctx, object, level, out, false)?;
+            }
             Refiner::CpuReference {
                 object,
                 scratch,
@@ -394,6 +423,15 @@ impl GpuScene {
                 triangle_count: o.triangle_count,
                 positions: &o.positions,
                 normals: None,
+                colours: &o.colours,
+                indices: &o.indices,
+            }),
+            Refiner::Loop { out, .. } => out.as_ref().map(|o| ObjectBuffers {
+                level: o.level,
+                vertex_count: o.vertex_count,
+                triangle_count: o.triangle_count,
+                positions: &o.positions,
+                normals: Some(&o.normals),
                 colours: &o.colours,
                 indices: &o.indices,
             }),

@@ -57,6 +57,11 @@ pub struct RenderArgs {
     /// Use a software adapter even if a GPU is present.
     #[arg(long)]
     pub software: bool,
+    /// Refine multiresolution objects with the CPU reference (Loop subdivision and colour
+    /// application on the CPU, then uploaded) instead of the GPU Loop kernel: for checking the
+    /// kernel, never needed otherwise.
+    #[arg(long)]
+    pub cpu_reference: bool,
 }
 
 /// Parses `WIDTHxHEIGHT`.
@@ -306,6 +311,14 @@ fn run_baked(
             camera,
             level: args.level,
             max_triangles: args.max_triangles,
+            scene: hce_runtime::gpu::SceneOptions {
+                multires: if args.cpu_reference {
+                    hce_runtime::gpu::MultiresPath::CpuReference
+                } else {
+                    hce_runtime::gpu::MultiresPath::Gpu
+                },
+                ..Default::default()
+            },
             ..Default::default()
         },
     )?;
