@@ -151,15 +151,50 @@ pub fn load_obj(path: &Path) -> Result<InputMesh, ImportError> {
 /// contributes one copy per node. A file without scenes has its meshes taken once each,
 /// untransformed, in mesh order. Primitives that are not triangle lists (points, lines,
 /// strips, fans) are skipped.
+///
+/// Hostile files are errors, never a panic, a hang or an unbounded allocation: the file goes
+/// through [`crate::gltf_guard`] (reference pre-check, buffers only from the GLB, `data:` URIs
+/// and regular files relative to it, every accessor bounds-checked before it is read), and a
+/// panic of the `gltf` crate that those checks miss is caught and reported as an error.
 pub fn load_gltf(path: &Path) -> Result<InputMesh, ImportError> {
-    let gltf_err = |source| ImportError::Gltf {
+    let bytes = std::fs::read(path).map_err(|source| ImportError::Io {
         path: path.to_owned(),
         source,
-    };
-    let gltf = gltf::Gltf::open(path).map_err(gltf_err)?;
-    let base = path.parent();
-    let buffers =
-        gltf::import_buffers(&gltf.document, base, gltf.blob.clone()).map_err(gltf_err)?;
+    })?;
+    crate::gltf_guard::precheck(&bytes).map_err(|what| ImportError::Invalid {
+        path: path.to_owned(),
+        what,
+    })?;
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        load_gltf_checked(path, &bytes)
+    }))
+    .unwrap_or_else(|panic| {
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        Err(ImportError::Invalid {
+            path: path.to_owned(),
+            what: format!("the glTF reader failed on this file ({what})"),
+        })
+    })
+}
+
+fn load_gltf_checked(path: &Path, bytes: &[u8]) -> Result<InputMesh, ImportError> {
+    use crate::gltf_guard::{check_accessor, load_buffers, AccessorUse};
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|source| ImportError::Gltf {
+        path: path.to_owned(),
+        source,
+    })?;
+    let base = path.parent().unwrap_or_else(|| Path::new("."));
+    let mut buffer_problems = Vec::new();
+    let buffers = load_buffers(
+        &gltf.document,
+        Some(base),
+        gltf.blob.clone(),
+        &mut buffer_problems,
+    );
     let doc = &gltf.document;
     let mut instances: Vec<(gltf::Mesh, glam::Mat4)> = Vec::new();
     match doc.default_scene().or_else(|| doc.scenes().next()) {
@@ -219,7 +254,29 @@ pub fn load_gltf(path: &Path) -> Result<InputMesh, ImportError> {
             if prim.mode() != gltf::mesh::Mode::Triangles {
                 continue;
             }
-            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let Some(pos_acc) = prim.get(&gltf::Semantic::Positions) else {
+                continue;
+            };
+            let mut used = vec![(pos_acc, AccessorUse::Position)];
+            used.extend(prim.indices().map(|a| (a, AccessorUse::Index)));
+            let normal_acc = prim.get(&gltf::Semantic::Normals);
+            used.extend(normal_acc.map(|a| (a, AccessorUse::Normal)));
+            if let Err(e) = used
+                .iter()
+                .try_for_each(|(a, u)| check_accessor(a, *u, &buffers))
+            {
+                let mut what =
+                    format!("meshes[{}].primitives[{}]: {e}", mesh.index(), prim.index());
+                for p in &buffer_problems {
+                    what.push_str("; ");
+                    what.push_str(p);
+                }
+                return Err(ImportError::Invalid {
+                    path: path.to_owned(),
+                    what,
+                });
+            }
+            let reader = prim.reader(|b| buffers.get(b.index()).and_then(|d| d.as_deref()));
             let Some(pos) = reader.read_positions() else {
                 continue;
             };

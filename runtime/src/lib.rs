@@ -13,6 +13,7 @@ pub mod gpu;
 pub mod asset;
 pub mod colour;
 pub mod export;
+pub mod gltf_guard;
 pub mod import;
 pub mod subdivide;
 pub mod topology;
