@@ -30,6 +30,30 @@ pub struct AdapterDescription {
     pub timestamps: bool,
 }
 
+impl AdapterDescription {
+    /// Describes the adapter `info` reports; `timestamps` says whether kernel timing works.
+    fn new(info: &wgpu::AdapterInfo, timestamps: bool) -> Self {
+        let kind = if info.device_type == wgpu::DeviceType::Cpu {
+            AdapterKind::Software
+        } else {
+            AdapterKind::Hardware
+        };
+        Self {
+            name: info.name.clone(),
+            backend: format!("{:?}", info.backend),
+            device_type: format!("{:?}", info.device_type),
+            driver: [info.driver.as_str(), info.driver_info.as_str()]
+                .iter()
+                .filter(|s| !s.is_empty())
+                .cloned()
+                .collect::<Vec<_>>()
+                .join(" "),
+            kind,
+            timestamps,
+        }
+    }
+}
+
 impl fmt::Display for AdapterDescription {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let kind = match self.kind {
@@ -143,24 +167,7 @@ impl GpuContext {
                 adapter: info.name.clone(),
                 reason: e.to_string(),
             })?;
-        let kind = if info.device_type == wgpu::DeviceType::Cpu {
-            AdapterKind::Software
-        } else {
-            AdapterKind::Hardware
-        };
-        let description = AdapterDescription {
-            name: info.name.clone(),
-            backend: format!("{:?}", info.backend),
-            device_type: format!("{:?}", info.device_type),
-            driver: [info.driver.as_str(), info.driver_info.as_str()]
-                .iter()
-                .filter(|s| !s.is_empty())
-                .cloned()
-                .collect::<Vec<_>>()
-                .join(" "),
-            kind,
-            timestamps,
-        };
+        let description = AdapterDescription::new(&info, timestamps);
         Ok(Self {
             adapter,
             device,
@@ -179,24 +186,10 @@ impl GpuContext {
         queue: &wgpu::Queue,
     ) -> Self {
         let info = adapter.get_info();
-        let kind = if info.device_type == wgpu::DeviceType::Cpu {
-            AdapterKind::Software
-        } else {
-            AdapterKind::Hardware
-        };
-        let description = AdapterDescription {
-            name: info.name.clone(),
-            backend: format!("{:?}", info.backend),
-            device_type: format!("{:?}", info.device_type),
-            driver: [info.driver.as_str(), info.driver_info.as_str()]
-                .iter()
-                .filter(|s| !s.is_empty())
-                .cloned()
-                .collect::<Vec<_>>()
-                .join(" "),
-            kind,
-            timestamps: device.features().contains(wgpu::Features::TIMESTAMP_QUERY),
-        };
+        let description = AdapterDescription::new(
+            &info,
+            device.features().contains(wgpu::Features::TIMESTAMP_QUERY),
+        );
         Self {
             adapter: adapter.clone(),
             device: device.clone(),
