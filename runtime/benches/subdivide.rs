@@ -59,6 +59,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("subdivide_into_reused_buffers", |b| {
         b.iter(|| hce_runtime::subdivide::subdivide_into(&topo.mesh, level, &mut reused).unwrap())
     });
+    g.bench_function("tables", |b| b.iter(build));
     g.bench_function("tables_plus_subdivide", |b| {
         b.iter(|| hce_runtime::subdivide::subdivide(&build().mesh, level).unwrap())
     });
@@ -98,6 +99,9 @@ fn bench(c: &mut Criterion) {
             hce_runtime::subdivide::subdivide_into(&topo.mesh, level, &mut buf.borrow_mut())
                 .unwrap();
         });
+        let tables = ours(&|| {
+            std::hint::black_box(build());
+        });
         let all = ours(&|| {
             std::hint::black_box(hce_runtime::subdivide::subdivide(&build().mesh, level).unwrap());
         });
@@ -131,7 +135,8 @@ fn bench(c: &mut Criterion) {
         println!(
             "bunny level 3: OpenSubdiv {osd_ms:.1} ms (topology + interpolate, positions only, 1 thread); \
              hce {sub:.1} ms from tables ({:.1}x), {reuse:.1} ms into reused buffers ({:.1}x), \
-             {all:.1} ms tables + subdivide ({:.1}x), positions + normals + indices, {} threads",
+             {all:.1} ms tables + subdivide ({:.1}x, tables alone {tables:.1} ms), \
+             positions + normals + indices, {} threads",
             osd_ms / sub,
             osd_ms / reuse,
             osd_ms / all,

@@ -164,23 +164,18 @@ fn write_parallel<T: Sync>(
 }
 
 /// Appends the decimal digits of `x`.
-fn push_u32(s: &mut Vec<u8>, mut x: u32) {
-    let mut buf = [0u8; 10];
-    let mut i = buf.len();
-    loop {
-        i -= 1;
-        buf[i] = b'0' + (x % 10) as u8;
-        x /= 10;
-        if x == 0 {
-            break;
-        }
-    }
-    s.extend_from_slice(&buf[i..]);
+fn push_u32(s: &mut Vec<u8>, x: u32) {
+    s.extend_from_slice(itoa::Buffer::new().format(x).as_bytes());
 }
 
-/// Appends `x` as Rust's `Display` writes it (the shortest text that reads back exactly).
+/// Appends the shortest decimal text that reads back as exactly `x` (Schubfach, through
+/// `zmij`: about ten times faster than `Display`, which dominated OBJ output; it may use an
+/// exponent, `1e-7`, which every OBJ reader and Rust's `f32::from_str` accept).
+/// An integral value drops zmij's trailing `.0`, as `Display` does.
 fn push_f32(s: &mut Vec<u8>, x: f32) {
-    let _ = write!(s, "{x}");
+    let mut buf = zmij::Buffer::new();
+    let text = buf.format(x);
+    s.extend_from_slice(text.strip_suffix(".0").unwrap_or(text).as_bytes());
 }
 
 fn write_obj(
@@ -503,6 +498,46 @@ mod tests {
             short,
             Err(ExportError::ColourCount { colours: 2, .. })
         ));
+    }
+
+    #[test]
+    fn obj_numbers_read_back_exactly() {
+        let mut special = vec![
+            0.0f32,
+            -0.0,
+            1.0,
+            -1.0,
+            0.1,
+            1e-7,
+            3.4028235e38,
+            -1.1754944e-38,
+            1e-45,
+            16777216.0,
+            123456.79,
+        ];
+        // Every exponent, pseudo-random mantissas (a fixed LCG: deterministic).
+        let mut state = 0x2545_f491_u32;
+        for _ in 0..200_000 {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            let x = f32::from_bits(state);
+            if x.is_finite() {
+                special.push(x);
+            }
+        }
+        let mut s = Vec::new();
+        for &x in &special {
+            s.clear();
+            push_f32(&mut s, x);
+            let text = std::str::from_utf8(&s).unwrap();
+            let back: f32 = text.parse().unwrap();
+            assert_eq!(back.to_bits(), x.to_bits(), "{x:e} written as {text}");
+            // Never longer than Display's shortest text (plus an exponent's few bytes).
+            assert!(text.len() <= format!("{x}").len().max(16), "{text}");
+        }
+        s.clear();
+        push_f32(&mut s, 2.0);
+        push_u32(&mut s, 4_294_967_295);
+        assert_eq!(s, b"24294967295");
     }
 
     #[test]

@@ -223,14 +223,8 @@ pub fn build_control_mesh(
     let f = tris.len();
 
     // 2. Orientation: breadth-first over edges shared by exactly two triangles.
-    let groups = edge_groups(&tris);
-    let mut partner = vec![u32::MAX; 3 * f];
-    for g in &groups {
-        if g.len() == 2 {
-            partner[g[0] as usize] = g[1];
-            partner[g[1] as usize] = g[0];
-        }
-    }
+    let mut groups = edge_groups(&tris);
+    let partner = &groups.mate;
     let mut flip = vec![false; f];
     let mut seen = vec![false; f];
     let mut queue = std::collections::VecDeque::new();
@@ -243,7 +237,7 @@ pub fn build_control_mesh(
         while let Some(t) = queue.pop_front() {
             for e in 0..3 {
                 let p = partner[3 * t + e];
-                if p == u32::MAX {
+                if p >= EDGE_MANY {
                     continue;
                 }
                 let (t2, e2) = (p as usize / 3, p as usize % 3);
@@ -269,28 +263,48 @@ pub fn build_control_mesh(
         }
     }
 
-    // 3. Pairing: exactly two uses in opposite directions.
-    let groups = edge_groups(&tris);
+    // The flips permute half-edges within their triangle (the swap of corners 1 and 2 turns
+    // edge 0 into edge 2 and back, and reverses edge 1), so the edge groups are relabelled
+    // rather than rebuilt.
+    if report.flipped_triangles > 0 {
+        groups.relabel(|h| {
+            let (t, e) = (h as usize / 3, h % 3);
+            if flip[t] {
+                3 * t as u32 + (2 - e)
+            } else {
+                h
+            }
+        });
+    }
+
+    // 3. Pairing: exactly two uses in opposite directions. Edges are visited in order of their
+    // first half-edge, so reports and errors name the same edge whatever the grouping method.
     let mut pair = vec![u32::MAX; 3 * f];
-    for g in &groups {
-        let (t0, e0) = (g[0] as usize / 3, g[0] as usize % 3);
+    let mut many = groups.many.iter().peekable();
+    for h in 0..3 * f {
+        let m = groups.mate[h];
+        let (t0, e0) = (h / 3, h % 3);
         let (a, b) = (tris[t0][e0], tris[t0][(e0 + 1) % 3]);
-        if g.len() == 2 {
-            let (t1, e1) = (g[1] as usize / 3, g[1] as usize % 3);
+        if m < EDGE_MANY {
+            if (m as usize) < h {
+                continue;
+            }
+            let (t1, e1) = (m as usize / 3, m as usize % 3);
             if tris[t1][e1] == b {
-                pair[g[0] as usize] = g[1];
-                pair[g[1] as usize] = g[0];
+                pair[h] = m;
+                pair[m as usize] = h as u32;
             } else {
                 report.non_orientable_edges += 1;
                 if config.non_manifold == NonManifold::Refuse {
                     return Err(TopologyError::NonManifoldEdge {
                         a,
                         b,
-                        triangles: g.iter().map(|&i| source[i as usize / 3] as usize).collect(),
+                        triangles: vec![source[t0] as usize, source[t1] as usize],
                     });
                 }
             }
-        } else if g.len() > 2 {
+        } else if m == EDGE_MANY && many.peek().is_some_and(|g| g[0] as usize == h) {
+            let g = many.next().expect("peeked");
             let list: Vec<usize> = g.iter().map(|&i| source[i as usize / 3] as usize).collect();
             if config.non_manifold == NonManifold::Refuse {
                 return Err(TopologyError::NonManifoldEdge {
@@ -319,7 +333,9 @@ pub fn build_control_mesh(
     };
     let mut fan_of = vec![u32::MAX; 3 * f];
     // (welded vertex, closed, corners in CCW order)
-    let mut fans: Vec<(u32, bool, Vec<u32>)> = Vec::new();
+    // Fans as (welded vertex, closed, range of `fan_corners`), corners in CCW order.
+    let mut fans: Vec<(u32, bool, std::ops::Range<usize>)> = Vec::new();
+    let mut fan_corners: Vec<u32> = Vec::with_capacity(3 * f);
     for i in 0..3 * f {
         if fan_of[i] != u32::MAX {
             continue;
@@ -339,7 +355,8 @@ pub fn build_control_mesh(
             }
         }
         let fan_id = fans.len() as u32;
-        let mut corners = vec![start as u32];
+        let first = fan_corners.len();
+        fan_corners.push(start as u32);
         fan_of[start] = fan_id;
         let mut cur = start;
         while let Some(n) = next_ccw(cur) {
@@ -347,23 +364,33 @@ pub fn build_control_mesh(
                 break;
             }
             fan_of[n] = fan_id;
-            corners.push(n as u32);
+            fan_corners.push(n as u32);
             cur = n;
         }
-        fans.push((tris[i / 3][i % 3], closed, corners));
+        fans.push((tris[i / 3][i % 3], closed, first..fan_corners.len()));
     }
     // Control vertices: welded order, then fans by their first corner.
-    let mut order: Vec<u32> = (0..fans.len() as u32).collect();
-    order.sort_by_key(|&k| (fans[k as usize].0, k));
+    // (A counting sort by welded vertex, stable in fan order.)
+    let mut used = vec![0u32; nv];
+    for (w, _, _) in &fans {
+        used[*w as usize] += 1;
+    }
+    let mut order_start = Vec::with_capacity(nv + 1);
+    order_start.push(0u32);
+    for &c in &used {
+        order_start.push(order_start.last().expect("non-empty") + c);
+    }
+    let mut order = vec![0u32; fans.len()];
+    for (k, (w, _, _)) in fans.iter().enumerate() {
+        let slot = &mut order_start[*w as usize];
+        order[*slot as usize] = k as u32;
+        *slot += 1;
+    }
     let mut fan_vertex = vec![0u32; fans.len()];
     let mut control_to_welded = Vec::with_capacity(fans.len());
     for (new, &k) in order.iter().enumerate() {
         fan_vertex[k as usize] = new as u32;
         control_to_welded.push(fans[k as usize].0);
-    }
-    let mut used = vec![0u32; nv];
-    for (w, _, _) in &fans {
-        used[*w as usize] += 1;
     }
     report.unused_vertices = used.iter().filter(|&&c| c == 0).count();
     report.split_vertices = used.iter().filter(|&&c| c > 1).count();
@@ -372,7 +399,7 @@ pub fn build_control_mesh(
             let list: Vec<usize> = fans
                 .iter()
                 .filter(|fan| fan.0 == w as u32)
-                .map(|fan| source[fan.2[0] as usize / 3] as usize)
+                .map(|fan| source[fan_corners[fan.2.start] as usize / 3] as usize)
                 .collect();
             return Err(TopologyError::NonManifoldVertex {
                 vertex: w as u32,
@@ -442,7 +469,8 @@ pub fn build_control_mesh(
     mesh.ring_offsets.push(0);
     let mut histogram = Vec::new();
     for &k in &order {
-        let (w, closed, corners) = &fans[k as usize];
+        let (w, closed, range) = &fans[k as usize];
+        let corners = &fan_corners[range.clone()];
         mesh.positions.extend_from_slice(&positions[*w as usize]);
         let spoke_of =
             |i: u32, d: usize| corner_vertex[3 * (i as usize / 3) + (i as usize % 3 + d) % 3];
@@ -521,28 +549,102 @@ pub fn build_control_mesh(
     })
 }
 
-/// Groups half-edges `3 t + e` by undirected edge, in order of each group's first half-edge.
-fn edge_groups(tris: &[[u32; 3]]) -> Vec<Vec<u32>> {
-    let mut keys: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * tris.len());
-    for (t, tri) in tris.iter().enumerate() {
-        for e in 0..3 {
-            let (a, b) = (tri[e], tri[(e + 1) % 3]);
-            keys.push((a.min(b), a.max(b), (3 * t + e) as u32));
+/// `EdgeGroups::mate` of a half-edge whose edge has no other use.
+const EDGE_ALONE: u32 = u32::MAX;
+/// `EdgeGroups::mate` of a half-edge whose edge has three or more uses.
+const EDGE_MANY: u32 = u32::MAX - 1;
+
+/// Half-edges `3 t + e` grouped by undirected edge.
+struct EdgeGroups {
+    /// The other half-edge of an edge with exactly two uses, else [`EDGE_ALONE`] or
+    /// [`EDGE_MANY`].
+    mate: Vec<u32>,
+    /// The edges with three or more uses: each group's half-edges ascending, the groups in
+    /// order of their first half-edge.
+    many: Vec<Vec<u32>>,
+}
+
+impl EdgeGroups {
+    /// Renames every half-edge `h` to `map(h)` (a permutation), keeping the invariants.
+    fn relabel(&mut self, map: impl Fn(u32) -> u32) {
+        let mut mate = vec![EDGE_ALONE; self.mate.len()];
+        for (h, &m) in self.mate.iter().enumerate() {
+            mate[map(h as u32) as usize] = if m < EDGE_MANY { map(m) } else { m };
+        }
+        self.mate = mate;
+        for g in &mut self.many {
+            for h in g.iter_mut() {
+                *h = map(*h);
+            }
+            g.sort_unstable();
+        }
+        self.many.sort_unstable_by_key(|g| g[0]);
+    }
+}
+
+/// Groups half-edges by undirected edge in linear time: a counting sort of the half-edges by
+/// their smaller vertex (ascending half-edge within each bucket), then each bucket sorted by
+/// the other vertex. Buckets hold the edges of one vertex, so they are small except at
+/// high-valence vertices, where the sort keeps the cost `k log k` rather than `k²`.
+fn edge_groups(tris: &[[u32; 3]]) -> EdgeGroups {
+    let nh = 3 * tris.len();
+    let nv = tris
+        .iter()
+        .flat_map(|t| t.iter())
+        .max()
+        .map_or(0, |&v| v as usize + 1);
+    let ends = |h: usize| {
+        let t = &tris[h / 3];
+        let (a, b) = (t[h % 3], t[(h % 3 + 1) % 3]);
+        (a.min(b), a.max(b))
+    };
+    let mut start = vec![0u32; nv + 1];
+    for h in 0..nh {
+        start[ends(h).0 as usize + 1] += 1;
+    }
+    for v in 0..nv {
+        start[v + 1] += start[v];
+    }
+    // (other vertex << 32 | half-edge), bucketed by the smaller vertex.
+    let mut keys = vec![0u64; nh];
+    let mut fill = start.clone();
+    for h in 0..nh {
+        let (lo, hi) = ends(h);
+        let slot = &mut fill[lo as usize];
+        keys[*slot as usize] = (hi as u64) << 32 | h as u64;
+        *slot += 1;
+    }
+    let mut mate = vec![EDGE_ALONE; nh];
+    let mut many: Vec<Vec<u32>> = Vec::new();
+    for v in 0..nv {
+        let bucket = &mut keys[start[v] as usize..start[v + 1] as usize];
+        bucket.sort_unstable();
+        let mut i = 0;
+        while i < bucket.len() {
+            let mut j = i + 1;
+            while j < bucket.len() && bucket[j] >> 32 == bucket[i] >> 32 {
+                j += 1;
+            }
+            let run = &bucket[i..j];
+            match run.len() {
+                1 => {}
+                2 => {
+                    let (h0, h1) = (run[0] as u32, run[1] as u32);
+                    mate[h0 as usize] = h1;
+                    mate[h1 as usize] = h0;
+                }
+                _ => {
+                    for &k in run {
+                        mate[k as u32 as usize] = EDGE_MANY;
+                    }
+                    many.push(run.iter().map(|&k| k as u32).collect());
+                }
+            }
+            i = j;
         }
     }
-    keys.sort_unstable();
-    let mut groups: Vec<Vec<u32>> = Vec::new();
-    let mut i = 0;
-    while i < keys.len() {
-        let mut j = i + 1;
-        while j < keys.len() && keys[j].0 == keys[i].0 && keys[j].1 == keys[i].1 {
-            j += 1;
-        }
-        groups.push(keys[i..j].iter().map(|k| k.2).collect());
-        i = j;
-    }
-    groups.sort_unstable_by_key(|g| g[0]);
-    groups
+    many.sort_unstable_by_key(|g| g[0]);
+    EdgeGroups { mate, many }
 }
 
 fn face_normal(p: &[[f32; 3]], t: [u32; 3]) -> Option<[f32; 3]> {
