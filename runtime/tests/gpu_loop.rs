@@ -17,7 +17,7 @@ use std::path::Path;
 use hce_format::{ControlMesh, Object, ObjectKind};
 use hce_runtime::colour::apply_baked_colours;
 use hce_runtime::gpu::testing::{context_or_skip, random_object, RandomTrees};
-use hce_runtime::gpu::{GpuContext, LoopKernel};
+use hce_runtime::gpu::{GpuContext, LoopKernel, PatchScheme};
 use hce_runtime::subdivide::subdivide;
 use hce_runtime::topology::{build_control_mesh, Creases, Topology, TopologyConfig};
 
@@ -121,7 +121,10 @@ struct Report {
 /// Refines `object` on the GPU at each of `levels` (reusing one output across levels, as a
 /// viewer does) and compares with the CPU reference.
 fn compare(ctx: &GpuContext, object: &Object, levels: &[u32]) -> Report {
-    let kernel = LoopKernel::new(ctx);
+    compare_with(ctx, &LoopKernel::new(ctx), object, levels)
+}
+
+fn compare_with(ctx: &GpuContext, kernel: &LoopKernel, object: &Object, levels: &[u32]) -> Report {
     let uploaded = kernel.upload(ctx, object).unwrap();
     let mut out = None;
     let mut report = Report::default();
@@ -244,6 +247,56 @@ fn gpu_loop_matches_cpu_on_built_in_meshes() {
         "built-in meshes: max position error {:.3e} of the diagonal, {} of {} positions bitwise equal",
         total.max_position, total.positions_bitwise, total.positions
     );
+}
+
+#[test]
+fn workgroup_and_scratch_patches_match_cpu_bitwise_at_levels_1_to_5() {
+    let Some(ctx) =
+        context_or_skip("workgroup_and_scratch_patches_match_cpu_bitwise_at_levels_1_to_5")
+    else {
+        return;
+    };
+    // Boundaries (grid_open, fan7_open), valence 9, and crease and corner vertices: every branch
+    // of the patch kernels, through both of them.
+    let meshes = [
+        ("grid_open", Creases::None),
+        ("fan7_open", Creases::None),
+        ("bipyramid9", Creases::None),
+        ("cube_creased", Creases::Angle(45.0)),
+    ];
+    let workgroup = LoopKernel::with_scheme(&ctx, PatchScheme::Workgroup);
+    let scratch = LoopKernel::with_scheme(&ctx, PatchScheme::Scratch);
+    let auto = LoopKernel::new(&ctx);
+    for (i, (name, creases)) in meshes.into_iter().enumerate() {
+        let object = baked(name, &data_mesh(name, creases).mesh, 300 + i as u64);
+        let uploaded = auto.upload(&ctx, &object).unwrap();
+        for level in 1..=5 {
+            // The default chooses workgroup memory wherever it fits: levels 1 to 5 here.
+            assert_eq!(
+                auto.scheme_for(&ctx, &uploaded, level).unwrap(),
+                PatchScheme::Workgroup,
+                "{name} level {level}"
+            );
+            assert_eq!(
+                scratch.scheme_for(&ctx, &uploaded, level).unwrap(),
+                PatchScheme::Scratch
+            );
+        }
+        // Level 6 does not fit workgroup memory: the default falls back, a forced workgroup
+        // kernel refuses.
+        assert_eq!(
+            auto.scheme_for(&ctx, &uploaded, 6).unwrap(),
+            PatchScheme::Scratch
+        );
+        assert!(workgroup.scheme_for(&ctx, &uploaded, 6).is_err());
+        for (scheme, kernel) in [("workgroup", &workgroup), ("scratch", &scratch)] {
+            let r = compare_with(&ctx, kernel, &object, &[1, 2, 3, 4, 5, 3]);
+            assert_eq!(
+                r.positions_bitwise, r.positions,
+                "{name}, {scheme} patches: positions must equal the CPU's bit for bit"
+            );
+        }
+    }
 }
 
 #[test]
