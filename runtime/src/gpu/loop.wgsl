@@ -4,17 +4,22 @@
 //
 // Three dispatches, each a pure gather or an owned write, so the result does not depend on
 // scheduling (no atomics):
-//   patch_main   one invocation per coarse triangle (grid-stride over scratch slots): refines
-//                the triangle's local patch to level L in a scratch region of a storage buffer
-//                and writes the positions and normals of the output vertices it owns.
+//   step 1       the patches, by one of two kernels (loop_kernel.rs chooses, `PatchScheme`):
+//                patch_wg_main (loop_workgroup.wgsl, appended to this file) refines 1 to 16
+//                coarse triangles per workgroup in workgroup memory, the lattice points of each
+//                level spread over the invocations; patch_main, below, runs one invocation per
+//                coarse triangle (grid-stride over scratch slots) with the patch in a scratch
+//                region of a storage buffer. Both write the positions and normals of the output
+//                vertices each triangle owns.
 //   faces_main   one invocation per fine triangle: its indices, area and HCE colour.
 //   colours_main one invocation per output vertex: area-weighted mean of the incident fine
 //                triangles, across coarse edges and vertices.
 //
-// The patch lives in storage memory rather than workgroup memory: at level 5 the two squares of
-// the CPU port alone take 2 x 35^2 x 12 = 29 KiB per triangle, above the 16 KiB of workgroup
-// memory WebGPU guarantees, and level 6 needs 105 KiB. A per-slot region of a storage buffer
-// works at every level on lavapipe and on real GPUs; the Rust side bounds the number of slots.
+// patch_main keeps its padded square (n + 3)^2 in storage memory: at level 5 its two squares
+// take 2 x 35^2 x 12 = 29 KiB per triangle and level 6 needs 105 KiB, beyond the 16 KiB of
+// workgroup memory WebGPU guarantees. It serves level 6, extreme valences, and software
+// adapters, where it is faster than the workgroup kernel (llvmpipe runs shaders with barriers
+// as coroutines); the Rust side bounds the number of slots.
 //
 // The CPU reference rounds every product and sum separately. SPIR-V from naga lets the driver
 // contract a * b + c into a fused multiply-add (Mesa does), which moves positions by an ulp, so

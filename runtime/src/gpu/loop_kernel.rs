@@ -4,20 +4,31 @@
 //! GRAPP 2012). The kernel is a port of the CPU reference, [`crate::subdivide`] followed by
 //! [`crate::colour::apply_baked_colours`], reading the same adjacency tables:
 //!
-//! 1. `patch_main`, one invocation per coarse triangle: the triangle's local patch (grid, bands,
-//!    corner rings) refined level by level in the CPU's order of arithmetic, then the positions
-//!    and normals of the output vertices the triangle owns (each vertex has exactly one owner,
-//!    so vertices shared across coarse edges are bitwise equal).
+//! 1. The patches: each coarse triangle's local patch (grid, bands, corner rings) refined level
+//!    by level in the CPU's order of arithmetic, then the positions and normals of the output
+//!    vertices the triangle owns (each vertex has exactly one owner, so vertices shared across
+//!    coarse edges are bitwise equal). Two kernels do this, chosen by [`PatchScheme`]:
+//!    * `patch_wg_main` (`loop_workgroup.wgsl`): a workgroup of 64 invocations per 1 to 16
+//!      triangles, the patches in workgroup memory, each level's lattice points, band points and
+//!      ring points spread over the invocations with a barrier between levels. A square keeps
+//!      only the lattice points i, j >= -1, i + j <= n + 1, so at level 5 a patch takes
+//!      10.3 KiB plus its rings and fits the 16 KiB WebGPU guarantees; at lower levels several
+//!      triangles share a workgroup so its invocations have work (`WG_TRIANGLES`). Each
+//!      variant (level, triangles per workgroup, ring capacity) is compiled on first use.
+//!    * `patch_main` (`loop.wgsl`): one invocation per triangle, the patch in a per-slot region
+//!      of a storage buffer ("scratch"), striding over the triangles so the buffer holds at most
+//!      [`SCRATCH_BUDGET`] bytes whatever the mesh. It serves level 6 (105 KiB per patch),
+//!      valences whose rings do not fit, and software adapters: on lavapipe it is the faster
+//!      of the two, because llvmpipe runs a shader with barriers as coroutines.
 //! 2. `faces_main`, one invocation per fine triangle: indices in the CPU's numbering, area, and
 //!    the HCE colour (tree node along the path, representative normal with the largest dot
 //!    product with the face normal).
 //! 3. `colours_main`, one invocation per output vertex: area-weighted mean colour of the incident
 //!    fine triangles, across coarse edges and vertices.
 //!
-//! The patch lives in a per-slot region of a storage buffer ("scratch"), not in workgroup
-//! memory: at level 5 it needs about 30 KiB per triangle and at level 6 about 105 KiB, more than
-//! the 16 KiB of workgroup memory WebGPU guarantees. Invocations stride over the coarse
-//! triangles, so the scratch buffer holds at most [`SCRATCH_BUDGET`] bytes whatever the mesh.
+//! Each step is a pure gather or an owned write (no atomics), so the output does not depend on
+//! scheduling, and both patch kernels compute every point with the same function of the
+//! previous level, so they agree bit for bit with each other and with the CPU.
 //!
 //! Output numbering is exactly that of [`crate::subdivide`]:
 //! `[V coarse][E edges × (M − 1)][F × interior]`, fine triangle `t · 4^L + path`.
@@ -33,7 +44,7 @@ use super::cpu_reference::{validate_tables, FlatTopology, RefinedMesh};
 use super::decode::{records_words, TREE_WGSL};
 use super::flat::KernelTiming;
 use super::util::{check_size, dispatch_size, read_back, storage_init, storage_output, WORKGROUP};
-use super::{GpuContext, GpuError};
+use super::{AdapterKind, GpuContext, GpuError};
 use crate::subdivide::{prepare, MAX_LEVEL};
 
 /// Upper bound of the scratch buffer (bytes): the number of coarse triangles refined at once is
@@ -80,8 +91,9 @@ const WG_TRIANGLES: [u32; 6] = [16, 8, 4, 2, 1, 1];
 /// others exist so that tests and benchmarks can exercise and compare both paths.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum PatchScheme {
-    /// The workgroup kernel wherever the patches fit the device's workgroup memory (levels 1 to
-    /// 5 unless the valences are extreme), the scratch kernel otherwise.
+    /// On a hardware adapter, the workgroup kernel wherever the patches fit the device's
+    /// workgroup memory (levels 0 to 5 unless the valences are extreme), the scratch kernel
+    /// otherwise. On a software adapter (lavapipe), the scratch kernel, which is faster there.
     #[default]
     Auto,
     /// A workgroup refines one to 16 triangles at once, the patches in workgroup memory and
@@ -307,7 +319,16 @@ impl LoopKernel {
         level: u32,
     ) -> Result<PatchPlan, GpuError> {
         let limit = ctx.device.limits().max_compute_workgroup_storage_size;
-        if self.scheme != PatchScheme::Scratch {
+        // Software adapters run the scratch kernel by default: llvmpipe (lavapipe) executes a
+        // shader with barriers as coroutines, and the workgroup kernel runs 2 to 5 times slower
+        // there than the scratch kernel (BENCHMARKS.md, "GPU kernels on lavapipe").
+        let software = ctx.description.kind == AdapterKind::Software;
+        let try_workgroup = match self.scheme {
+            PatchScheme::Auto => !software,
+            PatchScheme::Workgroup => true,
+            PatchScheme::Scratch => false,
+        };
+        if try_workgroup {
             match WgShape::new(level, object.ring_points, limit) {
                 Ok(shape) => return Ok(PatchPlan::Workgroup(shape)),
                 Err(needed) if self.scheme == PatchScheme::Workgroup => {

@@ -74,17 +74,6 @@ fn fold(s: i32, idx: u32) -> vec2<i32> {
     return vec2<i32>(c - (s - r + 1), s - r);
 }
 
-// The corner of ring point r of a triangle whose rings start at `ro`.
-fn ring_corner(ro: array<u32, 3>, r: u32) -> u32 {
-    if (r >= ro[2]) {
-        return 2u;
-    }
-    if (r >= ro[1]) {
-        return 1u;
-    }
-    return 0u;
-}
-
 // Where the square and ring set of step k (n = 2^k) live: the final level always in region A
 // and ring set 0, the levels before it alternating.
 fn wg_square(slot_base: u32, k: u32) -> u32 {
@@ -102,47 +91,80 @@ fn wg_rings(slot_base: u32, k: u32) -> u32 {
     return r + WG_RING;
 }
 
-// A triangle's constants, read from the tables once per lane.
+// What a lane knows of its triangle: the triangle, its flags, its slot in the workgroup and
+// the number of ring points (the sum of the three valences).
 struct WgTri {
     t: u32,
     flags: u32,
-    cs: array<Corner, 3>,
-    // First ring point of each corner in a ring set, and the total.
-    ro: array<u32, 3>,
+    slot: u32,
     rings: u32,
+}
+
+// Per-corner constants of the workgroup's triangles, loaded once by three lanes of each: a
+// table in workgroup memory rather than an array in every lane, which naga would copy at every
+// dynamic index.
+var<workgroup> wg_corners: array<Corner, 3 * WG_TRIS>;
+// First ring point of each corner in a ring set.
+var<workgroup> wg_ro: array<u32, 3 * WG_TRIS>;
+
+fn wcorner(tri: WgTri, c: u32) -> Corner {
+    return wg_corners[3u * tri.slot + c];
+}
+
+fn wro(tri: WgTri, c: u32) -> u32 {
+    return wg_ro[3u * tri.slot + c];
+}
+
+fn valence(t: u32, c: u32) -> u32 {
+    let v = corner(t, c);
+    return topo[params.ring_offsets_off + v + 1u] - topo[params.ring_offsets_off + v];
+}
+
+// Vertex s of the ring of corner c of triangle t.
+fn ring_vertex(t: u32, c: u32, s: u32) -> u32 {
+    return topo[params.ring_off + topo[params.ring_offsets_off + corner(t, c)] + s];
+}
+
+// The corner whose ring holds ring point r.
+fn wring_corner(tri: WgTri, r: u32) -> u32 {
+    if (r >= wro(tri, 2u)) {
+        return 2u;
+    }
+    if (r >= wro(tri, 1u)) {
+        return 1u;
+    }
+    return 0u;
 }
 
 // New ring point s of corner c (the odd vertex on spoke s), from the previous level.
 fn wg_ring_point(sq: u32, rg: u32, tri: WgTri, n: i32, c: u32, s: u32) -> vec3<f32> {
-    var cs = tri.cs;
-    var ro = tri.ro;
-    let cr = cs[c];
+    let cr = wcorner(tri, c);
+    let ro = wro(tri, c);
     let lc = corner_lattice(n, c);
     let v = wsq_at(sq, n, lc.x, lc.y);
-    let r = wring_at(rg, ro[c] + s);
+    let r = wring_at(rg, ro + s);
     if (spoke_sharp(cr, s)) {
         return mid(v, r);
     }
-    return odd_smooth(v, r, wring_at(rg, ro[c] + (s + cr.n - 1u) % cr.n),
-                      wring_at(rg, ro[c] + (s + 1u) % cr.n));
+    return odd_smooth(v, r, wring_at(rg, ro + (s + cr.n - 1u) % cr.n),
+                      wring_at(rg, ro + (s + 1u) % cr.n));
 }
 
 // New position of corner c by its vertex rule, from the previous level.
 fn wg_corner_point(sq: u32, rg: u32, tri: WgTri, n: i32, c: u32) -> vec3<f32> {
-    var cs = tri.cs;
-    var ro = tri.ro;
-    let cr = cs[c];
+    let cr = wcorner(tri, c);
+    let ro = wro(tri, c);
     let lc = corner_lattice(n, c);
     let v = wsq_at(sq, n, lc.x, lc.y);
     if (cr.rule == RULE_CORNER) {
         return v;
     }
     if (cr.rule == RULE_CREASE) {
-        return even_crease(v, wring_at(rg, ro[c] + cr.crease0), wring_at(rg, ro[c] + cr.crease1));
+        return even_crease(v, wring_at(rg, ro + cr.crease0), wring_at(rg, ro + cr.crease1));
     }
     var s = vec3<f32>(0.0);
     for (var q = 0u; q < cr.n; q++) {
-        s = s + mid(v, wring_at(rg, ro[c] + q));
+        s = s + mid(v, wring_at(rg, ro + q));
     }
     return even_smooth(v, s, w_of(cr.n), cf_of(cr.n));
 }
@@ -180,13 +202,12 @@ fn wg_even_point(sq: u32, rg: u32, tri: WgTri, n: i32, i: i32, j: i32) -> vec3<f
 // Band point q (0 ..= 2n - 1) of edge e of the new level: the two ends are ring points of the
 // edge's corners, the others odd points between the edge and the previous band.
 fn wg_band_point(sq: u32, rg: u32, tri: WgTri, n: i32, e: u32, q: i32) -> vec3<f32> {
-    var cs = tri.cs;
     if (q == 0) {
-        let c0 = cs[e];
+        let c0 = wcorner(tri, e);
         return wg_ring_point(sq, rg, tri, n, e, (c0.k + c0.n - 1u) % c0.n);
     }
     if (q == 2 * n - 1) {
-        let c1 = cs[(e + 1u) % 3u];
+        let c1 = wcorner(tri, (e + 1u) % 3u);
         return wg_ring_point(sq, rg, tri, n, (e + 1u) % 3u, (c1.k + 2u) % c1.n);
     }
     let m = q / 2;
@@ -273,8 +294,8 @@ fn wg_step(sq: u32, nsq: u32, rg: u32, nrg: u32, tri: WgTri, n: i32, lane: u32) 
     }
     // Rings.
     for (var r = lane; r < tri.rings; r += WG_LANES) {
-        let c = ring_corner(tri.ro, r);
-        wring_set(nrg, r, wg_ring_point(sq, rg, tri, n, c, r - tri.ro[c]));
+        let c = wring_corner(tri, r);
+        wring_set(nrg, r, wg_ring_point(sq, rg, tri, n, c, r - wro(tri, c)));
     }
 }
 
@@ -298,9 +319,8 @@ fn wg_grid_normal(sq: u32, flags: u32, n: i32, i: i32, j: i32) -> vec3<f32> {
 }
 
 fn wg_corner_normal(sq: u32, rg: u32, tri: WgTri, n: i32, c: u32) -> vec3<f32> {
-    var cs = tri.cs;
-    var ro = tri.ro;
-    let cr = cs[c];
+    let cr = wcorner(tri, c);
+    let ro = wro(tri, c);
     let lc = corner_lattice(n, c);
     let v = wsq_at(sq, n, lc.x, lc.y);
     var faces = cr.n;
@@ -309,7 +329,7 @@ fn wg_corner_normal(sq: u32, rg: u32, tri: WgTri, n: i32, c: u32) -> vec3<f32> {
     }
     var s = vec3<f32>(0.0);
     for (var f = 0u; f < faces; f++) {
-        s = s + cross3(wring_at(rg, ro[c] + f) - v, wring_at(rg, ro[c] + (f + 1u) % cr.n) - v);
+        s = s + cross3(wring_at(rg, ro + f) - v, wring_at(rg, ro + (f + 1u) % cr.n) - v);
     }
     return s;
 }
@@ -324,19 +344,23 @@ fn patch_wg_main(@builtin(local_invocation_index) lid: u32,
     let t = (wid.x + wid.y * groups.x) * WG_TRIS + slot;
     // Lanes past the last triangle idle but still meet every barrier.
     let live = t < params.triangle_count;
+    // Three lanes per triangle fill its corner table; every lane counts its ring points. Level 0
+    // (the three corners, the one opposite vertex per band and the rings, straight from the
+    // coarse positions) reads the tables directly, so one barrier serves both.
     var tri: WgTri;
+    tri.slot = slot;
     if (live) {
-        let cs = array<Corner, 3>(load_corner(t, 0u), load_corner(t, 1u), load_corner(t, 2u));
-        let ro = array<u32, 3>(0u, cs[0].n, cs[0].n + cs[1].n);
-        tri = WgTri(t, topo[params.tri_flags_off + t], cs, ro, ro[2] + cs[2].n);
-    }
-
-    // Level 0: the three corners, the one opposite vertex per band and the rings, straight from
-    // the coarse positions.
-    if (live) {
+        tri.t = t;
+        tri.flags = topo[params.tri_flags_off + t];
+        let n = vec3<u32>(valence(t, 0u), valence(t, 1u), valence(t, 2u));
+        let ro = vec3<u32>(0u, n.x, n.x + n.y);
+        tri.rings = ro.z + n.z;
+        if (lane < 3u) {
+            wg_corners[3u * slot + lane] = load_corner(t, lane);
+            wg_ro[3u * slot + lane] = ro[lane];
+        }
         let sq = wg_square(slot_base, 0u);
         let rg = wg_rings(slot_base, 0u);
-        var cs = tri.cs;
         for (var idx = lane; idx < 6u + tri.rings; idx += WG_LANES) {
             if (idx < 3u) {
                 let lc = corner_lattice(1, idx);
@@ -344,16 +368,20 @@ fn patch_wg_main(@builtin(local_invocation_index) lid: u32,
             } else if (idx < 6u) {
                 let e = idx - 3u;
                 if ((tri.flags & (INTERIOR << e)) != 0u) {
-                    let cr = cs[e];
+                    let k = topo[params.corner_spokes_off + 3u * t + e];
+                    let s = (k + n[e] - 1u) % n[e];
                     let l = band_lattice(1, e, 0);
-                    let s = (cr.k + cr.n - 1u) % cr.n;
-                    wsq_set(sq, 1, l.x, l.y, coarse_position(topo[params.ring_off + cr.off + s]));
+                    wsq_set(sq, 1, l.x, l.y, coarse_position(ring_vertex(t, e, s)));
                 }
             } else {
                 let r = idx - 6u;
-                let c = ring_corner(tri.ro, r);
-                let s = r - tri.ro[c];
-                wring_set(rg, r, coarse_position(topo[params.ring_off + cs[c].off + s]));
+                var c = 0u;
+                if (r >= ro.z) {
+                    c = 2u;
+                } else if (r >= ro.y) {
+                    c = 1u;
+                }
+                wring_set(rg, r, coarse_position(ring_vertex(t, c, r - ro[c])));
             }
         }
     }
