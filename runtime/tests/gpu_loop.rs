@@ -265,9 +265,9 @@ fn gpu_loop_matches_cpu_on_built_in_meshes() {
 }
 
 #[test]
-fn workgroup_and_scratch_patches_match_cpu_bitwise_at_levels_1_to_5() {
+fn workgroup_and_scratch_patches_match_cpu_bitwise_at_levels_0_to_5() {
     let Some(ctx) =
-        context_or_skip("workgroup_and_scratch_patches_match_cpu_bitwise_at_levels_1_to_5")
+        context_or_skip("workgroup_and_scratch_patches_match_cpu_bitwise_at_levels_0_to_5")
     else {
         return;
     };
@@ -314,7 +314,12 @@ fn workgroup_and_scratch_patches_match_cpu_bitwise_at_levels_1_to_5() {
             PatchScheme::Scratch
         );
         assert!(workgroup.scheme_for(&ctx, &uploaded, 6).is_err());
-        let reports = compare_with(&ctx, &[&workgroup, &scratch], &object, &[1, 2, 3, 4, 5, 3]);
+        let reports = compare_with(
+            &ctx,
+            &[&workgroup, &scratch],
+            &object,
+            &[0, 1, 2, 3, 4, 5, 3],
+        );
         for (scheme, r) in ["workgroup", "scratch"].into_iter().zip(reports) {
             assert_eq!(
                 r.positions_bitwise, r.positions,

@@ -124,7 +124,7 @@ impl WgShape {
         // A square of n segments holds rows of n + 4, n + 3, ... points (`wg_index`).
         let square = |n: u64| 3 * (n + 4) * (n + 5) / 2;
         let m = 1u64 << level.min(31);
-        let one = 4 * (square(m) + square(m / 2) + 6 * u64::from(ring_points));
+        let one = 4 * (square(m) + square(m / 2) + 6 * u64::from(ring_points)) + 96;
         let Some(&wanted) = WG_TRIANGLES.get(level as usize) else {
             return Err(one);
         };
@@ -144,8 +144,10 @@ impl WgShape {
         Ok(shape)
     }
 
+    /// Workgroup memory of the variant: the patches and, per triangle, its corner table
+    /// (`wg_corners` and `wg_ro`: three 7-word `Corner`s and three ring offsets).
     fn bytes(&self) -> u64 {
-        4 * u64::from(self.tris) * u64::from(self.square_a + self.square_b + 2 * self.ring)
+        u64::from(self.tris) * (4 * u64::from(self.square_a + self.square_b + 2 * self.ring) + 96)
     }
 
     /// The constants `loop_workgroup.wgsl` expects ahead of it.
@@ -832,4 +834,27 @@ pub fn refine_loop(ctx: &GpuContext, object: &Object, level: u32) -> Result<Loop
         mesh: out.read_back(ctx)?,
         normals: out.read_back_normals(ctx)?,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn workgroup_shapes_fit_the_webgpu_limit() {
+        let limit = 16384;
+        // Level 5: one triangle, squares of 36 · 37 / 2 and 20 · 21 / 2 points, two ring sets.
+        let s = WgShape::new(5, 24, limit).unwrap();
+        assert_eq!((s.tris, s.square_a, s.square_b, s.ring), (1, 1998, 630, 72));
+        assert_eq!(s.bytes(), 4 * (1998 + 630 + 2 * 72) + 96);
+        // The largest rings that still fit at level 5, and the first that do not.
+        assert_eq!(WgShape::new(5, 240, limit).unwrap().bytes(), 16368);
+        assert_eq!(WgShape::new(5, 248, limit), Err(16560));
+        // Low levels share a workgroup between triangles, fewer when the rings are large.
+        assert_eq!(WgShape::new(1, 24, limit).unwrap().tris, 8);
+        assert_eq!(WgShape::new(1, 200, limit).unwrap().tris, 2);
+        assert_eq!(WgShape::new(0, 24, limit).unwrap().square_b, 0);
+        // Level 6 never runs in workgroup memory.
+        assert!(WgShape::new(6, 24, limit).is_err());
+    }
 }
