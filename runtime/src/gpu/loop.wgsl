@@ -149,29 +149,40 @@ fn normalize_or_z(s: vec3<f32>) -> vec3<f32> {
 // The patch in scratch memory. A slot holds two squares (current and next level) over lattice
 // points -1 ..= n + 1, index (i + 1) + (j + 1)(n + 3), three floats each, and two ring sets
 // (3 corners x ring_cap points). Lattice point (i, j) is v0 + i/n (v1 - v0) + j/n (v2 - v0).
+// The slots are interleaved: float k of slot s is scratch[k * slots + s], so neighbouring
+// invocations, which work on the same point of different triangles, touch neighbouring words
+// (coalesced on a GPU, one cache line per eight lanes on lavapipe).
+
+// This invocation's slot (set once by patch_main).
+var<private> slot_id: u32;
+
+fn scratch_at(k: u32) -> vec3<f32> {
+    let s = params.slots;
+    return vec3<f32>(scratch[k * s + slot_id], scratch[(k + 1u) * s + slot_id],
+                     scratch[(k + 2u) * s + slot_id]);
+}
+
+fn scratch_set(k: u32, p: vec3<f32>) {
+    let s = params.slots;
+    scratch[k * s + slot_id] = p.x;
+    scratch[(k + 1u) * s + slot_id] = p.y;
+    scratch[(k + 2u) * s + slot_id] = p.z;
+}
 
 fn sq_at(base: u32, n: i32, i: i32, j: i32) -> vec3<f32> {
-    let k = base + 3u * u32((i + 1) + (j + 1) * (n + 3));
-    return vec3<f32>(scratch[k], scratch[k + 1u], scratch[k + 2u]);
+    return scratch_at(base + 3u * u32((i + 1) + (j + 1) * (n + 3)));
 }
 
 fn sq_set(base: u32, n: i32, i: i32, j: i32, p: vec3<f32>) {
-    let k = base + 3u * u32((i + 1) + (j + 1) * (n + 3));
-    scratch[k] = p.x;
-    scratch[k + 1u] = p.y;
-    scratch[k + 2u] = p.z;
+    scratch_set(base + 3u * u32((i + 1) + (j + 1) * (n + 3)), p);
 }
 
 fn ring_at(base: u32, c: u32, s: u32) -> vec3<f32> {
-    let k = base + 3u * (c * params.ring_cap + s);
-    return vec3<f32>(scratch[k], scratch[k + 1u], scratch[k + 2u]);
+    return scratch_at(base + 3u * (c * params.ring_cap + s));
 }
 
 fn ring_set(base: u32, c: u32, s: u32, p: vec3<f32>) {
-    let k = base + 3u * (c * params.ring_cap + s);
-    scratch[k] = p.x;
-    scratch[k + 1u] = p.y;
-    scratch[k + 2u] = p.z;
+    scratch_set(base + 3u * (c * params.ring_cap + s), p);
 }
 
 // Lattice point of corner c, of point m of edge e (from v_e), and of band point m of edge e.
@@ -410,11 +421,11 @@ fn patch_main(@builtin(global_invocation_id) gid: vec3<u32>,
     if (slot >= params.slots) {
         return;
     }
+    slot_id = slot;
     let ring_floats = 9u * params.ring_cap;
-    let base = slot * (2u * params.square_floats + 2u * ring_floats);
-    let sq_a = base;
-    let sq_b = base + params.square_floats;
-    let rg_a = base + 2u * params.square_floats;
+    let sq_a = 0u;
+    let sq_b = params.square_floats;
+    let rg_a = 2u * params.square_floats;
     let rg_b = rg_a + ring_floats;
     let mm = i32(params.m);
     for (var t = slot; t < params.triangle_count; t += params.slots) {
