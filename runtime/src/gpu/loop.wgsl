@@ -124,6 +124,16 @@ fn even_smooth(v: vec3<f32>, sum_mid: vec3<f32>, w: f32, cf: f32) -> vec3<f32> {
     return v + keep((avg - v) * cf);
 }
 
+// Neighbours of spoke s in a ring of n, without the integer division of a modulo (which SIMD
+// hardware, lavapipe's included, does lane by lane).
+fn ring_prev(s: u32, n: u32) -> u32 {
+    return select(s - 1u, n - 1u, s == 0u);
+}
+
+fn ring_next(s: u32, n: u32) -> u32 {
+    return select(s + 1u, 0u, s + 1u == n);
+}
+
 fn cf_of(k: u32) -> f32 {
     return bitcast<f32>(topo[params.weights_off + 2u * k]);
 }
@@ -245,7 +255,7 @@ fn refine_step(sq: u32, nsq: u32, rg: u32, nrg: u32, corners: array<Corner, 3>, 
             if (spoke_sharp(cr, s)) {
                 p = mid(v, r);
             } else {
-                p = odd_smooth(v, r, ring_at(rg, c, (s + cr.n - 1u) % cr.n), ring_at(rg, c, (s + 1u) % cr.n));
+                p = odd_smooth(v, r, ring_at(rg, c, ring_prev(s, cr.n)), ring_at(rg, c, ring_next(s, cr.n)));
             }
             ring_set(nrg, c, s, p);
         }
@@ -398,7 +408,7 @@ fn corner_normal(sq: u32, rg: u32, cr: Corner, n: i32, c: u32) -> vec3<f32> {
     }
     var s = vec3<f32>(0.0);
     for (var f = 0u; f < faces; f++) {
-        s = s + cross3(ring_at(rg, c, f) - v, ring_at(rg, c, (f + 1u) % cr.n) - v);
+        s = s + cross3(ring_at(rg, c, f) - v, ring_at(rg, c, ring_next(f, cr.n)) - v);
     }
     return s;
 }

@@ -146,8 +146,8 @@ fn wg_ring_point(sq: u32, rg: u32, tri: WgTri, n: i32, c: u32, s: u32) -> vec3<f
     if (spoke_sharp(cr, s)) {
         return mid(v, r);
     }
-    return odd_smooth(v, r, wring_at(rg, ro + (s + cr.n - 1u) % cr.n),
-                      wring_at(rg, ro + (s + 1u) % cr.n));
+    return odd_smooth(v, r, wring_at(rg, ro + ring_prev(s, cr.n)),
+                      wring_at(rg, ro + ring_next(s, cr.n)));
 }
 
 // New position of corner c by its vertex rule, from the previous level.
@@ -329,7 +329,7 @@ fn wg_corner_normal(sq: u32, rg: u32, tri: WgTri, n: i32, c: u32) -> vec3<f32> {
     }
     var s = vec3<f32>(0.0);
     for (var f = 0u; f < faces; f++) {
-        s = s + cross3(wring_at(rg, ro + f) - v, wring_at(rg, ro + (f + 1u) % cr.n) - v);
+        s = s + cross3(wring_at(rg, ro + f) - v, wring_at(rg, ro + ring_next(f, cr.n)) - v);
     }
     return s;
 }
