@@ -600,9 +600,9 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
     if (g >= params.fine_total) {
         return;
     }
-    let per = 1u << (2u * params.level);
-    let t = g / per;
-    let path = g % per;
+    // 4^L fine triangles per coarse one: a shift and a mask, not a division.
+    let t = g >> (2u * params.level);
+    let path = g & ((1u << (2u * params.level)) - 1u);
     let cs = fine_corners(path);
     let i0 = vertex_index(t, cs[0].x, cs[0].y);
     let i1 = vertex_index(t, cs[1].x, cs[1].y);
