@@ -505,3 +505,43 @@ fn flat_and_loop_refinements_number_vertices_alike() {
         }
     }
 }
+
+/// More than 65,535 workgroups in one dispatch take the second dispatch dimension: a 400 × 400
+/// grid (320,000 triangles) at level 2, four triangles per workgroup, is 80,000 workgroups. The
+/// two patch kernels must agree bit for bit with each other and the CPU. About a minute on
+/// lavapipe, hence ignored by default (`cargo test -p hce-runtime --test gpu_loop -- --ignored`).
+#[test]
+#[ignore]
+fn workgroup_kernel_spans_two_dispatch_dimensions() {
+    let Some(ctx) = context_or_skip("workgroup_kernel_spans_two_dispatch_dimensions") else {
+        return;
+    };
+    let (p, t) = hce_runtime::gpu::testing::grid(400, 400);
+    let p: Vec<[f32; 3]> = p.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let t: Vec<[u32; 3]> = t.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let mesh = build_control_mesh(&p, &t, None, &TopologyConfig::default())
+        .unwrap()
+        .mesh;
+    // Shallow trees, so the colours stay within lavapipe's 128 MiB storage bindings.
+    let mut object = random_object(
+        "grid400",
+        mesh.positions.clone(),
+        mesh.triangles.clone(),
+        RandomTrees {
+            max_depth: 2,
+            max_extra_normals: 2,
+            ..Default::default()
+        },
+        17,
+    );
+    object.kind = ObjectKind::Multiresolution;
+    object.mesh = mesh.clone();
+    let limit = ctx.device.limits().max_compute_workgroups_per_dimension;
+    assert!(mesh.triangle_count() / 4 > limit as usize);
+    let workgroup = LoopKernel::with_scheme(&ctx, PatchScheme::Workgroup);
+    let scratch = LoopKernel::with_scheme(&ctx, PatchScheme::Scratch);
+    let reports = compare_with(&ctx, &[&workgroup, &scratch], &object, &[2]);
+    for r in reports {
+        assert_eq!(r.positions_bitwise, r.positions);
+    }
+}
