@@ -17,7 +17,7 @@ use std::path::Path;
 use hce_format::{ControlMesh, Object, ObjectKind};
 use hce_runtime::colour::apply_baked_colours;
 use hce_runtime::gpu::testing::{context_or_skip, random_object, RandomTrees};
-use hce_runtime::gpu::{GpuContext, LoopKernel};
+use hce_runtime::gpu::{AdapterKind, GpuContext, LoopKernel, PatchScheme};
 use hce_runtime::subdivide::subdivide;
 use hce_runtime::topology::{build_control_mesh, Creases, Topology, TopologyConfig};
 
@@ -108,7 +108,7 @@ fn baked(name: &str, mesh: &ControlMesh, seed: u64) -> Object {
 }
 
 /// What one comparison found, for the test's report.
-#[derive(Default, Debug)]
+#[derive(Clone, Default, Debug)]
 struct Report {
     max_position: f64,
     positions_bitwise: usize,
@@ -121,80 +121,98 @@ struct Report {
 /// Refines `object` on the GPU at each of `levels` (reusing one output across levels, as a
 /// viewer does) and compares with the CPU reference.
 fn compare(ctx: &GpuContext, object: &Object, levels: &[u32]) -> Report {
-    let kernel = LoopKernel::new(ctx);
-    let uploaded = kernel.upload(ctx, object).unwrap();
-    let mut out = None;
-    let mut report = Report::default();
+    compare_with(ctx, &[&LoopKernel::new(ctx)], object, levels)
+        .pop()
+        .unwrap()
+}
+
+/// [`compare`] for several kernels at once, against one CPU reference per level.
+fn compare_with(
+    ctx: &GpuContext,
+    kernels: &[&LoopKernel],
+    object: &Object,
+    levels: &[u32],
+) -> Vec<Report> {
+    let uploaded: Vec<_> = kernels
+        .iter()
+        .map(|k| k.upload(ctx, object).unwrap())
+        .collect();
+    let mut outs: Vec<_> = kernels.iter().map(|_| None).collect();
+    let mut reports = vec![Report::default(); kernels.len()];
     for &level in levels {
-        let name = format!("{} level {level}", object.name);
-        kernel
-            .refine_into(ctx, &uploaded, level, &mut out, false)
-            .unwrap();
-        let o = out.as_ref().unwrap();
-        let gpu = o.read_back(ctx).unwrap();
-        let gpu_normals = o.read_back_normals(ctx).unwrap();
         let cpu = subdivide(&object.mesh, level).unwrap();
         let cpu_colours = apply_baked_colours(object, &cpu, level).unwrap();
-
-        assert_eq!(gpu.level, level);
-        assert_eq!(gpu.vertex_count(), cpu.positions.len(), "{name}");
-        assert_eq!(gpu.triangle_count(), cpu.indices.len(), "{name}");
-        assert!(
-            gpu.indices == cpu.indices.as_flattened(),
-            "{name}: indices differ"
-        );
-
-        let diag = common::bbox_diagonal(&cpu.positions);
-        for (v, c) in cpu.positions.iter().enumerate() {
-            let g = &gpu.positions[3 * v..3 * v + 3];
-            let d = (0..3)
-                .map(|k| (f64::from(g[k]) - f64::from(c[k])).powi(2))
-                .sum::<f64>()
-                .sqrt()
-                / diag;
-            assert!(d <= 1e-5, "{name}: vertex {v}: {g:?} vs {c:?}");
-            report.max_position = report.max_position.max(d);
-            report.positions_bitwise += usize::from(g == c.as_slice());
-            report.positions += 1;
-
-            let gn = &gpu_normals[3 * v..3 * v + 3];
-            let dn = (0..3)
-                .map(|k| (gn[k] - cpu.normals[v][k]).abs())
-                .fold(0.0, f32::max);
+        for (k, kernel) in kernels.iter().enumerate() {
+            let report = &mut reports[k];
+            let name = format!("{} level {level}, kernel {k}", object.name);
+            kernel
+                .refine_into(ctx, &uploaded[k], level, &mut outs[k], false)
+                .unwrap();
+            let o = outs[k].as_ref().unwrap();
+            let gpu = o.read_back(ctx).unwrap();
+            let gpu_normals = o.read_back_normals(ctx).unwrap();
+            assert_eq!(gpu.level, level);
+            assert_eq!(gpu.vertex_count(), cpu.positions.len(), "{name}");
+            assert_eq!(gpu.triangle_count(), cpu.indices.len(), "{name}");
             assert!(
-                dn <= 1e-3,
-                "{name}: vertex {v}: normal {gn:?} vs {:?}",
-                cpu.normals[v]
+                gpu.indices == cpu.indices.as_flattened(),
+                "{name}: indices differ"
             );
-            report.max_normal = report.max_normal.max(dn);
-        }
 
-        // Colours: relative 1e-3 of the channel (absolute 1e-3 of the largest channel for
-        // dark ones). A fine triangle on a near tie between two representative normals may pick
-        // the other one on the GPU (f32 dot products against the CPU's f64); that moves its
-        // three vertices, so a handful of vertices are allowed to differ.
-        for (v, c) in cpu_colours.iter().enumerate() {
-            let g = &gpu.colours[4 * v..4 * v + 4];
-            assert_eq!(g[3], 1.0);
-            let scale = c.iter().fold(0f32, |a, &b| a.max(b.abs())).max(1e-6);
-            let d = (0..3)
-                .map(|k| f64::from((g[k] - c[k]).abs() / c[k].abs().max(1e-3 * scale)))
-                .fold(0.0, f64::max);
-            if d > 1e-3 {
-                report.colours_over += 1;
-            } else {
-                report.max_colour = report.max_colour.max(d);
+            let diag = common::bbox_diagonal(&cpu.positions);
+            for (v, c) in cpu.positions.iter().enumerate() {
+                let g = &gpu.positions[3 * v..3 * v + 3];
+                let d = (0..3)
+                    .map(|k| (f64::from(g[k]) - f64::from(c[k])).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+                    / diag;
+                assert!(d <= 1e-5, "{name}: vertex {v}: {g:?} vs {c:?}");
+                report.max_position = report.max_position.max(d);
+                report.positions_bitwise += usize::from(g == c.as_slice());
+                report.positions += 1;
+
+                let gn = &gpu_normals[3 * v..3 * v + 3];
+                let dn = (0..3)
+                    .map(|k| (gn[k] - cpu.normals[v][k]).abs())
+                    .fold(0.0, f32::max);
+                assert!(
+                    dn <= 1e-3,
+                    "{name}: vertex {v}: normal {gn:?} vs {:?}",
+                    cpu.normals[v]
+                );
+                report.max_normal = report.max_normal.max(dn);
             }
+
+            // Colours: relative 1e-3 of the channel (absolute 1e-3 of the largest channel for
+            // dark ones). A fine triangle on a near tie between two representative normals may pick
+            // the other one on the GPU (f32 dot products against the CPU's f64); that moves its
+            // three vertices, so a handful of vertices are allowed to differ.
+            for (v, c) in cpu_colours.iter().enumerate() {
+                let g = &gpu.colours[4 * v..4 * v + 4];
+                assert_eq!(g[3], 1.0);
+                let scale = c.iter().fold(0f32, |a, &b| a.max(b.abs())).max(1e-6);
+                let d = (0..3)
+                    .map(|k| f64::from((g[k] - c[k]).abs() / c[k].abs().max(1e-3 * scale)))
+                    .fold(0.0, f64::max);
+                if d > 1e-3 {
+                    report.colours_over += 1;
+                } else {
+                    report.max_colour = report.max_colour.max(d);
+                }
+            }
+            assert!(
+                report.colours_over * 2000 <= cpu_colours.len(),
+                "{name}: {} of {} vertex colours differ by more than 1e-3 relative",
+                report.colours_over,
+                cpu_colours.len()
+            );
         }
-        assert!(
-            report.colours_over * 2000 <= cpu_colours.len(),
-            "{name}: {} of {} vertex colours differ by more than 1e-3 relative",
-            report.colours_over,
-            cpu_colours.len()
-        );
     }
-    eprintln!("{}: {report:?}", object.name);
-    report
+    for report in &reports {
+        eprintln!("{}: {report:?}", object.name);
+    }
+    reports
 }
 
 #[test]
@@ -247,6 +265,71 @@ fn gpu_loop_matches_cpu_on_built_in_meshes() {
 }
 
 #[test]
+fn workgroup_and_scratch_patches_match_cpu_bitwise_at_levels_0_to_5() {
+    let Some(ctx) =
+        context_or_skip("workgroup_and_scratch_patches_match_cpu_bitwise_at_levels_0_to_5")
+    else {
+        return;
+    };
+    // Boundaries (grid_open, fan7_open), valence 9, and crease and corner vertices: every branch
+    // of the patch kernels, through both of them.
+    let meshes = [
+        ("grid_open", Creases::None),
+        ("fan7_open", Creases::None),
+        ("bipyramid9", Creases::None),
+        ("cube_creased", Creases::Angle(45.0)),
+    ];
+    let workgroup = LoopKernel::with_scheme(&ctx, PatchScheme::Workgroup);
+    let scratch = LoopKernel::with_scheme(&ctx, PatchScheme::Scratch);
+    let auto = LoopKernel::new(&ctx);
+    // The default takes workgroup memory wherever it fits on hardware, and the scratch kernel
+    // on software adapters, where it is faster.
+    let preferred = if ctx.description.kind == AdapterKind::Software {
+        PatchScheme::Scratch
+    } else {
+        PatchScheme::Workgroup
+    };
+    for (i, (name, creases)) in meshes.into_iter().enumerate() {
+        let object = baked(name, &data_mesh(name, creases).mesh, 300 + i as u64);
+        let uploaded = auto.upload(&ctx, &object).unwrap();
+        for level in 1..=5 {
+            assert_eq!(
+                auto.scheme_for(&ctx, &uploaded, level).unwrap(),
+                preferred,
+                "{name} level {level}"
+            );
+            assert_eq!(
+                workgroup.scheme_for(&ctx, &uploaded, level).unwrap(),
+                PatchScheme::Workgroup
+            );
+            assert_eq!(
+                scratch.scheme_for(&ctx, &uploaded, level).unwrap(),
+                PatchScheme::Scratch
+            );
+        }
+        // Level 6 does not fit workgroup memory: the default falls back, a forced workgroup
+        // kernel refuses with an error.
+        assert_eq!(
+            auto.scheme_for(&ctx, &uploaded, 6).unwrap(),
+            PatchScheme::Scratch
+        );
+        assert!(workgroup.scheme_for(&ctx, &uploaded, 6).is_err());
+        let reports = compare_with(
+            &ctx,
+            &[&workgroup, &scratch],
+            &object,
+            &[0, 1, 2, 3, 4, 5, 3],
+        );
+        for (scheme, r) in ["workgroup", "scratch"].into_iter().zip(reports) {
+            assert_eq!(
+                r.positions_bitwise, r.positions,
+                "{name}, {scheme} patches: positions must equal the CPU's bit for bit"
+            );
+        }
+    }
+}
+
+#[test]
 fn gpu_loop_matches_cpu_on_real_meshes() {
     let Some(dir) = std::env::var_os("HCE_EXTRA_MESHES") else {
         eprintln!(
@@ -261,6 +344,8 @@ fn gpu_loop_matches_cpu_on_real_meshes() {
     // The bunny (69,451 triangles) only to level 2, to keep the test within its time budget in
     // the dev profile; the other meshes to level 4. Suzanne is non-manifold and is split into
     // manifold pieces by the default topology configuration. Fandisk gets angle creases.
+    let workgroup = LoopKernel::with_scheme(&ctx, PatchScheme::Workgroup);
+    let scratch = LoopKernel::with_scheme(&ctx, PatchScheme::Scratch);
     let cases: &[(&str, Creases, u32)] = &[
         ("spot", Creases::None, 4),
         ("fandisk", Creases::Angle(40.0), 4),
@@ -296,11 +381,14 @@ fn gpu_loop_matches_cpu_on_real_meshes() {
         }
         let object = baked(name, &t.mesh, 200 + i as u64);
         let levels: Vec<u32> = (1..=top).collect();
-        let r = compare(&ctx, &object, &levels);
-        eprintln!(
-            "{name} (max valence {max_valence:?}, {} crease edges): max position error {:.3e} of the diagonal, {} of {} positions bitwise equal",
-            t.report.crease_edges, r.max_position, r.positions_bitwise, r.positions
-        );
+        // Both patch kernels: the default picks only one of them on a given adapter.
+        let reports = compare_with(&ctx, &[&workgroup, &scratch], &object, &levels);
+        for (scheme, r) in ["workgroup", "scratch"].into_iter().zip(reports) {
+            eprintln!(
+                "{name}, {scheme} patches (max valence {max_valence:?}, {} crease edges): max position error {:.3e} of the diagonal, {} of {} positions bitwise equal",
+                t.report.crease_edges, r.max_position, r.positions_bitwise, r.positions
+            );
+        }
     }
 }
 
@@ -415,5 +503,45 @@ fn flat_and_loop_refinements_number_vertices_alike() {
                 "{name} level {level}"
             );
         }
+    }
+}
+
+/// More than 65,535 workgroups in one dispatch take the second dispatch dimension: a 400 × 400
+/// grid (320,000 triangles) at level 2, four triangles per workgroup, is 80,000 workgroups. The
+/// two patch kernels must agree bit for bit with each other and the CPU. About a minute on
+/// lavapipe, hence ignored by default (`cargo test -p hce-runtime --test gpu_loop -- --ignored`).
+#[test]
+#[ignore]
+fn workgroup_kernel_spans_two_dispatch_dimensions() {
+    let Some(ctx) = context_or_skip("workgroup_kernel_spans_two_dispatch_dimensions") else {
+        return;
+    };
+    let (p, t) = hce_runtime::gpu::testing::grid(400, 400);
+    let p: Vec<[f32; 3]> = p.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let t: Vec<[u32; 3]> = t.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let mesh = build_control_mesh(&p, &t, None, &TopologyConfig::default())
+        .unwrap()
+        .mesh;
+    // Shallow trees, so the colours stay within lavapipe's 128 MiB storage bindings.
+    let mut object = random_object(
+        "grid400",
+        mesh.positions.clone(),
+        mesh.triangles.clone(),
+        RandomTrees {
+            max_depth: 2,
+            max_extra_normals: 2,
+            ..Default::default()
+        },
+        17,
+    );
+    object.kind = ObjectKind::Multiresolution;
+    object.mesh = mesh.clone();
+    let limit = ctx.device.limits().max_compute_workgroups_per_dimension;
+    assert!(mesh.triangle_count() / 4 > limit as usize);
+    let workgroup = LoopKernel::with_scheme(&ctx, PatchScheme::Workgroup);
+    let scratch = LoopKernel::with_scheme(&ctx, PatchScheme::Scratch);
+    let reports = compare_with(&ctx, &[&workgroup, &scratch], &object, &[2]);
+    for r in reports {
+        assert_eq!(r.positions_bitwise, r.positions);
     }
 }

@@ -7,7 +7,7 @@ use std::time::Instant;
 use hce_format::Object;
 
 use super::flat::{FlatKernel, KernelTiming};
-use super::loop_kernel::LoopKernel;
+use super::loop_kernel::{LoopKernel, PatchScheme};
 use super::{GpuContext, GpuError};
 
 /// Where a time came from.
@@ -31,6 +31,9 @@ pub struct BenchRow {
     /// Bytes the kernel writes to its outputs: positions, (Loop: normals,) vertex colours,
     /// indices and per-face colours.
     pub bytes_written: u64,
+    /// GPU time of each dispatch in the repeat whose total is the median, when the kernel times
+    /// its dispatches separately (the Loop kernel: patches, faces, vertex colours).
+    pub step_seconds: Option<[f64; 3]>,
 }
 
 impl BenchRow {
@@ -57,7 +60,7 @@ pub fn bench_flat(
     let mut rows = Vec::new();
     for &level in levels {
         let mut out = None;
-        let (seconds, timer) = time_repeats(repeats, || {
+        let (seconds, timer, step_seconds) = time_repeats(repeats, || {
             kernel.refine_into(ctx, &uploaded, level, &mut out, true)
         })?;
         let o = out.as_ref().expect("refine_into allocates");
@@ -69,6 +72,7 @@ pub fn bench_flat(
             seconds,
             timer,
             bytes_written: o.bytes_written(),
+            step_seconds,
         });
     }
     Ok(rows)
@@ -84,13 +88,25 @@ pub fn bench_loop(
     levels: &[u32],
     repeats: u32,
 ) -> Result<Vec<BenchRow>, GpuError> {
-    let kernel = LoopKernel::new(ctx);
+    bench_loop_with(ctx, object, levels, repeats, PatchScheme::Auto)
+}
+
+/// [`bench_loop`] with step 1 forced to `scheme`, to compare the workgroup and scratch kernels
+/// in one run.
+pub fn bench_loop_with(
+    ctx: &GpuContext,
+    object: &Object,
+    levels: &[u32],
+    repeats: u32,
+    scheme: PatchScheme,
+) -> Result<Vec<BenchRow>, GpuError> {
+    let kernel = LoopKernel::with_scheme(ctx, scheme);
     let uploaded = kernel.upload(ctx, object)?;
     let coarse = u64::from(uploaded.triangle_count);
     let mut rows = Vec::new();
     for &level in levels {
         let mut out = None;
-        let (seconds, timer) = time_repeats(repeats, || {
+        let (seconds, timer, step_seconds) = time_repeats(repeats, || {
             kernel.refine_into(ctx, &uploaded, level, &mut out, true)
         })?;
         let o = out.as_ref().expect("refine_into allocates");
@@ -102,17 +118,19 @@ pub fn bench_loop(
             seconds,
             timer,
             bytes_written: o.bytes_written(),
+            step_seconds,
         });
     }
     Ok(rows)
 }
 
-/// Runs `refine` once to warm up, then `repeats` times; the median time and where it came from
-/// (GPU timestamps when every sample had them, wall time around submit-and-wait otherwise).
+/// Runs `refine` once to warm up, then `repeats` times; the median time, where it came from
+/// (GPU timestamps when every sample had them, wall time around submit-and-wait otherwise) and
+/// the per-dispatch times of the median sample.
 fn time_repeats(
     repeats: u32,
     mut refine: impl FnMut() -> Result<KernelTiming, GpuError>,
-) -> Result<(f64, Timer), GpuError> {
+) -> Result<(f64, Timer, Option<[f64; 3]>), GpuError> {
     refine()?;
     let mut samples = Vec::new();
     let mut timer = Timer::Wall;
@@ -123,11 +141,12 @@ fn time_repeats(
         match timing.gpu_seconds {
             Some(s) if s > 0.0 => {
                 timer = Timer::GpuTimestamps;
-                samples.push(s);
+                samples.push((s, timing.step_seconds));
             }
-            _ => samples.push(wall),
+            _ => samples.push((wall, None)),
         }
     }
-    samples.sort_by(f64::total_cmp);
-    Ok((samples[samples.len() / 2], timer))
+    samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (seconds, steps) = samples[samples.len() / 2];
+    Ok((seconds, timer, steps))
 }

@@ -100,6 +100,9 @@ pub struct KernelTiming {
     /// GPU time between timestamps around the three dispatches, when the adapter supports
     /// timestamp queries.
     pub gpu_seconds: Option<f64>,
+    /// GPU time of each of the three dispatches, when the kernel times them separately (the
+    /// Loop kernel does: patches, faces, vertex colours).
+    pub step_seconds: Option<[f64; 3]>,
 }
 
 impl FlatKernel {

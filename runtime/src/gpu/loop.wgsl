@@ -4,17 +4,22 @@
 //
 // Three dispatches, each a pure gather or an owned write, so the result does not depend on
 // scheduling (no atomics):
-//   patch_main   one invocation per coarse triangle (grid-stride over scratch slots): refines
-//                the triangle's local patch to level L in a scratch region of a storage buffer
-//                and writes the positions and normals of the output vertices it owns.
+//   step 1       the patches, by one of two kernels (loop_kernel.rs chooses, `PatchScheme`):
+//                patch_wg_main (loop_workgroup.wgsl, appended to this file) refines 1 to 16
+//                coarse triangles per workgroup in workgroup memory, the lattice points of each
+//                level spread over the invocations; patch_main, below, runs one invocation per
+//                coarse triangle (grid-stride over scratch slots) with the patch in a scratch
+//                region of a storage buffer. Both write the positions and normals of the output
+//                vertices each triangle owns.
 //   faces_main   one invocation per fine triangle: its indices, area and HCE colour.
 //   colours_main one invocation per output vertex: area-weighted mean of the incident fine
 //                triangles, across coarse edges and vertices.
 //
-// The patch lives in storage memory rather than workgroup memory: at level 5 the two squares of
-// the CPU port alone take 2 x 35^2 x 12 = 29 KiB per triangle, above the 16 KiB of workgroup
-// memory WebGPU guarantees, and level 6 needs 105 KiB. A per-slot region of a storage buffer
-// works at every level on lavapipe and on real GPUs; the Rust side bounds the number of slots.
+// patch_main keeps its padded square (n + 3)^2 in storage memory: at level 5 its two squares
+// take 2 x 35^2 x 12 = 29 KiB per triangle and level 6 needs 105 KiB, beyond the 16 KiB of
+// workgroup memory WebGPU guarantees. It serves level 6, extreme valences, and software
+// adapters, where it is faster than the workgroup kernel (llvmpipe runs shaders with barriers
+// as coroutines); the Rust side bounds the number of slots.
 //
 // The CPU reference rounds every product and sum separately. SPIR-V from naga lets the driver
 // contract a * b + c into a fused multiply-add (Mesa does), which moves positions by an ulp, so
@@ -119,6 +124,16 @@ fn even_smooth(v: vec3<f32>, sum_mid: vec3<f32>, w: f32, cf: f32) -> vec3<f32> {
     return v + keep((avg - v) * cf);
 }
 
+// Neighbours of spoke s in a ring of n, without the integer division of a modulo (which SIMD
+// hardware, lavapipe's included, does lane by lane).
+fn ring_prev(s: u32, n: u32) -> u32 {
+    return select(s - 1u, n - 1u, s == 0u);
+}
+
+fn ring_next(s: u32, n: u32) -> u32 {
+    return select(s + 1u, 0u, s + 1u == n);
+}
+
 fn cf_of(k: u32) -> f32 {
     return bitcast<f32>(topo[params.weights_off + 2u * k]);
 }
@@ -144,29 +159,40 @@ fn normalize_or_z(s: vec3<f32>) -> vec3<f32> {
 // The patch in scratch memory. A slot holds two squares (current and next level) over lattice
 // points -1 ..= n + 1, index (i + 1) + (j + 1)(n + 3), three floats each, and two ring sets
 // (3 corners x ring_cap points). Lattice point (i, j) is v0 + i/n (v1 - v0) + j/n (v2 - v0).
+// The slots are interleaved: float k of slot s is scratch[k * slots + s], so neighbouring
+// invocations, which work on the same point of different triangles, touch neighbouring words
+// (coalesced on a GPU, one cache line per eight lanes on lavapipe).
+
+// This invocation's slot (set once by patch_main).
+var<private> slot_id: u32;
+
+fn scratch_at(k: u32) -> vec3<f32> {
+    let s = params.slots;
+    return vec3<f32>(scratch[k * s + slot_id], scratch[(k + 1u) * s + slot_id],
+                     scratch[(k + 2u) * s + slot_id]);
+}
+
+fn scratch_set(k: u32, p: vec3<f32>) {
+    let s = params.slots;
+    scratch[k * s + slot_id] = p.x;
+    scratch[(k + 1u) * s + slot_id] = p.y;
+    scratch[(k + 2u) * s + slot_id] = p.z;
+}
 
 fn sq_at(base: u32, n: i32, i: i32, j: i32) -> vec3<f32> {
-    let k = base + 3u * u32((i + 1) + (j + 1) * (n + 3));
-    return vec3<f32>(scratch[k], scratch[k + 1u], scratch[k + 2u]);
+    return scratch_at(base + 3u * u32((i + 1) + (j + 1) * (n + 3)));
 }
 
 fn sq_set(base: u32, n: i32, i: i32, j: i32, p: vec3<f32>) {
-    let k = base + 3u * u32((i + 1) + (j + 1) * (n + 3));
-    scratch[k] = p.x;
-    scratch[k + 1u] = p.y;
-    scratch[k + 2u] = p.z;
+    scratch_set(base + 3u * u32((i + 1) + (j + 1) * (n + 3)), p);
 }
 
 fn ring_at(base: u32, c: u32, s: u32) -> vec3<f32> {
-    let k = base + 3u * (c * params.ring_cap + s);
-    return vec3<f32>(scratch[k], scratch[k + 1u], scratch[k + 2u]);
+    return scratch_at(base + 3u * (c * params.ring_cap + s));
 }
 
 fn ring_set(base: u32, c: u32, s: u32, p: vec3<f32>) {
-    let k = base + 3u * (c * params.ring_cap + s);
-    scratch[k] = p.x;
-    scratch[k + 1u] = p.y;
-    scratch[k + 2u] = p.z;
+    scratch_set(base + 3u * (c * params.ring_cap + s), p);
 }
 
 // Lattice point of corner c, of point m of edge e (from v_e), and of band point m of edge e.
@@ -229,7 +255,7 @@ fn refine_step(sq: u32, nsq: u32, rg: u32, nrg: u32, corners: array<Corner, 3>, 
             if (spoke_sharp(cr, s)) {
                 p = mid(v, r);
             } else {
-                p = odd_smooth(v, r, ring_at(rg, c, (s + cr.n - 1u) % cr.n), ring_at(rg, c, (s + 1u) % cr.n));
+                p = odd_smooth(v, r, ring_at(rg, c, ring_prev(s, cr.n)), ring_at(rg, c, ring_next(s, cr.n)));
             }
             ring_set(nrg, c, s, p);
         }
@@ -382,7 +408,7 @@ fn corner_normal(sq: u32, rg: u32, cr: Corner, n: i32, c: u32) -> vec3<f32> {
     }
     var s = vec3<f32>(0.0);
     for (var f = 0u; f < faces; f++) {
-        s = s + cross3(ring_at(rg, c, f) - v, ring_at(rg, c, (f + 1u) % cr.n) - v);
+        s = s + cross3(ring_at(rg, c, f) - v, ring_at(rg, c, ring_next(f, cr.n)) - v);
     }
     return s;
 }
@@ -405,11 +431,11 @@ fn patch_main(@builtin(global_invocation_id) gid: vec3<u32>,
     if (slot >= params.slots) {
         return;
     }
+    slot_id = slot;
     let ring_floats = 9u * params.ring_cap;
-    let base = slot * (2u * params.square_floats + 2u * ring_floats);
-    let sq_a = base;
-    let sq_b = base + params.square_floats;
-    let rg_a = base + 2u * params.square_floats;
+    let sq_a = 0u;
+    let sq_b = params.square_floats;
+    let rg_a = 2u * params.square_floats;
     let rg_b = rg_a + ring_floats;
     let mm = i32(params.m);
     for (var t = slot; t < params.triangle_count; t += params.slots) {
@@ -574,9 +600,9 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
     if (g >= params.fine_total) {
         return;
     }
-    let per = 1u << (2u * params.level);
-    let t = g / per;
-    let path = g % per;
+    // 4^L fine triangles per coarse one: a shift and a mask, not a division.
+    let t = g >> (2u * params.level);
+    let path = g & ((1u << (2u * params.level)) - 1u);
     let cs = fine_corners(path);
     let i0 = vertex_index(t, cs[0].x, cs[0].y);
     let i1 = vertex_index(t, cs[1].x, cs[1].y);

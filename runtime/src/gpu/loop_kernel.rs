@@ -4,20 +4,31 @@
 //! GRAPP 2012). The kernel is a port of the CPU reference, [`crate::subdivide`] followed by
 //! [`crate::colour::apply_baked_colours`], reading the same adjacency tables:
 //!
-//! 1. `patch_main`, one invocation per coarse triangle: the triangle's local patch (grid, bands,
-//!    corner rings) refined level by level in the CPU's order of arithmetic, then the positions
-//!    and normals of the output vertices the triangle owns (each vertex has exactly one owner,
-//!    so vertices shared across coarse edges are bitwise equal).
+//! 1. The patches: each coarse triangle's local patch (grid, bands, corner rings) refined level
+//!    by level in the CPU's order of arithmetic, then the positions and normals of the output
+//!    vertices the triangle owns (each vertex has exactly one owner, so vertices shared across
+//!    coarse edges are bitwise equal). Two kernels do this, chosen by [`PatchScheme`]:
+//!    * `patch_wg_main` (`loop_workgroup.wgsl`): a workgroup of 64 invocations per 1 to 16
+//!      triangles, the patches in workgroup memory, each level's lattice points, band points and
+//!      ring points spread over the invocations with a barrier between levels. A square keeps
+//!      only the lattice points i, j >= -1, i + j <= n + 1, so at level 5 a patch takes
+//!      10.3 KiB plus its rings and fits the 16 KiB WebGPU guarantees; at lower levels several
+//!      triangles share a workgroup so its invocations have work (`WG_TRIANGLES`). Each
+//!      variant (level, triangles per workgroup, ring capacity) is compiled on first use.
+//!    * `patch_main` (`loop.wgsl`): one invocation per triangle, the patch in a per-slot region
+//!      of a storage buffer ("scratch"), striding over the triangles so the buffer holds at most
+//!      [`SCRATCH_BUDGET`] bytes whatever the mesh. It serves level 6 (105 KiB per patch),
+//!      valences whose rings do not fit, and software adapters: on lavapipe it is the faster
+//!      of the two, because llvmpipe runs a shader with barriers as coroutines.
 //! 2. `faces_main`, one invocation per fine triangle: indices in the CPU's numbering, area, and
 //!    the HCE colour (tree node along the path, representative normal with the largest dot
 //!    product with the face normal).
 //! 3. `colours_main`, one invocation per output vertex: area-weighted mean colour of the incident
 //!    fine triangles, across coarse edges and vertices.
 //!
-//! The patch lives in a per-slot region of a storage buffer ("scratch"), not in workgroup
-//! memory: at level 5 it needs about 30 KiB per triangle and at level 6 about 105 KiB, more than
-//! the 16 KiB of workgroup memory WebGPU guarantees. Invocations stride over the coarse
-//! triangles, so the scratch buffer holds at most [`SCRATCH_BUDGET`] bytes whatever the mesh.
+//! Each step is a pure gather or an owned write (no atomics), so the output does not depend on
+//! scheduling, and both patch kernels compute every point with the same function of the
+//! previous level, so they agree bit for bit with each other and with the CPU.
 //!
 //! Output numbering is exactly that of [`crate::subdivide`]:
 //! `[V coarse][E edges × (M − 1)][F × interior]`, fine triangle `t · 4^L + path`.
@@ -33,7 +44,7 @@ use super::cpu_reference::{validate_tables, FlatTopology, RefinedMesh};
 use super::decode::{records_words, TREE_WGSL};
 use super::flat::KernelTiming;
 use super::util::{check_size, dispatch_size, read_back, storage_init, storage_output, WORKGROUP};
-use super::{GpuContext, GpuError};
+use super::{AdapterKind, GpuContext, GpuError};
 use crate::subdivide::{prepare, MAX_LEVEL};
 
 /// Upper bound of the scratch buffer (bytes): the number of coarse triangles refined at once is
@@ -71,11 +82,103 @@ const OWNS_VERTEX: u32 = 8;
 const INTERIOR: u32 = 64;
 const SHARP: u32 = 512;
 
-/// The compiled pipelines of the three steps.
+/// Triangles per workgroup the cooperative kernel aims for at levels 0 to 5 (halved while their
+/// patches do not fit the workgroup memory): enough triangles that the 64 lanes have work at the
+/// low levels, where one triangle has only a handful of points per step.
+const WG_TRIANGLES: [u32; 6] = [16, 8, 4, 2, 1, 1];
+
+/// Where step 1 keeps the patches. [`PatchScheme::Auto`] is what [`LoopKernel::new`] uses; the
+/// others exist so that tests and benchmarks can exercise and compare both paths.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PatchScheme {
+    /// On a hardware adapter, the workgroup kernel wherever the patches fit the device's
+    /// workgroup memory (levels 0 to 5 unless the valences are extreme), the scratch kernel
+    /// otherwise. On a software adapter (lavapipe), the scratch kernel, which is faster there.
+    #[default]
+    Auto,
+    /// A workgroup refines one to 16 triangles at once, the patches in workgroup memory and
+    /// each level's lattice points spread over its invocations (`loop_workgroup.wgsl`). Refining
+    /// with this scheme where the patches do not fit is an error.
+    Workgroup,
+    /// One invocation per triangle, the patch in a storage-buffer scratch slot (`patch_main`):
+    /// every level, any valence.
+    Scratch,
+}
+
+/// The shape of one compiled variant of the workgroup kernel: its level, the triangles per
+/// workgroup and the floats of one triangle's regions (the constants of `loop_workgroup.wgsl`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+struct WgShape {
+    level: u32,
+    tris: u32,
+    square_a: u32,
+    square_b: u32,
+    ring: u32,
+}
+
+impl WgShape {
+    /// The variant for `level` when a triangle's three rings hold at most `ring_points` points,
+    /// or the bytes one triangle's patch needs when it does not fit `limit` (levels past 5 are
+    /// never tried: their patches are over 27 KiB).
+    fn new(level: u32, ring_points: u32, limit: u32) -> Result<Self, u64> {
+        // A square of n segments holds rows of n + 4, n + 3, ... points (`wg_index`).
+        let square = |n: u64| 3 * (n + 4) * (n + 5) / 2;
+        let m = 1u64 << level.min(31);
+        let one = 4 * (square(m) + square(m / 2) + 6 * u64::from(ring_points)) + 96;
+        let Some(&wanted) = WG_TRIANGLES.get(level as usize) else {
+            return Err(one);
+        };
+        let mut shape = Self {
+            level,
+            tris: wanted,
+            square_a: square(m) as u32,
+            square_b: if level == 0 { 0 } else { square(m / 2) as u32 },
+            ring: 3 * ring_points,
+        };
+        while shape.tris > 1 && shape.bytes() > u64::from(limit) {
+            shape.tris /= 2;
+        }
+        if shape.bytes() > u64::from(limit) {
+            return Err(shape.bytes());
+        }
+        Ok(shape)
+    }
+
+    /// Workgroup memory of the variant: the patches and, per triangle, its corner table
+    /// (`wg_corners` and `wg_ro`: three 7-word `Corner`s and three ring offsets).
+    fn bytes(&self) -> u64 {
+        u64::from(self.tris) * (4 * u64::from(self.square_a + self.square_b + 2 * self.ring) + 96)
+    }
+
+    /// The constants `loop_workgroup.wgsl` expects ahead of it.
+    fn header(&self) -> String {
+        format!(
+            "const WG_LEVEL: u32 = {}u;\nconst WG_TRIS: u32 = {}u;\nconst WG_SQ_A: u32 = {}u;\n\
+             const WG_SQ_B: u32 = {}u;\nconst WG_RING: u32 = {}u;\n",
+            self.level, self.tris, self.square_a, self.square_b, self.ring
+        )
+    }
+}
+
+/// How one refinement runs step 1.
+enum PatchPlan {
+    Workgroup(WgShape),
+    /// Floats per square, bytes per slot and slots in flight.
+    Scratch {
+        square_floats: u64,
+        slot_bytes: u64,
+        slots: u32,
+    },
+}
+
+/// The compiled pipelines of the three steps. The workgroup variants of step 1 are compiled on
+/// first use, one per level and triangle shape.
 pub struct LoopKernel {
+    scheme: PatchScheme,
     patch: wgpu::ComputePipeline,
     faces: wgpu::ComputePipeline,
     colours: wgpu::ComputePipeline,
+    workgroup: std::sync::Mutex<std::collections::HashMap<WgShape, wgpu::ComputePipeline>>,
 }
 
 /// An object's tables on the GPU, validated: every index the kernel reads was checked by
@@ -87,6 +190,9 @@ pub struct LoopObject {
     pub triangle_count: u32,
     /// Largest valence (ring length) of the control mesh: the ring capacity of a scratch slot.
     pub max_valence: u32,
+    /// Largest sum of the valences of a triangle's three corners, rounded up to a multiple of 8
+    /// (fewer kernel variants): the ring capacity of a workgroup patch.
+    ring_points: u32,
     coarse_positions: wgpu::Buffer,
     topo: wgpu::Buffer,
     offsets: [u32; SECTIONS],
@@ -159,7 +265,12 @@ fn slot_floats(level: u32, max_valence: u32) -> (u64, u64) {
 }
 
 impl LoopKernel {
+    /// The kernel with [`PatchScheme::Auto`].
     pub fn new(ctx: &GpuContext) -> Self {
+        Self::with_scheme(ctx, PatchScheme::Auto)
+    }
+
+    pub fn with_scheme(ctx: &GpuContext, scheme: PatchScheme) -> Self {
         let source = format!("{TREE_WGSL}\n{}", include_str!("loop.wgsl"));
         let module = ctx
             .device
@@ -181,10 +292,106 @@ impl LoopKernel {
                 })
         };
         Self {
+            scheme,
             patch: make("patch_main"),
             faces: make("faces_main"),
             colours: make("colours_main"),
+            workgroup: Default::default(),
         }
+    }
+
+    /// The scheme step 1 uses for `object` at `level` on this device ([`PatchScheme::Workgroup`]
+    /// or [`PatchScheme::Scratch`]); an error where a forced scheme cannot run.
+    pub fn scheme_for(
+        &self,
+        ctx: &GpuContext,
+        object: &LoopObject,
+        level: u32,
+    ) -> Result<PatchScheme, GpuError> {
+        Ok(match self.plan(ctx, object, level)? {
+            PatchPlan::Workgroup(_) => PatchScheme::Workgroup,
+            PatchPlan::Scratch { .. } => PatchScheme::Scratch,
+        })
+    }
+
+    fn plan(
+        &self,
+        ctx: &GpuContext,
+        object: &LoopObject,
+        level: u32,
+    ) -> Result<PatchPlan, GpuError> {
+        let limit = ctx.device.limits().max_compute_workgroup_storage_size;
+        // Software adapters run the scratch kernel by default: llvmpipe (lavapipe) executes a
+        // shader with barriers as coroutines, and the workgroup kernel runs 2 to 5 times slower
+        // there than the scratch kernel (BENCHMARKS.md, "GPU kernels on lavapipe").
+        let software = ctx.description.kind == AdapterKind::Software;
+        let try_workgroup = match self.scheme {
+            PatchScheme::Auto => !software,
+            PatchScheme::Workgroup => true,
+            PatchScheme::Scratch => false,
+        };
+        if try_workgroup {
+            match WgShape::new(level, object.ring_points, limit) {
+                Ok(shape) => return Ok(PatchPlan::Workgroup(shape)),
+                Err(needed) if self.scheme == PatchScheme::Workgroup => {
+                    return Err(GpuError::TooLarge {
+                        what: "one triangle's workgroup patch (PatchScheme::Auto falls back to scratch)",
+                        needed,
+                        limit: u64::from(limit),
+                    })
+                }
+                Err(_) => {}
+            }
+        }
+        let (square_floats, slot_bytes, slots) = scratch_shape(ctx, object, level)?;
+        Ok(PatchPlan::Scratch {
+            square_floats,
+            slot_bytes,
+            slots,
+        })
+    }
+
+    /// The workgroup variant of `shape`, compiled on first use.
+    fn workgroup_pipeline(&self, ctx: &GpuContext, shape: WgShape) -> wgpu::ComputePipeline {
+        // A poisoned lock only means another thread panicked while compiling; the map itself
+        // is still consistent (insertions are whole).
+        let mut cache = self
+            .workgroup
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        cache
+            .entry(shape)
+            .or_insert_with(|| {
+                let source = format!(
+                    "{TREE_WGSL}\n{}\n{}\n{}",
+                    include_str!("loop.wgsl"),
+                    shape.header(),
+                    include_str!("loop_workgroup.wgsl")
+                );
+                let module = ctx
+                    .device
+                    .create_shader_module(wgpu::ShaderModuleDescriptor {
+                        label: Some("hce loop workgroup"),
+                        source: wgpu::ShaderSource::Wgsl(source.into()),
+                    });
+                ctx.device
+                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some("patch_wg_main"),
+                        layout: None,
+                        module: &module,
+                        entry_point: Some("patch_wg_main"),
+                        compilation_options: wgpu::PipelineCompilationOptions {
+                            // Every point the kernel reads was written before a barrier in the
+                            // same workgroup (band points only on edges with a neighbour, which
+                            // are the only ones read), so zeroing 10 KiB per workgroup first
+                            // would be pure cost.
+                            zero_initialize_workgroup_memory: false,
+                            ..Default::default()
+                        },
+                        cache: None,
+                    })
+            })
+            .clone()
     }
 
     /// Validates `object` (adjacency tables as [`crate::subdivide`] reads them, edge and
@@ -205,6 +412,13 @@ impl LoopKernel {
             .map(|v| mesh.ring_offsets[v + 1] - mesh.ring_offsets[v])
             .max()
             .unwrap_or(0);
+        let valence = |v: u32| mesh.ring_offsets[v as usize + 1] - mesh.ring_offsets[v as usize];
+        let ring_points = (0..nf)
+            .map(|t| mesh.triangle(t).iter().map(|&v| valence(v)).sum::<u32>())
+            .max()
+            .unwrap_or(0)
+            .next_multiple_of(8)
+            .max(8);
         let mut tri_flags = vec![0u32; nf];
         for (t, flags) in tri_flags.iter_mut().enumerate() {
             let tri = mesh.triangle(t);
@@ -276,6 +490,7 @@ impl LoopKernel {
             edge_count: topology.edge_count,
             triangle_count: topology.triangle_count,
             max_valence,
+            ring_points,
             coarse_positions: storage_init(ctx, "coarse positions", &mesh.positions),
             topo: storage_init(ctx, "loop topology", &packed),
             offsets,
@@ -295,7 +510,7 @@ impl LoopKernel {
     ) -> Result<LoopOutput, GpuError> {
         let (v, f) = counts(object, level)?;
         let vertex = wgpu::BufferUsages::VERTEX;
-        let (_, slot_bytes, slots) = scratch_shape(ctx, object, level)?;
+        let scratch = self.scratch_buffer(ctx, &self.plan(ctx, object, level)?)?;
         Ok(LoopOutput {
             level,
             vertex_count: v,
@@ -330,13 +545,25 @@ impl LoopKernel {
                 check_size(ctx, "refined faces", u64::from(f) * 16)?,
                 wgpu::BufferUsages::empty(),
             ),
-            scratch: storage_output(
-                ctx,
-                "loop scratch",
-                check_size(ctx, "subdivision scratch", slot_bytes * u64::from(slots))?,
-                wgpu::BufferUsages::empty(),
-            ),
+            scratch,
         })
+    }
+
+    /// The scratch buffer `plan` needs: one word for the workgroup kernel, which keeps its
+    /// patches in workgroup memory (wgpu rejects empty buffers).
+    fn scratch_buffer(&self, ctx: &GpuContext, plan: &PatchPlan) -> Result<wgpu::Buffer, GpuError> {
+        let bytes = match *plan {
+            PatchPlan::Workgroup(_) => 4,
+            PatchPlan::Scratch {
+                slot_bytes, slots, ..
+            } => check_size(ctx, "subdivision scratch", slot_bytes * u64::from(slots))?,
+        };
+        Ok(storage_output(
+            ctx,
+            "loop scratch",
+            bytes,
+            wgpu::BufferUsages::empty(),
+        ))
     }
 
     /// Refines `object` to `level` (0..=6) into `out`, reallocating only when `out` is too
@@ -351,14 +578,13 @@ impl LoopKernel {
         measure: bool,
     ) -> Result<KernelTiming, GpuError> {
         let (v, f) = counts(object, level)?;
-        let (square_floats, slot_bytes, wanted_slots) = scratch_shape(ctx, object, level)?;
+        let plan = self.plan(ctx, object, level)?;
         let fits = out.as_ref().is_some_and(|o| {
             o.positions.size() >= u64::from(v) * 12
                 && o.normals.size() >= u64::from(v) * 12
                 && o.colours.size() >= u64::from(v) * 16
                 && o.indices.size() >= u64::from(f) * 12
                 && o.faces.size() >= u64::from(f) * 16
-                && o.scratch.size() >= slot_bytes
         });
         if !fits {
             *out = Some(self.allocate(ctx, object, level)?);
@@ -367,10 +593,24 @@ impl LoopKernel {
         o.level = level;
         o.vertex_count = v;
         o.triangle_count = f;
-        // A reused scratch buffer may hold fewer slots at this level than a fresh one would.
-        let slots = wanted_slots
-            .min((o.scratch.size() / slot_bytes) as u32)
-            .max(1);
+        // The scratch kernel needs room for at least one slot; the buffer of a workgroup-kernel
+        // refinement has none. A reused buffer may hold fewer slots than a fresh one would.
+        let (square_floats, slots) = match plan {
+            PatchPlan::Workgroup(_) => (0, 0),
+            PatchPlan::Scratch {
+                square_floats,
+                slot_bytes,
+                slots,
+            } => {
+                if o.scratch.size() < slot_bytes {
+                    o.scratch = self.scratch_buffer(ctx, &plan)?;
+                }
+                (
+                    square_floats,
+                    slots.min((o.scratch.size() / slot_bytes) as u32).max(1),
+                )
+            }
+        };
 
         let m = 1u32 << level;
         let params = Params {
@@ -404,17 +644,41 @@ impl LoopKernel {
                     .collect::<Vec<_>>(),
             })
         };
-        let patch_group = group(
-            &self.patch,
-            &[
-                (0, &uniform),
-                (1, &object.coarse_positions),
-                (2, &object.topo),
-                (7, &o.scratch),
-                (8, &o.positions),
-                (9, &o.normals),
-            ],
-        );
+        // Step 1: the workgroup kernel (no scratch binding), a workgroup per `tris` triangles,
+        // or the scratch kernel, an invocation per slot.
+        let (patch, patch_group, patch_groups) = match plan {
+            PatchPlan::Workgroup(shape) => {
+                let pipeline = self.workgroup_pipeline(ctx, shape);
+                let bind = group(
+                    &pipeline,
+                    &[
+                        (0, &uniform),
+                        (1, &object.coarse_positions),
+                        (2, &object.topo),
+                        (8, &o.positions),
+                        (9, &o.normals),
+                    ],
+                );
+                let workgroups = u64::from(object.triangle_count).div_ceil(u64::from(shape.tris));
+                let size = dispatch_size(ctx, workgroups * u64::from(WORKGROUP))?;
+                (pipeline, bind, size)
+            }
+            PatchPlan::Scratch { .. } => {
+                let bind = group(
+                    &self.patch,
+                    &[
+                        (0, &uniform),
+                        (1, &object.coarse_positions),
+                        (2, &object.topo),
+                        (7, &o.scratch),
+                        (8, &o.positions),
+                        (9, &o.normals),
+                    ],
+                );
+                let size = dispatch_size(ctx, u64::from(slots))?;
+                (self.patch.clone(), bind, size)
+            }
+        };
         let faces_group = group(
             &self.faces,
             &[
@@ -439,55 +703,57 @@ impl LoopKernel {
             ],
         );
         let timestamps = measure && ctx.description.timestamps;
+        // Two timestamps per step (one compute pass each), so the time of each step is known.
         let query = timestamps.then(|| {
             ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("hce loop timing"),
                 ty: wgpu::QueryType::Timestamp,
-                count: 2,
+                count: 6,
             })
         });
-        let slot_groups = dispatch_size(ctx, u64::from(slots))?;
         let face_groups = dispatch_size(ctx, u64::from(f))?;
         let vertex_groups = dispatch_size(ctx, u64::from(v))?;
         let mut encoder = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        {
+        let steps: [(&wgpu::ComputePipeline, &wgpu::BindGroup, (u32, u32)); 3] = [
+            (&patch, &patch_group, patch_groups),
+            (&self.faces, &faces_group, face_groups),
+            (&self.colours, &colours_group, vertex_groups),
+        ];
+        // wgpu orders the passes: each one sees the previous one's writes.
+        for (k, (pipeline, bind, size)) in steps.into_iter().enumerate() {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("hce loop"),
                 timestamp_writes: query.as_ref().map(|q| wgpu::ComputePassTimestampWrites {
                     query_set: q,
-                    beginning_of_pass_write_index: Some(0),
-                    end_of_pass_write_index: Some(1),
+                    beginning_of_pass_write_index: Some(2 * k as u32),
+                    end_of_pass_write_index: Some(2 * k as u32 + 1),
                 }),
             });
-            // wgpu orders the dispatches: each one sees the previous one's writes.
-            pass.set_pipeline(&self.patch);
-            pass.set_bind_group(0, &patch_group, &[]);
-            pass.dispatch_workgroups(slot_groups.0, slot_groups.1, 1);
-            pass.set_pipeline(&self.faces);
-            pass.set_bind_group(0, &faces_group, &[]);
-            pass.dispatch_workgroups(face_groups.0, face_groups.1, 1);
-            pass.set_pipeline(&self.colours);
-            pass.set_bind_group(0, &colours_group, &[]);
-            pass.dispatch_workgroups(vertex_groups.0, vertex_groups.1, 1);
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, bind, &[]);
+            pass.dispatch_workgroups(size.0, size.1, 1);
         }
         let resolve = query.as_ref().map(|q| {
             let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("timestamps"),
-                size: 16,
+                size: 48,
                 usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             });
-            encoder.resolve_query_set(q, 0..2, &buf, 0);
+            encoder.resolve_query_set(q, 0..6, &buf, 0);
             buf
         });
         ctx.queue.submit([encoder.finish()]);
         let mut timing = KernelTiming::default();
         if let Some(buf) = resolve {
-            let ticks: Vec<u64> = read_back(ctx, &buf, 2)?;
+            let ticks: Vec<u64> = read_back(ctx, &buf, 6)?;
             let period = f64::from(ctx.queue.get_timestamp_period());
-            timing.gpu_seconds = Some(ticks[1].saturating_sub(ticks[0]) as f64 * period * 1e-9);
+            let span =
+                |a: usize, b: usize| ticks[b].saturating_sub(ticks[a]) as f64 * period * 1e-9;
+            timing.gpu_seconds = Some(span(0, 5));
+            timing.step_seconds = Some([span(0, 1), span(2, 3), span(4, 5)]);
         } else if measure {
             ctx.wait()?;
         }
@@ -568,4 +834,27 @@ pub fn refine_loop(ctx: &GpuContext, object: &Object, level: u32) -> Result<Loop
         mesh: out.read_back(ctx)?,
         normals: out.read_back_normals(ctx)?,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn workgroup_shapes_fit_the_webgpu_limit() {
+        let limit = 16384;
+        // Level 5: one triangle, squares of 36 · 37 / 2 and 20 · 21 / 2 points, two ring sets.
+        let s = WgShape::new(5, 24, limit).unwrap();
+        assert_eq!((s.tris, s.square_a, s.square_b, s.ring), (1, 1998, 630, 72));
+        assert_eq!(s.bytes(), 4 * (1998 + 630 + 2 * 72) + 96);
+        // The largest rings that still fit at level 5, and the first that do not.
+        assert_eq!(WgShape::new(5, 240, limit).unwrap().bytes(), 16368);
+        assert_eq!(WgShape::new(5, 248, limit), Err(16560));
+        // Low levels share a workgroup between triangles, fewer when the rings are large.
+        assert_eq!(WgShape::new(1, 24, limit).unwrap().tris, 8);
+        assert_eq!(WgShape::new(1, 200, limit).unwrap().tris, 2);
+        assert_eq!(WgShape::new(0, 24, limit).unwrap().square_b, 0);
+        // Level 6 never runs in workgroup memory.
+        assert!(WgShape::new(6, 24, limit).is_err());
+    }
 }

@@ -31,7 +31,7 @@ pub use cpu_reference::RefinedMesh;
 pub use decode::{decode_colours, ColourQuery, DecodedColour};
 pub use flat::{refine_flat, FlatKernel, FlatObject, FlatOutput, KernelTiming};
 pub use lod::{choose_level, Camera, LodParams};
-pub use loop_kernel::{refine_loop, LoopKernel, LoopMesh, LoopObject, LoopOutput};
+pub use loop_kernel::{refine_loop, LoopKernel, LoopMesh, LoopObject, LoopOutput, PatchScheme};
 pub use render::{
     render_draws, render_gpu_mesh, render_mesh, tone_map_aces, Framing, GpuMesh, MeshDraw,
     RenderParams, RenderedImage,

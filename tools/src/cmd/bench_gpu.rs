@@ -28,6 +28,10 @@ pub struct BenchGpuArgs {
     /// Kernels to measure: flat, loop or both.
     #[arg(long, default_value = "both", value_parser = ["flat", "loop", "both"])]
     pub kernel: String,
+    /// Step 1 of the Loop kernel: auto (workgroup memory where the patches fit), workgroup,
+    /// scratch, or both (scratch then auto, to compare them in one run).
+    #[arg(long, default_value = "auto", value_parser = ["auto", "workgroup", "scratch", "both"])]
+    pub patch: String,
 }
 
 #[cfg(not(feature = "gpu"))]
@@ -38,8 +42,9 @@ pub fn run(_args: BenchGpuArgs) -> Result<()> {
 #[cfg(feature = "gpu")]
 pub fn run(args: BenchGpuArgs) -> Result<()> {
     use anyhow::Context;
-    use hce_runtime::gpu::bench::{bench_flat, bench_loop, BenchRow, Timer};
+    use hce_runtime::gpu::bench::{bench_flat, bench_loop_with, BenchRow, Timer};
     use hce_runtime::gpu::testing::{grid, random_object, RandomTrees};
+    use hce_runtime::gpu::PatchScheme;
     use hce_runtime::gpu::{plain_mesh, ContextOptions, GpuContext};
 
     let levels: Vec<u32> = args
@@ -60,12 +65,12 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
     let print = |title: &str, rows: Vec<BenchRow>| {
         println!("kernel: {title}");
         println!(
-            "{:>5} {:>8} {:>11} {:>11} {:>11} {:>9} {:>14} {:>10}",
+            "{:>5} {:>8} {:>11} {:>11} {:>11} {:>9} {:>14} {:>10}  steps ms",
             "level", "coarse", "out tris", "out verts", "time ms", "timer", "Mtris/s", "GB/s"
         );
         for row in rows {
             println!(
-                "{:>5} {:>8} {:>11} {:>11} {:>11.3} {:>9} {:>14.2} {:>10.3}",
+                "{:>5} {:>8} {:>11} {:>11} {:>11.3} {:>9} {:>14.2} {:>10.3}  {}",
                 row.level,
                 row.coarse_triangles,
                 row.output_triangles,
@@ -76,7 +81,13 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
                     Timer::Wall => "wall",
                 },
                 row.triangles_per_second() / 1e6,
-                row.bytes_per_second() / 1e9
+                row.bytes_per_second() / 1e9,
+                row.step_seconds.map_or("-".to_string(), |s| format!(
+                    "{:.1} / {:.1} / {:.1}",
+                    s[0] * 1e3,
+                    s[1] * 1e3,
+                    s[2] * 1e3
+                ))
             );
         }
     };
@@ -133,10 +144,24 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
         );
         object.kind = hce_format::ObjectKind::Multiresolution;
         object.mesh = topo.mesh;
-        print(
-            "Loop subdivision (patches: positions + normals, faces + HCE decoding, vertex colours)",
-            bench_loop(&ctx, &object, &levels, args.repeats)?,
-        );
+        let schemes: &[(&str, PatchScheme)] = match args.patch.as_str() {
+            "workgroup" => &[("workgroup", PatchScheme::Workgroup)],
+            "scratch" => &[("scratch", PatchScheme::Scratch)],
+            "both" => &[
+                ("scratch", PatchScheme::Scratch),
+                ("auto", PatchScheme::Auto),
+            ],
+            _ => &[("auto", PatchScheme::Auto)],
+        };
+        for &(name, scheme) in schemes {
+            print(
+                &format!(
+                    "Loop subdivision, {name} patches (patches: positions + normals, faces + HCE \
+                     decoding, vertex colours)"
+                ),
+                bench_loop_with(&ctx, &object, &levels, args.repeats, scheme)?,
+            );
+        }
     }
     Ok(())
 }
