@@ -371,12 +371,49 @@ impl Ctx<'_> {
         }
     }
 
+    /// Per node of `t`: the spread (largest minus smallest) of the radiance (normal 0) over
+    /// the leaves below it, in the current solution.
+    fn spreads(&self, r: u32, t: &Tree) -> Vec<f32> {
+        let nn = self.nn(r);
+        let n = t.keys.len();
+        let mut lo = vec![f32::MAX; n];
+        let mut hi = vec![f32::MIN; n];
+        // Breadth-first order: children come after their parent, so reverse is bottom-up.
+        for i in (0..n).rev() {
+            let c = t.child[i];
+            if c == u32::MAX {
+                let v = lum(t.l[i * nn]);
+                lo[i] = v;
+                hi[i] = v;
+            } else {
+                for ch in c as usize..c as usize + 4 {
+                    lo[i] = lo[i].min(lo[ch]);
+                    hi[i] = hi[i].max(hi[ch]);
+                }
+            }
+        }
+        lo.iter().zip(&hi).map(|(a, b)| b - a).collect()
+    }
+
+    /// Spread of a source element's radiance in the previous solution: zero where the
+    /// element is not in its tree (it then lies inside a leaf, which is uniform).
+    fn src_spread(&self, trees: &[Tree], spreads: &[Vec<f32>], k: ElemKey) -> f32 {
+        let t = &trees[k.root as usize];
+        let i = t.deepest_toward(k) as usize;
+        if t.keys[i] == k {
+            spreads[k.root as usize][i]
+        } else {
+            0.0
+        }
+    }
+
     /// Refines the links arriving at root `r` against the previous solution.
     fn refine_root(
         &self,
         r: u32,
         trees: &[Tree],
         cl: &[Vec3],
+        spreads: &[Vec<f32>],
         eps_power: f32,
     ) -> (Vec<RawLink>, Vec<f32>) {
         let mut links = Vec::new();
@@ -443,11 +480,13 @@ impl Ctx<'_> {
                     let d2 = (sc - rc).length_squared();
                     let l = lum(self.src_radiance(trees, cl, src));
                     let far = d2 > 36.0 * (r_area + s_area);
+                    let f_bound;
                     if far {
                         let w = (sc - rc) / d2.sqrt();
                         let cos_r = root.normals.iter().map(|n| n.dot(w)).fold(0.0, f32::max);
                         let f = disc_estimate(cos_r, (-w).dot(sn), s_area, d2);
                         est = f * l * r_area * std::f32::consts::PI;
+                        f_bound = f;
                     } else {
                         // Near pairs: the point form factor at the centre and near each
                         // corner of the receiver bounds both its size and its variation.
@@ -461,10 +500,30 @@ impl Ctx<'_> {
                             }
                         }
                         est = fmax * l * r_area * std::f32::consts::PI;
+                        f_bound = fmax;
                         let var = (fmax - fmin) * l * r_area * std::f32::consts::PI;
-                        if var > eps_power * 0.2 && self.splittable(recv, r_area) {
+                        if var > eps_power * 0.2 {
+                            let r_split = self.splittable(recv, r_area);
+                            if r_split && (r_area >= s_area || !s_splittable) {
+                                for c in (0..4).rev() {
+                                    stack.push((recv.child(c), src));
+                                }
+                                continue;
+                            }
+                            if s_splittable {
+                                for c in (0..4).rev() {
+                                    stack.push((recv, Source::Elem(sk.child(c))));
+                                }
+                                continue;
+                            }
+                        }
+                    }
+                    if s_splittable {
+                        let spread = self.src_spread(trees, spreads, sk);
+                        let svar = f_bound * spread * r_area * std::f32::consts::PI;
+                        if svar > eps_power * 0.2 {
                             for c in (0..4).rev() {
-                                stack.push((recv.child(c), src));
+                                stack.push((recv, Source::Elem(sk.child(c))));
                             }
                             continue;
                         }
@@ -953,10 +1012,14 @@ pub fn bake_with_progress(
         let t2 = Instant::now();
         let phase = format!("refine {}", pass + 1);
         counter.store(0, std::sync::atomic::Ordering::Relaxed);
+        let spreads: Vec<Vec<f32>> = (0..n_roots)
+            .into_par_iter()
+            .map(|r| ctx.spreads(r, &trees[r as usize]))
+            .collect();
         let refined: Vec<(Vec<RawLink>, Vec<f32>)> = (0..n_roots)
             .into_par_iter()
             .map(|r| {
-                let out = ctx.refine_root(r, &trees, &cl, eps_power);
+                let out = ctx.refine_root(r, &trees, &cl, &spreads, eps_power);
                 let done = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                 progress(&phase, done, n_roots as usize);
                 out
