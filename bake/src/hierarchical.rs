@@ -190,6 +190,9 @@ struct Tree {
     k: Vec<f32>,
     /// Radiance per node and normal.
     l: Vec<Vec3>,
+    /// Fraction of each node's area that is open, not shut in under other geometry
+    /// ([`Ctx::open_fraction`]; interior nodes average their children).
+    open: Vec<f32>,
 }
 
 impl Tree {
@@ -365,16 +368,32 @@ impl Ctx<'_> {
             Source::Cluster(c) => cl[c as usize],
             Source::Elem(k) => {
                 let t = &trees[k.root as usize];
-                let i = t.deepest_toward(k);
-                t.l[i as usize * self.nn(k.root)]
+                self.source_radiance(k.root, t, t.deepest_toward(k) as usize)
             }
         }
     }
 
-    /// Per node of `t`: the spread (largest minus smallest) of the radiance (normal 0) over
-    /// the leaves below it, in the current solution.
+    /// Radiance (normal 0) that node `i` of root `r`'s tree sends out. Its stored value is
+    /// the area average that a viewer sees; but light leaves only from the open part of the
+    /// element (see [`Ctx::open_fraction`]): the part of a floor element under a block
+    /// standing on it receives nothing and sends nothing. Links already give that part no
+    /// weight (a receiver finds it behind the block or behind its own plane), so the power
+    /// the element reflects must be spread over the open part alone, or the light it sends
+    /// is cut once by the dark part in the average and again by the link. Emission is
+    /// uniform over the element and is not diluted.
+    fn source_radiance(&self, r: u32, t: &Tree, i: usize) -> Vec3 {
+        let o = t.open[i];
+        if o <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let le = self.roots[r as usize].emission;
+        le + (t.l[i * self.nn(r)] - le) / o
+    }
+
+    /// Per node of `t`: the spread (largest minus smallest) of the source radiance over the
+    /// leaves below it, in the current solution. A link's constant source is only as good
+    /// as this spread is small: the refinement oracle splits sources by it.
     fn spreads(&self, r: u32, t: &Tree) -> Vec<f32> {
-        let nn = self.nn(r);
         let n = t.keys.len();
         let mut lo = vec![f32::MAX; n];
         let mut hi = vec![f32::MIN; n];
@@ -382,7 +401,7 @@ impl Ctx<'_> {
         for i in (0..n).rev() {
             let c = t.child[i];
             if c == u32::MAX {
-                let v = lum(t.l[i * nn]);
+                let v = lum(self.source_radiance(r, t, i));
                 lo[i] = v;
                 hi[i] = v;
             } else {
@@ -687,6 +706,33 @@ impl Ctx<'_> {
         sn.dot(-d) > self.plane_eps && normals.iter().any(|n| n.dot(d) > self.plane_eps)
     }
 
+    /// Fraction of element `k` that is open, from four stratified points: a point is shut
+    /// in when the first surface met along its normal and along four directions 30 degrees
+    /// above its plane is, every time, the back of a triangle (a floor point under a block,
+    /// a ceiling point just above a one-sided lamp). The area average the solver stores
+    /// counts such a part as dark, and rightly so (it is part of the element), but it
+    /// can neither receive nor send light.
+    fn open_fraction(&self, k: ElemKey) -> f32 {
+        let tri = self.elem_corners(k);
+        let n = self.roots[k.root as usize].normal;
+        let a = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+        let t = n.cross(a).normalize();
+        let b = n.cross(t);
+        let dirs = [
+            n,
+            (n + t * 1.7).normalize(),
+            (n - t * 1.7).normalize(),
+            (n + b * 1.7).normalize(),
+            (n - b * 1.7).normalize(),
+        ];
+        let pts = stratified_points(tri, 1);
+        let shut = pts
+            .iter()
+            .filter(|&&p| dirs.iter().all(|&d| self.occ.first_hit_is_back(p, d)))
+            .count();
+        1.0 - shut as f32 / pts.len() as f32
+    }
+
     /// Builds root `r`'s tree from the keys that must exist.
     fn build_tree(&self, r: u32, mut keys: Vec<ElemKey>, direct: &[(ElemKey, Vec<Vec3>)]) -> Tree {
         let nn = self.nn(r);
@@ -719,6 +765,7 @@ impl Ctx<'_> {
                 .map(|k| self.roots[r as usize].area / 4f32.powi(k.level as i32))
                 .collect(),
             rho: vec![Vec3::ZERO; n],
+            open: vec![1.0; n],
             direct: vec![Vec3::ZERO; n * nn],
             links: Vec::new(),
             k: Vec::new(),
@@ -735,6 +782,16 @@ impl Ctx<'_> {
         for i in 0..n {
             if tree.child[i] == u32::MAX {
                 tree.rho[i] = self.reflectance(tree.keys[i]);
+                tree.open[i] = self.open_fraction(tree.keys[i]);
+            }
+        }
+        for i in (0..n).rev() {
+            let c = tree.child[i];
+            if c != u32::MAX {
+                tree.open[i] = (c as usize..c as usize + 4)
+                    .map(|ch| tree.open[ch])
+                    .sum::<f32>()
+                    * 0.25;
             }
         }
         for (k, q) in direct {
@@ -754,7 +811,7 @@ impl Ctx<'_> {
             let ls = match link.src {
                 SrcIdx::Cluster(c) => cl[c as usize],
                 SrcIdx::Node { root, node } => {
-                    trees[root as usize].l[node as usize * self.nn(root)]
+                    self.source_radiance(root, &trees[root as usize], node as usize)
                 }
             };
             let base = link.recv as usize * nn;
@@ -803,16 +860,28 @@ impl Ctx<'_> {
     fn cluster_radiance(&self, trees: &[Tree]) -> Vec<Vec3> {
         let cs = &self.clusters.clusters;
         let mut out = vec![Vec3::ZERO; cs.len()];
+        // Open area below each cluster: its radiance is that of its open surface, as for
+        // an element (see `source_radiance`).
+        let mut open = vec![0.0f32; cs.len()];
         // Children are created after their parent, so reverse order is bottom-up.
         for c in (0..cs.len()).rev() {
-            let mut s = Vec3::ZERO;
+            let (mut s, mut a) = (Vec3::ZERO, 0.0f32);
             for ch in cs[c].children {
-                s += match ch {
-                    ClusterChild::Cluster(x) => out[x as usize] * cs[x as usize].area,
-                    ClusterChild::Root(x) => trees[x as usize].l[0] * self.roots[x as usize].area,
+                let (l, w) = match ch {
+                    ClusterChild::Cluster(x) => (out[x as usize], open[x as usize]),
+                    ClusterChild::Root(x) => {
+                        let t = &trees[x as usize];
+                        (
+                            self.source_radiance(x, t, 0),
+                            t.open[0] * self.roots[x as usize].area,
+                        )
+                    }
                 };
+                s += l * w;
+                a += w;
             }
-            out[c] = s / cs[c].area.max(1e-30);
+            out[c] = if a > 0.0 { s / a } else { Vec3::ZERO };
+            open[c] = a;
         }
         out
     }

@@ -6,7 +6,7 @@ use std::time::Duration;
 use glam::{Vec3, Vec3A};
 use obvhs::{
     cwbvh::{builder::build_cwbvh_from_tris, CwBvh},
-    ray::Ray,
+    ray::{Ray, RayHit},
     triangle::Triangle,
     BvhBuildParams,
 };
@@ -64,6 +64,21 @@ impl Occluders {
             return true;
         }
         self.ray_clear(a, d / len, len - self.eps)
+    }
+
+    /// Whether the ray from `origin` along unit `dir` first meets the back of a triangle.
+    pub fn first_hit_is_back(&self, origin: Vec3, dir: Vec3) -> bool {
+        let Some(bvh) = &self.bvh else { return false };
+        let ray = Ray::new(origin.into(), dir.into(), self.eps, f32::INFINITY);
+        let mut hit = RayHit::none();
+        if !bvh.ray_traverse(ray, &mut hit, |r, id| {
+            self.tris[bvh.primitive_indices[id] as usize].intersect(r)
+        }) {
+            return false;
+        }
+        let t = &self.tris[bvh.primitive_indices[hit.primitive_id as usize] as usize];
+        let n = (t.v1 - t.v0).cross(t.v2 - t.v0);
+        n.dot(Vec3A::from(dir)) > 0.0
     }
 
     /// Whether the ray from `origin` along unit `dir` meets no triangle before `max_t`.
