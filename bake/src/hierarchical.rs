@@ -520,10 +520,12 @@ impl Ctx<'_> {
                         }
                         est = fmax * l * r_area * std::f32::consts::PI;
                         f_bound = fmax;
+                        // The form factor varies over the receiver: only a smaller receiver
+                        // resolves that (splitting the source would only share the same error
+                        // among four links), unless the receiver is as small as it gets.
                         let var = (fmax - fmin) * l * r_area * std::f32::consts::PI;
                         if var > eps_power * 0.2 {
-                            let r_split = self.splittable(recv, r_area);
-                            if r_split && (r_area >= s_area || !s_splittable) {
+                            if self.splittable(recv, r_area) {
                                 for c in (0..4).rev() {
                                     stack.push((recv.child(c), src));
                                 }
@@ -537,10 +539,16 @@ impl Ctx<'_> {
                             }
                         }
                     }
+                    // The source's radiance varies (a lit wall with a shadow on it): a link
+                    // gathers its average, and only a smaller source resolves that. The
+                    // estimate is the power the error would carry into the whole coarse
+                    // receiver triangle, not into this element: receivers are split finely
+                    // near sources (the rule above), and with their own small areas every
+                    // piece would pass while the error, the same in each, stayed.
                     if s_splittable {
                         let spread = self.src_spread(trees, spreads, sk);
-                        let svar = f_bound * spread * r_area * std::f32::consts::PI;
-                        if svar > eps_power * 0.2 {
+                        let svar = f_bound * spread * root.area * std::f32::consts::PI;
+                        if svar > eps_power {
                             for c in (0..4).rev() {
                                 stack.push((recv, Source::Elem(sk.child(c))));
                             }
