@@ -4,9 +4,13 @@
 //! elements are coarse triangles split 1-to-4 (children Top, Left, Center, Right as in
 //! `hce_format::model`); a link between a receiver and a source is refined, splitting the
 //! larger of the two, while its brightness-weighted estimate (form factor × source radiance ×
-//! receiver area, as power) exceeds `bf_epsilon` times the scene's reference power; the system
-//! is solved by gathering over links and push-pull, and links are refined again against the
-//! solution. Instead of linking every pair of input triangles up front, receivers start from
+//! receiver area, as power) exceeds `bf_epsilon` times the scene's reference power. Two more
+//! rules bound a link's error rather than its power: for near pairs, a receiver over which
+//! the form factor varies is split, and a source whose radiance varies in the previous
+//! solution is split (that error weighed against the whole coarse receiver triangle, so that
+//! a finely split receiver cannot hide it; BENCHMARKS.md, Cornell box). The system is solved
+//! by gathering over links and push-pull, and links are refined again against the solution.
+//! Instead of linking every pair of input triangles up front, receivers start from
 //! the top of a cluster hierarchy ([`crate::cluster`], after Smits et al. 1994) and open
 //! clusters by the same oracle, which culls pairs that face away or lie behind each other.
 //!
@@ -16,7 +20,10 @@
 //! (the value for n0). Punctual lights add direct illumination through shadow rays.
 //!
 //! Quantities are outgoing radiance `L` (see [`crate::scene`]); a receiver gathers
-//! `Q = Σ F·L_src + H_direct / π` and a leaf has `L = L_e + ρ·Q`.
+//! `Q = Σ F·L_src + H_direct / π` and a leaf has `L = L_e + ρ·Q`, the area average over the
+//! element. As a source an element sends its reflected light from its open part only (the
+//! part not shut in under other geometry, such as the floor under a block standing on it):
+//! `L_src = L_e + (L − L_e) / open`.
 //!
 //! Determinism: work is split per root triangle, every random number is seeded from element
 //! ids, and every sum runs in a fixed order, so the result does not depend on the thread count.
