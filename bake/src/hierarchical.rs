@@ -4,9 +4,13 @@
 //! elements are coarse triangles split 1-to-4 (children Top, Left, Center, Right as in
 //! `hce_format::model`); a link between a receiver and a source is refined, splitting the
 //! larger of the two, while its brightness-weighted estimate (form factor × source radiance ×
-//! receiver area, as power) exceeds `bf_epsilon` times the scene's reference power; the system
-//! is solved by gathering over links and push-pull, and links are refined again against the
-//! solution. Instead of linking every pair of input triangles up front, receivers start from
+//! receiver area, as power) exceeds `bf_epsilon` times the scene's reference power. Two more
+//! rules bound a link's error rather than its power: for near pairs, a receiver over which
+//! the form factor varies is split, and a source whose radiance varies in the previous
+//! solution is split (that error weighed against the whole coarse receiver triangle, so that
+//! a finely split receiver cannot hide it; BENCHMARKS.md, Cornell box). The system is solved
+//! by gathering over links and push-pull, and links are refined again against the solution.
+//! Instead of linking every pair of input triangles up front, receivers start from
 //! the top of a cluster hierarchy ([`crate::cluster`], after Smits et al. 1994) and open
 //! clusters by the same oracle, which culls pairs that face away or lie behind each other.
 //!
@@ -16,7 +20,10 @@
 //! (the value for n0). Punctual lights add direct illumination through shadow rays.
 //!
 //! Quantities are outgoing radiance `L` (see [`crate::scene`]); a receiver gathers
-//! `Q = Σ F·L_src + H_direct / π` and a leaf has `L = L_e + ρ·Q`.
+//! `Q = Σ F·L_src + H_direct / π` and a leaf has `L = L_e + ρ·Q`, the area average over the
+//! element. As a source an element sends its reflected light from its open part only (the
+//! part not shut in under other geometry, such as the floor under a block standing on it):
+//! `L_src = L_e + (L − L_e) / open`.
 //!
 //! Determinism: work is split per root triangle, every random number is seeded from element
 //! ids, and every sum runs in a fixed order, so the result does not depend on the thread count.
@@ -190,6 +197,9 @@ struct Tree {
     k: Vec<f32>,
     /// Radiance per node and normal.
     l: Vec<Vec3>,
+    /// Fraction of each node's area that is open, not shut in under other geometry
+    /// ([`Ctx::open_fraction`]; interior nodes average their children).
+    open: Vec<f32>,
 }
 
 impl Tree {
@@ -365,9 +375,61 @@ impl Ctx<'_> {
             Source::Cluster(c) => cl[c as usize],
             Source::Elem(k) => {
                 let t = &trees[k.root as usize];
-                let i = t.deepest_toward(k);
-                t.l[i as usize * self.nn(k.root)]
+                self.source_radiance(k.root, t, t.deepest_toward(k) as usize)
             }
+        }
+    }
+
+    /// Radiance (normal 0) that node `i` of root `r`'s tree sends out. Its stored value is
+    /// the area average that a viewer sees; but light leaves only from the open part of the
+    /// element (see [`Ctx::open_fraction`]): the part of a floor element under a block
+    /// standing on it receives nothing and sends nothing. Links already give that part no
+    /// weight (a receiver finds it behind the block or behind its own plane), so the power
+    /// the element reflects must be spread over the open part alone, or the light it sends
+    /// is cut once by the dark part in the average and again by the link. Emission is
+    /// uniform over the element and is not diluted.
+    fn source_radiance(&self, r: u32, t: &Tree, i: usize) -> Vec3 {
+        let o = t.open[i];
+        if o <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let le = self.roots[r as usize].emission;
+        le + (t.l[i * self.nn(r)] - le) / o
+    }
+
+    /// Per node of `t`: the spread (largest minus smallest) of the source radiance over the
+    /// leaves below it, in the current solution. A link's constant source is only as good
+    /// as this spread is small: the refinement oracle splits sources by it.
+    fn spreads(&self, r: u32, t: &Tree) -> Vec<f32> {
+        let n = t.keys.len();
+        let mut lo = vec![f32::MAX; n];
+        let mut hi = vec![f32::MIN; n];
+        // Breadth-first order: children come after their parent, so reverse is bottom-up.
+        for i in (0..n).rev() {
+            let c = t.child[i];
+            if c == u32::MAX {
+                let v = lum(self.source_radiance(r, t, i));
+                lo[i] = v;
+                hi[i] = v;
+            } else {
+                for ch in c as usize..c as usize + 4 {
+                    lo[i] = lo[i].min(lo[ch]);
+                    hi[i] = hi[i].max(hi[ch]);
+                }
+            }
+        }
+        lo.iter().zip(&hi).map(|(a, b)| b - a).collect()
+    }
+
+    /// Spread of a source element's radiance in the previous solution: zero where the
+    /// element is not in its tree (it then lies inside a leaf, which is uniform).
+    fn src_spread(&self, trees: &[Tree], spreads: &[Vec<f32>], k: ElemKey) -> f32 {
+        let t = &trees[k.root as usize];
+        let i = t.deepest_toward(k) as usize;
+        if t.keys[i] == k {
+            spreads[k.root as usize][i]
+        } else {
+            0.0
         }
     }
 
@@ -377,6 +439,7 @@ impl Ctx<'_> {
         r: u32,
         trees: &[Tree],
         cl: &[Vec3],
+        spreads: &[Vec<f32>],
         eps_power: f32,
     ) -> (Vec<RawLink>, Vec<f32>) {
         let mut links = Vec::new();
@@ -443,11 +506,13 @@ impl Ctx<'_> {
                     let d2 = (sc - rc).length_squared();
                     let l = lum(self.src_radiance(trees, cl, src));
                     let far = d2 > 36.0 * (r_area + s_area);
+                    let f_bound;
                     if far {
                         let w = (sc - rc) / d2.sqrt();
                         let cos_r = root.normals.iter().map(|n| n.dot(w)).fold(0.0, f32::max);
                         let f = disc_estimate(cos_r, (-w).dot(sn), s_area, d2);
                         est = f * l * r_area * std::f32::consts::PI;
+                        f_bound = f;
                     } else {
                         // Near pairs: the point form factor at the centre and near each
                         // corner of the receiver bounds both its size and its variation.
@@ -461,10 +526,38 @@ impl Ctx<'_> {
                             }
                         }
                         est = fmax * l * r_area * std::f32::consts::PI;
+                        f_bound = fmax;
+                        // The form factor varies over the receiver: only a smaller receiver
+                        // resolves that (splitting the source would only share the same error
+                        // among four links), unless the receiver is as small as it gets.
                         let var = (fmax - fmin) * l * r_area * std::f32::consts::PI;
-                        if var > eps_power * 0.2 && self.splittable(recv, r_area) {
+                        if var > eps_power * 0.2 {
+                            if self.splittable(recv, r_area) {
+                                for c in (0..4).rev() {
+                                    stack.push((recv.child(c), src));
+                                }
+                                continue;
+                            }
+                            if s_splittable {
+                                for c in (0..4).rev() {
+                                    stack.push((recv, Source::Elem(sk.child(c))));
+                                }
+                                continue;
+                            }
+                        }
+                    }
+                    // The source's radiance varies (a lit wall with a shadow on it): a link
+                    // gathers its average, and only a smaller source resolves that. The
+                    // estimate is the power the error would carry into the whole coarse
+                    // receiver triangle, not into this element: receivers are split finely
+                    // near sources (the rule above), and with their own small areas every
+                    // piece would pass while the error, the same in each, stayed.
+                    if s_splittable {
+                        let spread = self.src_spread(trees, spreads, sk);
+                        let svar = f_bound * spread * root.area * std::f32::consts::PI;
+                        if svar > eps_power {
                             for c in (0..4).rev() {
-                                stack.push((recv.child(c), src));
+                                stack.push((recv, Source::Elem(sk.child(c))));
                             }
                             continue;
                         }
@@ -628,6 +721,33 @@ impl Ctx<'_> {
         sn.dot(-d) > self.plane_eps && normals.iter().any(|n| n.dot(d) > self.plane_eps)
     }
 
+    /// Fraction of element `k` that is open, from four stratified points: a point is shut
+    /// in when the first surface met along its normal and along four directions 30 degrees
+    /// above its plane is, every time, the back of a triangle (a floor point under a block,
+    /// a ceiling point just above a one-sided lamp). The area average the solver stores
+    /// counts such a part as dark, and rightly so (it is part of the element), but it
+    /// can neither receive nor send light.
+    fn open_fraction(&self, k: ElemKey) -> f32 {
+        let tri = self.elem_corners(k);
+        let n = self.roots[k.root as usize].normal;
+        let a = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+        let t = n.cross(a).normalize();
+        let b = n.cross(t);
+        let dirs = [
+            n,
+            (n + t * 1.7).normalize(),
+            (n - t * 1.7).normalize(),
+            (n + b * 1.7).normalize(),
+            (n - b * 1.7).normalize(),
+        ];
+        let pts = stratified_points(tri, 1);
+        let shut = pts
+            .iter()
+            .filter(|&&p| dirs.iter().all(|&d| self.occ.first_hit_is_back(p, d)))
+            .count();
+        1.0 - shut as f32 / pts.len() as f32
+    }
+
     /// Builds root `r`'s tree from the keys that must exist.
     fn build_tree(&self, r: u32, mut keys: Vec<ElemKey>, direct: &[(ElemKey, Vec<Vec3>)]) -> Tree {
         let nn = self.nn(r);
@@ -660,6 +780,7 @@ impl Ctx<'_> {
                 .map(|k| self.roots[r as usize].area / 4f32.powi(k.level as i32))
                 .collect(),
             rho: vec![Vec3::ZERO; n],
+            open: vec![1.0; n],
             direct: vec![Vec3::ZERO; n * nn],
             links: Vec::new(),
             k: Vec::new(),
@@ -676,6 +797,16 @@ impl Ctx<'_> {
         for i in 0..n {
             if tree.child[i] == u32::MAX {
                 tree.rho[i] = self.reflectance(tree.keys[i]);
+                tree.open[i] = self.open_fraction(tree.keys[i]);
+            }
+        }
+        for i in (0..n).rev() {
+            let c = tree.child[i];
+            if c != u32::MAX {
+                tree.open[i] = (c as usize..c as usize + 4)
+                    .map(|ch| tree.open[ch])
+                    .sum::<f32>()
+                    * 0.25;
             }
         }
         for (k, q) in direct {
@@ -695,7 +826,7 @@ impl Ctx<'_> {
             let ls = match link.src {
                 SrcIdx::Cluster(c) => cl[c as usize],
                 SrcIdx::Node { root, node } => {
-                    trees[root as usize].l[node as usize * self.nn(root)]
+                    self.source_radiance(root, &trees[root as usize], node as usize)
                 }
             };
             let base = link.recv as usize * nn;
@@ -744,16 +875,28 @@ impl Ctx<'_> {
     fn cluster_radiance(&self, trees: &[Tree]) -> Vec<Vec3> {
         let cs = &self.clusters.clusters;
         let mut out = vec![Vec3::ZERO; cs.len()];
+        // Open area below each cluster: its radiance is that of its open surface, as for
+        // an element (see `source_radiance`).
+        let mut open = vec![0.0f32; cs.len()];
         // Children are created after their parent, so reverse order is bottom-up.
         for c in (0..cs.len()).rev() {
-            let mut s = Vec3::ZERO;
+            let (mut s, mut a) = (Vec3::ZERO, 0.0f32);
             for ch in cs[c].children {
-                s += match ch {
-                    ClusterChild::Cluster(x) => out[x as usize] * cs[x as usize].area,
-                    ClusterChild::Root(x) => trees[x as usize].l[0] * self.roots[x as usize].area,
+                let (l, w) = match ch {
+                    ClusterChild::Cluster(x) => (out[x as usize], open[x as usize]),
+                    ClusterChild::Root(x) => {
+                        let t = &trees[x as usize];
+                        (
+                            self.source_radiance(x, t, 0),
+                            t.open[0] * self.roots[x as usize].area,
+                        )
+                    }
                 };
+                s += l * w;
+                a += w;
             }
-            out[c] = s / cs[c].area.max(1e-30);
+            out[c] = if a > 0.0 { s / a } else { Vec3::ZERO };
+            open[c] = a;
         }
         out
     }
@@ -953,10 +1096,14 @@ pub fn bake_with_progress(
         let t2 = Instant::now();
         let phase = format!("refine {}", pass + 1);
         counter.store(0, std::sync::atomic::Ordering::Relaxed);
+        let spreads: Vec<Vec<f32>> = (0..n_roots)
+            .into_par_iter()
+            .map(|r| ctx.spreads(r, &trees[r as usize]))
+            .collect();
         let refined: Vec<(Vec<RawLink>, Vec<f32>)> = (0..n_roots)
             .into_par_iter()
             .map(|r| {
-                let out = ctx.refine_root(r, &trees, &cl, eps_power);
+                let out = ctx.refine_root(r, &trees, &cl, &spreads, eps_power);
                 let done = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                 progress(&phase, done, n_roots as usize);
                 out

@@ -6,7 +6,7 @@ use std::time::Duration;
 use glam::{Vec3, Vec3A};
 use obvhs::{
     cwbvh::{builder::build_cwbvh_from_tris, CwBvh},
-    ray::Ray,
+    ray::{Ray, RayHit},
     triangle::Triangle,
     BvhBuildParams,
 };
@@ -66,6 +66,22 @@ impl Occluders {
         self.ray_clear(a, d / len, len - self.eps)
     }
 
+    /// Whether the ray from `origin` along unit `dir` first meets the back of a triangle (the
+    /// side its counter-clockwise winding does not face); false when it meets nothing.
+    pub fn first_hit_is_back(&self, origin: Vec3, dir: Vec3) -> bool {
+        let Some(bvh) = &self.bvh else { return false };
+        let ray = Ray::new(origin.into(), dir.into(), self.eps, f32::INFINITY);
+        let mut hit = RayHit::none();
+        if !bvh.ray_traverse(ray, &mut hit, |r, id| {
+            self.tris[bvh.primitive_indices[id] as usize].intersect(r)
+        }) {
+            return false;
+        }
+        let t = &self.tris[bvh.primitive_indices[hit.primitive_id as usize] as usize];
+        let n = (t.v1 - t.v0).cross(t.v2 - t.v0);
+        n.dot(Vec3A::from(dir)) > 0.0
+    }
+
     /// Whether the ray from `origin` along unit `dir` meets no triangle before `max_t`.
     pub fn ray_clear(&self, origin: Vec3, dir: Vec3, max_t: f32) -> bool {
         let Some(bvh) = &self.bvh else { return true };
@@ -100,5 +116,21 @@ mod tests {
         assert!(occ.segment_clear(Vec3::ZERO, Vec3::new(2.0, 3.0, 0.0)));
         // A segment ending on the wall is not blocked by it.
         assert!(occ.segment_clear(Vec3::ZERO, Vec3::new(1.0, 0.5, 0.5)));
+    }
+
+    #[test]
+    fn first_hit_tells_the_back_of_a_panel_from_its_front() {
+        // A panel in z = 1 facing down (counter-clockwise seen from below).
+        let panel = [[
+            Vec3::new(-1.0, -1.0, 1.0),
+            Vec3::new(0.0, 2.0, 1.0),
+            Vec3::new(2.0, -1.0, 1.0),
+        ]];
+        let occ = Occluders::new(panel);
+        // From below the ray meets its front; from above, going down, its back.
+        assert!(!occ.first_hit_is_back(Vec3::ZERO, Vec3::Z));
+        assert!(occ.first_hit_is_back(Vec3::new(0.0, 0.0, 2.0), Vec3::NEG_Z));
+        // A ray that misses meets nothing.
+        assert!(!occ.first_hit_is_back(Vec3::ZERO, Vec3::NEG_Z));
     }
 }

@@ -6,12 +6,14 @@
 //! within the CI budget); BENCHMARKS.md records a run with many more.
 //!
 //! Tolerances (relative error of the RGB sum, BENCHMARKS.md "Baker against a path tracer"):
-//! the light, the floor and the block tops, which the light sees directly, within 5 %; the
-//! walls and the ceiling, lit mostly by interreflection, within 12 %; the vertical block faces
-//! within 45 %. The last two are far from the "few percent" issue 4 asks for: they record a
-//! bias of the solver that is still open (the baked interreflected light is too low, and the
-//! deficit grows with the element depth; see BENCHMARKS.md), so that a change that makes it
-//! worse fails here.
+//! the light, the floor and the block tops, which the light sees directly, within 2 %; the
+//! walls and the ceiling, lit mostly by interreflection, within 3.5 %; the vertical block faces
+//! within 12 %. Each bound leaves about three of the reference's standard errors (printed with
+//! every run) above what the baker achieves. The block faces are the one class still short of
+//! issue 4's "few percent": the shadowed front face of the short block, the dimmest surface of
+//! the scene (a tenth of the others), is about 10 % too bright against a million-path
+//! reference, because the power-based refinement oracle accepts a larger relative error on dim
+//! receivers (with `bf_epsilon 1e-5` it is within 4 %).
 
 use std::path::Path;
 
@@ -138,7 +140,7 @@ fn cornell_box_agrees_with_a_path_traced_reference() {
         100.0 * worst[2],
         t0.elapsed().as_secs_f64()
     );
-    assert!(worst[0] < 0.05, "directly lit surfaces: {}", worst[0]);
-    assert!(worst[1] < 0.12, "walls and ceiling: {}", worst[1]);
-    assert!(worst[2] < 0.45, "vertical block faces: {}", worst[2]);
+    assert!(worst[0] < 0.02, "directly lit surfaces: {}", worst[0]);
+    assert!(worst[1] < 0.035, "walls and ceiling: {}", worst[1]);
+    assert!(worst[2] < 0.12, "vertical block faces: {}", worst[2]);
 }
