@@ -327,3 +327,16 @@ fn refining_again_reuses_buffers_and_is_deterministic() {
     assert_eq!(reused, fresh);
     assert_eq!(reused.triangle_count(), object.triangles.len() * 16);
 }
+
+#[test]
+fn write_bandwidth_reference_fills_the_whole_buffer() {
+    let Some(ctx) = context_or_skip("write_bandwidth_reference_fills_the_whole_buffer") else {
+        return;
+    };
+    // 1 MiB + 16 bytes: the last word lies past a power of two, so a dispatch that stops
+    // short would leave it unwritten and the function would report an error.
+    let bw = hce_runtime::gpu::bench::write_bandwidth(&ctx, (1 << 20) + 16, 2).unwrap();
+    assert_eq!(bw.bytes, (1 << 20) + 16);
+    assert!(bw.seconds > 0.0 && bw.bytes_per_second().is_finite());
+    assert!(bw.bytes_per_second() > 1e6, "{bw:?}");
+}

@@ -8,6 +8,7 @@ use hce_format::Object;
 
 use super::flat::{FlatKernel, KernelTiming};
 use super::loop_kernel::{LoopKernel, PatchScheme};
+use super::util::{check_size, dispatch_size, read_back, storage_output, uniform_init};
 use super::{GpuContext, GpuError};
 
 /// Where a time came from.
@@ -122,6 +123,128 @@ pub fn bench_loop_with(
         });
     }
     Ok(rows)
+}
+
+/// The device's write bandwidth as a compute kernel sees it: the reference the refinement
+/// kernels' bytes written per second are compared with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bandwidth {
+    /// Bytes the fill kernel wrote per run.
+    pub bytes: u64,
+    /// Median time of one run.
+    pub seconds: f64,
+    pub timer: Timer,
+}
+
+impl Bandwidth {
+    pub fn bytes_per_second(&self) -> f64 {
+        self.bytes as f64 / self.seconds.max(1e-12)
+    }
+}
+
+/// Times a kernel that only stores 16-byte words into a buffer of (up to) `bytes`, capped by
+/// the device's buffer limits, `repeats` times after one warm-up (`fill.wgsl`). Its bytes per
+/// second is what a kernel that writes its outputs once, coalesced, can reach on this device.
+pub fn write_bandwidth(ctx: &GpuContext, bytes: u64, repeats: u32) -> Result<Bandwidth, GpuError> {
+    let limits = ctx.device.limits();
+    let cap = limits
+        .max_buffer_size
+        .min(limits.max_storage_buffer_binding_size);
+    let words = (bytes.min(cap) / 16).clamp(1, u64::from(u32::MAX));
+    let size = check_size(ctx, "bandwidth buffer", words * 16)?;
+    let module = ctx
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("hce fill"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("fill.wgsl").into()),
+        });
+    let pipeline = ctx
+        .device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("hce fill"),
+            layout: None,
+            module: &module,
+            entry_point: Some("fill_main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+    let out = storage_output(ctx, "bandwidth buffer", size, wgpu::BufferUsages::empty());
+    let params = uniform_init(ctx, "fill params", &[words as u32, 0x5eed_u32, 0, 0]);
+    let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("hce fill"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: params.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: out.as_entire_binding(),
+            },
+        ],
+    });
+    let groups = dispatch_size(ctx, words)?;
+    let run = || -> Result<KernelTiming, GpuError> {
+        let query = ctx.description.timestamps.then(|| {
+            ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("hce fill timing"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            })
+        });
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("hce fill"),
+                timestamp_writes: query.as_ref().map(|q| wgpu::ComputePassTimestampWrites {
+                    query_set: q,
+                    beginning_of_pass_write_index: Some(0),
+                    end_of_pass_write_index: Some(1),
+                }),
+            });
+            pass.set_pipeline(&pipeline);
+            pass.set_bind_group(0, &bind_group, &[]);
+            pass.dispatch_workgroups(groups.0, groups.1, 1);
+        }
+        let resolve = query.as_ref().map(|q| {
+            let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("fill timestamps"),
+                size: 16,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            encoder.resolve_query_set(q, 0..2, &buf, 0);
+            buf
+        });
+        ctx.queue.submit([encoder.finish()]);
+        let mut timing = KernelTiming::default();
+        if let Some(buf) = resolve {
+            let ticks: Vec<u64> = read_back(ctx, &buf, 2)?;
+            let period = f64::from(ctx.queue.get_timestamp_period());
+            timing.gpu_seconds = Some(ticks[1].saturating_sub(ticks[0]) as f64 * period * 1e-9);
+        } else {
+            ctx.wait()?;
+        }
+        Ok(timing)
+    };
+    let (seconds, timer, _) = time_repeats(repeats, run)?;
+    // The last word proves the kernel ran over the whole buffer.
+    let last: Vec<u32> = read_back(ctx, &out, (size / 4) as usize)?;
+    let i = (words - 1) as u32;
+    let tail = &last[last.len() - 4..];
+    if tail != [0x5eed, i, 0x5eed ^ i, 0x5eed_u32.wrapping_add(i)] {
+        return Err(GpuError::Readback(format!(
+            "the fill kernel left {tail:?} in its last word"
+        )));
+    }
+    Ok(Bandwidth {
+        bytes: words * 16,
+        seconds,
+        timer,
+    })
 }
 
 /// Runs `refine` once to warm up, then `repeats` times; the median time, where it came from

@@ -42,7 +42,7 @@ pub fn run(_args: BenchGpuArgs) -> Result<()> {
 #[cfg(feature = "gpu")]
 pub fn run(args: BenchGpuArgs) -> Result<()> {
     use anyhow::Context;
-    use hce_runtime::gpu::bench::{bench_flat, bench_loop_with, BenchRow, Timer};
+    use hce_runtime::gpu::bench::{bench_flat, bench_loop_with, write_bandwidth, BenchRow, Timer};
     use hce_runtime::gpu::testing::{grid, random_object, RandomTrees};
     use hce_runtime::gpu::PatchScheme;
     use hce_runtime::gpu::{plain_mesh, ContextOptions, GpuContext};
@@ -62,26 +62,45 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
         None => "built-in 32x32 grid, random trees".to_string(),
     };
     println!("input: {label}");
+    let timer_name = |t: Timer| match t {
+        Timer::GpuTimestamps => "gpu-ts",
+        Timer::Wall => "wall",
+    };
+    // The reference for the kernels' bytes written per second: a kernel that only writes.
+    let bandwidth = write_bandwidth(&ctx, 256 << 20, args.repeats)?;
+    let peak = bandwidth.bytes_per_second();
+    println!(
+        "device write bandwidth (fill kernel, {} MiB, {}): {:.2} GB/s",
+        bandwidth.bytes >> 20,
+        timer_name(bandwidth.timer),
+        peak / 1e9
+    );
     let print = |title: &str, rows: Vec<BenchRow>| {
         println!("kernel: {title}");
         println!(
-            "{:>5} {:>8} {:>11} {:>11} {:>11} {:>9} {:>14} {:>10}  steps ms",
-            "level", "coarse", "out tris", "out verts", "time ms", "timer", "Mtris/s", "GB/s"
+            "{:>5} {:>8} {:>11} {:>11} {:>11} {:>9} {:>14} {:>10} {:>7}  steps ms",
+            "level",
+            "coarse",
+            "out tris",
+            "out verts",
+            "time ms",
+            "timer",
+            "Mtris/s",
+            "GB/s",
+            "% fill"
         );
         for row in rows {
             println!(
-                "{:>5} {:>8} {:>11} {:>11} {:>11.3} {:>9} {:>14.2} {:>10.3}  {}",
+                "{:>5} {:>8} {:>11} {:>11} {:>11.3} {:>9} {:>14.2} {:>10.3} {:>7.2}  {}",
                 row.level,
                 row.coarse_triangles,
                 row.output_triangles,
                 row.output_vertices,
                 row.seconds * 1e3,
-                match row.timer {
-                    Timer::GpuTimestamps => "gpu-ts",
-                    Timer::Wall => "wall",
-                },
+                timer_name(row.timer),
                 row.triangles_per_second() / 1e6,
                 row.bytes_per_second() / 1e9,
+                100.0 * row.bytes_per_second() / peak,
                 row.step_seconds.map_or("-".to_string(), |s| format!(
                     "{:.1} / {:.1} / {:.1}",
                     s[0] * 1e3,
