@@ -8,7 +8,7 @@ use hce_format::Object;
 
 use super::flat::{FlatKernel, KernelTiming};
 use super::loop_kernel::{LoopKernel, PatchScheme};
-use super::util::{check_size, dispatch_size, read_back, storage_output, uniform_init};
+use super::util::{check_size, dispatch_size, read_back, storage_output, uniform_init, PassTimer};
 use super::{GpuContext, GpuError};
 
 /// Where a time came from.
@@ -186,48 +186,25 @@ pub fn write_bandwidth(ctx: &GpuContext, bytes: u64, repeats: u32) -> Result<Ban
     });
     let groups = dispatch_size(ctx, words)?;
     let run = || -> Result<KernelTiming, GpuError> {
-        let query = ctx.description.timestamps.then(|| {
-            ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("hce fill timing"),
-                ty: wgpu::QueryType::Timestamp,
-                count: 2,
-            })
-        });
+        let mut timer = PassTimer::new(ctx, "hce fill timing", 1, true);
         let mut encoder = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("hce fill"),
-                timestamp_writes: query.as_ref().map(|q| wgpu::ComputePassTimestampWrites {
-                    query_set: q,
-                    beginning_of_pass_write_index: Some(0),
-                    end_of_pass_write_index: Some(1),
-                }),
+                timestamp_writes: timer.writes(0),
             });
             pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &bind_group, &[]);
             pass.dispatch_workgroups(groups.0, groups.1, 1);
         }
-        let resolve = query.as_ref().map(|q| {
-            let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("fill timestamps"),
-                size: 16,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            encoder.resolve_query_set(q, 0..2, &buf, 0);
-            buf
-        });
+        timer.resolve(ctx, &mut encoder);
         ctx.queue.submit([encoder.finish()]);
-        let mut timing = KernelTiming::default();
-        if let Some(buf) = resolve {
-            let ticks: Vec<u64> = read_back(ctx, &buf, 2)?;
-            let period = f64::from(ctx.queue.get_timestamp_period());
-            timing.gpu_seconds = Some(ticks[1].saturating_sub(ticks[0]) as f64 * period * 1e-9);
-        } else {
-            ctx.wait()?;
-        }
+        let timing = KernelTiming {
+            gpu_seconds: timer.read(ctx)?.map(|(total, _)| total),
+            step_seconds: None,
+        };
         Ok(timing)
     };
     let (seconds, timer, _) = time_repeats(repeats, run)?;

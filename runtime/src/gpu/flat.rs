@@ -12,7 +12,7 @@ use hce_format::Object;
 
 use super::cpu_reference::{validate_tables, FlatTopology, RefinedMesh, MAX_LEVEL};
 use super::decode::{records_words, TREE_WGSL};
-use super::util::{check_size, dispatch_size, read_back, storage_init, storage_output};
+use super::util::{check_size, dispatch_size, read_back, storage_init, storage_output, PassTimer};
 use super::{GpuContext, GpuError};
 
 /// The kernel's uniform block (`Params` in `flat.wgsl`).
@@ -325,14 +325,7 @@ impl FlatKernel {
                 })
                 .collect::<Vec<_>>(),
         });
-        let timestamps = measure && ctx.description.timestamps;
-        let query = timestamps.then(|| {
-            ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("hce flat timing"),
-                ty: wgpu::QueryType::Timestamp,
-                count: 2,
-            })
-        });
+        let mut timer = PassTimer::new(ctx, "hce flat timing", 1, measure);
         let vertex_groups = dispatch_size(ctx, u64::from(v))?;
         let face_groups = dispatch_size(ctx, u64::from(f))?;
         let mut encoder = ctx
@@ -341,11 +334,7 @@ impl FlatKernel {
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("hce flat"),
-                timestamp_writes: query.as_ref().map(|q| wgpu::ComputePassTimestampWrites {
-                    query_set: q,
-                    beginning_of_pass_write_index: Some(0),
-                    end_of_pass_write_index: Some(1),
-                }),
+                timestamp_writes: timer.writes(0),
             });
             pass.set_bind_group(0, &bind_group, &[]);
             // wgpu orders the dispatches: each one sees the previous one's writes.
@@ -356,25 +345,12 @@ impl FlatKernel {
             pass.set_pipeline(&self.colours);
             pass.dispatch_workgroups(vertex_groups.0, vertex_groups.1, 1);
         }
-        let resolve = query.as_ref().map(|q| {
-            let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamps"),
-                size: 16,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            encoder.resolve_query_set(q, 0..2, &buf, 0);
-            buf
-        });
+        timer.resolve(ctx, &mut encoder);
         ctx.queue.submit([encoder.finish()]);
-        let mut timing = KernelTiming::default();
-        if let Some(buf) = resolve {
-            let ticks: Vec<u64> = read_back(ctx, &buf, 2)?;
-            let period = f64::from(ctx.queue.get_timestamp_period());
-            timing.gpu_seconds = Some(ticks[1].saturating_sub(ticks[0]) as f64 * period * 1e-9);
-        } else if measure {
-            ctx.wait()?;
-        }
+        let timing = KernelTiming {
+            gpu_seconds: timer.read(ctx)?.map(|(total, _)| total),
+            step_seconds: None,
+        };
         Ok(timing)
     }
 }

@@ -43,7 +43,9 @@ use hce_format::Object;
 use super::cpu_reference::{validate_tables, FlatTopology, RefinedMesh};
 use super::decode::{records_words, TREE_WGSL};
 use super::flat::KernelTiming;
-use super::util::{check_size, dispatch_size, read_back, storage_init, storage_output, WORKGROUP};
+use super::util::{
+    check_size, dispatch_size, read_back, storage_init, storage_output, PassTimer, WORKGROUP,
+};
 use super::{AdapterKind, GpuContext, GpuError};
 use crate::subdivide::{prepare, MAX_LEVEL};
 
@@ -702,15 +704,8 @@ impl LoopKernel {
                 (12, &o.colours),
             ],
         );
-        let timestamps = measure && ctx.description.timestamps;
         // Two timestamps per step (one compute pass each), so the time of each step is known.
-        let query = timestamps.then(|| {
-            ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("hce loop timing"),
-                ty: wgpu::QueryType::Timestamp,
-                count: 6,
-            })
-        });
+        let mut timer = PassTimer::new(ctx, "hce loop timing", 3, measure);
         let face_groups = dispatch_size(ctx, u64::from(f))?;
         let vertex_groups = dispatch_size(ctx, u64::from(v))?;
         let mut encoder = ctx
@@ -725,37 +720,18 @@ impl LoopKernel {
         for (k, (pipeline, bind, size)) in steps.into_iter().enumerate() {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("hce loop"),
-                timestamp_writes: query.as_ref().map(|q| wgpu::ComputePassTimestampWrites {
-                    query_set: q,
-                    beginning_of_pass_write_index: Some(2 * k as u32),
-                    end_of_pass_write_index: Some(2 * k as u32 + 1),
-                }),
+                timestamp_writes: timer.writes(k as u32),
             });
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, bind, &[]);
             pass.dispatch_workgroups(size.0, size.1, 1);
         }
-        let resolve = query.as_ref().map(|q| {
-            let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamps"),
-                size: 48,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            encoder.resolve_query_set(q, 0..6, &buf, 0);
-            buf
-        });
+        timer.resolve(ctx, &mut encoder);
         ctx.queue.submit([encoder.finish()]);
         let mut timing = KernelTiming::default();
-        if let Some(buf) = resolve {
-            let ticks: Vec<u64> = read_back(ctx, &buf, 6)?;
-            let period = f64::from(ctx.queue.get_timestamp_period());
-            let span =
-                |a: usize, b: usize| ticks[b].saturating_sub(ticks[a]) as f64 * period * 1e-9;
-            timing.gpu_seconds = Some(span(0, 5));
-            timing.step_seconds = Some([span(0, 1), span(2, 3), span(4, 5)]);
-        } else if measure {
-            ctx.wait()?;
+        if let Some((total, steps)) = timer.read(ctx)? {
+            timing.gpu_seconds = Some(total);
+            timing.step_seconds = Some([steps[0], steps[1], steps[2]]);
         }
         Ok(timing)
     }

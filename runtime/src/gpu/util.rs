@@ -130,3 +130,75 @@ pub fn map_and_copy<R>(
     staging.unmap();
     Ok(out)
 }
+
+/// GPU timestamps around the compute passes of one submission (two per pass), when timing is
+/// asked for and the adapter has timestamp queries: the one timing path of every kernel.
+pub struct PassTimer {
+    query: Option<wgpu::QuerySet>,
+    resolve: Option<wgpu::Buffer>,
+    passes: u32,
+    measure: bool,
+}
+
+impl PassTimer {
+    pub fn new(ctx: &GpuContext, label: &str, passes: u32, measure: bool) -> Self {
+        let query = (measure && ctx.description.timestamps).then(|| {
+            ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some(label),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2 * passes,
+            })
+        });
+        PassTimer {
+            query,
+            resolve: None,
+            passes,
+            measure,
+        }
+    }
+
+    /// The timestamp writes of pass `pass` (none when not timing).
+    pub fn writes(&self, pass: u32) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        self.query
+            .as_ref()
+            .map(|q| wgpu::ComputePassTimestampWrites {
+                query_set: q,
+                beginning_of_pass_write_index: Some(2 * pass),
+                end_of_pass_write_index: Some(2 * pass + 1),
+            })
+    }
+
+    /// Records the copy of the timestamps; call after the passes, before `encoder.finish()`.
+    pub fn resolve(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(q) = &self.query {
+            let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps"),
+                size: 16 * u64::from(self.passes),
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            encoder.resolve_query_set(q, 0..2 * self.passes, &buf, 0);
+            self.resolve = Some(buf);
+        }
+    }
+
+    /// After the submission: the GPU seconds from the first pass's start to the last pass's end
+    /// and of each pass, or `None` without timestamps (having waited for the GPU when timing
+    /// was asked for, so that a wall clock around the call measures the work).
+    pub fn read(self, ctx: &GpuContext) -> Result<Option<(f64, Vec<f64>)>, GpuError> {
+        let Some(buf) = &self.resolve else {
+            if self.measure {
+                ctx.wait()?;
+            }
+            return Ok(None);
+        };
+        let n = 2 * self.passes as usize;
+        let ticks: Vec<u64> = read_back(ctx, buf, n)?;
+        let period = f64::from(ctx.queue.get_timestamp_period());
+        let span = |a: usize, b: usize| ticks[b].saturating_sub(ticks[a]) as f64 * period * 1e-9;
+        let passes = (0..self.passes as usize)
+            .map(|k| span(2 * k, 2 * k + 1))
+            .collect();
+        Ok(Some((span(0, n - 1), passes)))
+    }
+}
