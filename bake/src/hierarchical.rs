@@ -821,7 +821,11 @@ impl Ctx<'_> {
         let t = &trees[r as usize];
         let nn = self.nn(r);
         let n = t.keys.len();
+        // Direct light plus gathered radiance; beside it, the form factors the radiance was
+        // gathered through and the gathered part alone for the geometric normal.
         let mut q = t.direct.clone();
+        let mut ff = vec![0.0f32; n * nn];
+        let mut g0 = vec![Vec3::ZERO; n];
         for link in &t.links {
             let ls = match link.src {
                 SrcIdx::Cluster(c) => cl[c as usize],
@@ -831,8 +835,11 @@ impl Ctx<'_> {
             };
             let base = link.recv as usize * nn;
             for j in 0..nn {
-                q[base + j] += ls * t.k[link.k_start as usize + j];
+                let k = t.k[link.k_start as usize + j];
+                q[base + j] += ls * k;
+                ff[base + j] += k;
             }
+            g0[link.recv as usize] += ls * t.k[link.k_start as usize];
         }
         // Push: every node receives what its ancestors gathered (breadth-first order puts
         // parents first).
@@ -841,9 +848,31 @@ impl Ctx<'_> {
             if c != u32::MAX {
                 for ch in c as usize..c as usize + 4 {
                     for j in 0..nn {
-                        let v = q[i * nn + j];
+                        let (v, f) = (q[i * nn + j], ff[i * nn + j]);
                         q[ch * nn + j] += v;
+                        ff[ch * nn + j] += f;
                     }
+                    let v = g0[i];
+                    g0[ch] += v;
+                }
+            }
+        }
+        // Light from below the coarse plane. A normal turned away from the coarse one sees,
+        // through the part of its hemisphere below the element's plane, surface that the coarse
+        // scene does not have there (on the refined surface: the object's own neighbouring
+        // patches). Every form factor a tilted normal lacks against the geometric one is filled
+        // with the mean radiance the geometric normal gathers, so that a closed furnace stays
+        // exact for every normal (SPEC.md G.1).
+        if nn > 1 {
+            for i in 0..n {
+                let f0 = ff[i * nn];
+                if f0 <= 0.0 {
+                    continue;
+                }
+                let mean = g0[i] / f0;
+                for j in 1..nn {
+                    let missing = (f0 - ff[i * nn + j]).max(0.0);
+                    q[i * nn + j] += mean * missing;
                 }
             }
         }

@@ -1,14 +1,28 @@
 //! Applying baked HCE colours to a refined mesh on the CPU, exactly as the runtime's renderer
-//! does (Concheiro et al., "Synthesis of multiresolution scenes with global illumination on a
-//! GPU", GRAPP 2012, section 4): each level-`L` subtriangle follows its path down its coarse
-//! triangle's HCE tree, stopping at a leaf; it takes the colour of the representative normal with
-//! the largest dot product with its own face normal; each vertex averages the colours of its
-//! incident subtriangles weighted by their areas (across coarse-triangle borders, since refined
-//! vertices are shared there).
+//! does. This is the reference the GPU kernels are tested against.
+//!
+//! Two reconstructions (SPEC.md, Appendix G):
+//!
+//! * [`Reconstruction::Smooth`] (the default): every corner of every level-`L` subtriangle gets
+//!   the value of the field of [`crate::lighting`] at its lattice point, for its vertex's unit
+//!   normal, read from the subtriangle's own coarse triangle; each vertex averages those values
+//!   over its incident subtriangles weighted by their areas. Inside one smooth region all
+//!   incident subtriangles give the same value; across a sharp edge or a fold of a flat object
+//!   the vertex, shared by both sides, blends them.
+//! * [`Reconstruction::NearestNormal`], the paper's rule (Concheiro et al., "Synthesis of
+//!   multiresolution scenes with global illumination on a GPU", GRAPP 2012, section 4): each
+//!   level-`L` subtriangle follows its path down its coarse triangle's HCE tree, stopping at a
+//!   leaf; it takes the colour of the representative normal with the largest dot product with its
+//!   own face normal; each vertex averages the colours of its incident subtriangles weighted by
+//!   their areas (across coarse-triangle borders, since refined vertices are shared there).
 
-use hce_format::{rgb9e5, Object, Tree, TreeError};
+use hce_format::{rgb9e5, Object, TreeError};
 
-use crate::subdivide::Refined;
+pub use crate::lighting::Reconstruction;
+use crate::lighting::{
+    triangle_lighting, LightingError, LightingTable, TriangleLighting, EVAL_LATTICE_BITS,
+};
+use crate::subdivide::{subtriangle_cells, Refined};
 
 /// Errors of colour application: the object and the refined mesh do not belong together, or the
 /// object's tables are inconsistent.
@@ -48,8 +62,33 @@ pub enum ColourError {
     Index { object: String, face: usize },
 }
 
+impl From<LightingError> for ColourError {
+    fn from(e: LightingError) -> Self {
+        match e {
+            LightingError::Record {
+                object,
+                triangle,
+                what,
+            } => ColourError::Record {
+                object,
+                triangle,
+                what,
+            },
+            LightingError::Tree {
+                object,
+                triangle,
+                source,
+            } => ColourError::Tree {
+                object,
+                triangle,
+                source,
+            },
+        }
+    }
+}
+
 /// Per refined vertex linear RGB colour of `object` drawn at `level` from `refined`, which must be
-/// the subdivision of `object.mesh` to `level`.
+/// the subdivision of `object.mesh` to `level`, with the default (smooth) reconstruction.
 ///
 /// Normals are compared in object space (the space of the control mesh). Vertices used by no
 /// subtriangle, or whose incident subtriangles all have zero area, average without weights
@@ -59,6 +98,27 @@ pub fn apply_baked_colours(
     refined: &Refined,
     level: u32,
 ) -> Result<Vec<[f32; 3]>, ColourError> {
+    apply_baked_colours_with(object, refined, level, Reconstruction::Smooth)
+}
+
+/// [`apply_baked_colours`] with the reconstruction chosen.
+pub fn apply_baked_colours_with(
+    object: &Object,
+    refined: &Refined,
+    level: u32,
+    reconstruction: Reconstruction,
+) -> Result<Vec<[f32; 3]>, ColourError> {
+    check_refined(object, refined, level)?;
+    match reconstruction {
+        Reconstruction::Smooth => {
+            let table = LightingTable::build(object)?;
+            smooth_colours(object, &table, refined, level)
+        }
+        Reconstruction::NearestNormal => nearest_normal_colours(object, refined, level),
+    }
+}
+
+fn check_refined(object: &Object, refined: &Refined, level: u32) -> Result<(), ColourError> {
     let name = || object.name.clone();
     if refined.level != level {
         return Err(ColourError::Level {
@@ -75,68 +135,127 @@ pub fn apply_baked_colours(
             records: object.triangles.len(),
         });
     }
-    let record_err = |triangle: usize, what: String| ColourError::Record {
-        object: name(),
-        triangle,
-        what,
-    };
-    let n = refined.positions.len();
-    let mut sum = vec![[0.0f64; 3]; n];
-    let mut weight = vec![0.0f64; n];
-    let mut plain = vec![[0.0f64; 3]; n];
-    let mut plain_count = vec![0u32; n];
+    if level > EVAL_LATTICE_BITS - 1 {
+        return Err(ColourError::Level {
+            object: name(),
+            refined: refined.level,
+            level: EVAL_LATTICE_BITS - 1,
+        });
+    }
+    Ok(())
+}
+
+/// Area-weighted vertex averages of per-corner colours.
+struct VertexAverage {
+    sum: Vec<[f64; 3]>,
+    weight: Vec<f64>,
+    plain: Vec<[f64; 3]>,
+    plain_count: Vec<u32>,
+}
+
+impl VertexAverage {
+    fn new(n: usize) -> Self {
+        VertexAverage {
+            sum: vec![[0.0; 3]; n],
+            weight: vec![0.0; n],
+            plain: vec![[0.0; 3]; n],
+            plain_count: vec![0; n],
+        }
+    }
+
+    fn add(&mut self, i: usize, area: f64, rgb: [f64; 3]) {
+        for k in 0..3 {
+            self.sum[i][k] += area * rgb[k];
+            self.plain[i][k] += rgb[k];
+        }
+        self.weight[i] += area;
+        self.plain_count[i] += 1;
+    }
+
+    fn finish(self) -> Vec<[f32; 3]> {
+        (0..self.sum.len())
+            .map(|i| {
+                if self.weight[i] > 0.0 {
+                    self.sum[i].map(|s| (s / self.weight[i]) as f32)
+                } else if self.plain_count[i] > 0 {
+                    self.plain[i].map(|s| (s / f64::from(self.plain_count[i])) as f32)
+                } else {
+                    [0.0; 3]
+                }
+            })
+            .collect()
+    }
+}
+
+fn fine_triangle(
+    object: &Object,
+    refined: &Refined,
+    f: usize,
+) -> Result<([u32; 3], [[f32; 3]; 3]), ColourError> {
+    let tri = refined.indices[f];
+    let mut p = [[0.0f32; 3]; 3];
+    for (slot, &i) in p.iter_mut().zip(&tri) {
+        *slot = *refined
+            .positions
+            .get(i as usize)
+            .ok_or_else(|| ColourError::Index {
+                object: object.name.clone(),
+                face: f,
+            })?;
+    }
+    Ok((tri, p))
+}
+
+fn area_of(p: [[f32; 3]; 3]) -> f64 {
+    let c = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+    0.5 * dot(c, c).sqrt()
+}
+
+/// SPEC.md G.4: per subtriangle corner the field at its lattice point for the vertex's normal,
+/// averaged at the vertex weighted by subtriangle area.
+fn smooth_colours(
+    object: &Object,
+    table: &LightingTable,
+    refined: &Refined,
+    level: u32,
+) -> Result<Vec<[f32; 3]>, ColourError> {
+    let cells = subtriangle_cells(level);
+    let shift = EVAL_LATTICE_BITS - level;
     let per = 1usize << (2 * level);
-    for (t, rec) in object.triangles.iter().enumerate() {
-        let ns = rec.normal_start as usize;
-        let nc = rec.normal_count as usize;
-        let normals = ns
-            .checked_add(nc)
-            .filter(|_| nc >= 1)
-            .and_then(|end| object.normals.get(ns..end))
-            .ok_or_else(|| {
-                record_err(
-                    t,
-                    format!(
-                        "normals {ns}+{nc} lie outside the {} stored normals",
-                        object.normals.len()
-                    ),
-                )
-            })?;
-        let tree = Tree::new(&object.bits, object.bit_len, u64::from(rec.bits_start)).map_err(
-            |source| ColourError::Tree {
-                object: name(),
-                triangle: t,
-                source,
-            },
-        )?;
-        let nodes = tree.node_count() as usize;
-        let cs = rec.colour_start as usize;
-        let colours = nodes
-            .checked_mul(nc)
-            .and_then(|len| cs.checked_add(len))
-            .and_then(|end| object.colours.get(cs..end))
-            .ok_or_else(|| {
-                record_err(
-                    t,
-                    format!(
-                        "{nodes} nodes x {nc} colours from {cs} lie outside the {} stored colours",
-                        object.colours.len()
-                    ),
-                )
-            })?;
+    let mut avg = VertexAverage::new(refined.positions.len());
+    for t in 0..object.triangles.len() {
+        let tree = triangle_lighting(object, t)?.tree;
+        for (path, cell) in cells.iter().enumerate() {
+            let f = t * per + path;
+            let (tri, p) = fine_triangle(object, refined, f)?;
+            let area = area_of(p);
+            for (&v, q) in tri.iter().zip(cell) {
+                let normal = refined.normals.get(v as usize).copied().unwrap_or([0.0; 3]);
+                let rgb = table.evaluate(&tree, t, q[0] << shift, q[1] << shift, normal);
+                avg.add(v as usize, area, rgb.map(f64::from));
+            }
+        }
+    }
+    Ok(avg.finish())
+}
+
+fn nearest_normal_colours(
+    object: &Object,
+    refined: &Refined,
+    level: u32,
+) -> Result<Vec<[f32; 3]>, ColourError> {
+    let per = 1usize << (2 * level);
+    let mut avg = VertexAverage::new(refined.positions.len());
+    for t in 0..object.triangles.len() {
+        let TriangleLighting {
+            normals,
+            tree,
+            colours,
+        } = triangle_lighting(object, t)?;
+        let nc = normals.len();
         for f in t * per..(t + 1) * per {
-            let tri = refined.indices[f];
-            let p = tri
-                .iter()
-                .map(|&i| refined.positions.get(i as usize).copied())
-                .collect::<Option<Vec<_>>>()
-                .ok_or_else(|| ColourError::Index {
-                    object: name(),
-                    face: f,
-                })?;
-            let e1 = sub(p[1], p[0]);
-            let e2 = sub(p[2], p[0]);
-            let c = cross(e1, e2);
+            let (tri, p) = fine_triangle(object, refined, f)?;
+            let c = cross(sub(p[1], p[0]), sub(p[2], p[0]));
             let area = 0.5 * dot(c, c).sqrt();
             let (node, _) = tree.find_path(level, u64::from(refined.path(f)));
             // Largest dot product with the (unnormalised) face normal: the same argmax as with
@@ -152,27 +271,11 @@ pub fn apply_baked_colours(
             }
             let rgb = rgb9e5::decode(colours[node as usize * nc + best]).map(f64::from);
             for &i in &tri {
-                let i = i as usize;
-                for k in 0..3 {
-                    sum[i][k] += area * rgb[k];
-                    plain[i][k] += rgb[k];
-                }
-                weight[i] += area;
-                plain_count[i] += 1;
+                avg.add(i as usize, area, rgb);
             }
         }
     }
-    Ok((0..n)
-        .map(|i| {
-            if weight[i] > 0.0 {
-                sum[i].map(|s| (s / weight[i]) as f32)
-            } else if plain_count[i] > 0 {
-                plain[i].map(|s| (s / f64::from(plain_count[i])) as f32)
-            } else {
-                [0.0; 3]
-            }
-        })
-        .collect())
+    Ok(avg.finish())
 }
 
 fn sub(a: [f32; 3], b: [f32; 3]) -> [f64; 3] {

@@ -1,8 +1,10 @@
 //! Applying baked colours on the CPU (`hce_runtime::colour`) to the example containers of
-//! hce-format, against colours worked out by hand from their trees.
+//! hce-format, against colours worked out by hand from their trees: the paper's nearest-normal
+//! rule and the smooth reconstruction (SPEC.md, Appendix G).
 
 use hce_format::{example, rgb9e5, tree::encode_tree, Object};
-use hce_runtime::colour::{apply_baked_colours, ColourError};
+use hce_runtime::colour::{apply_baked_colours, apply_baked_colours_with, ColourError};
+use hce_runtime::lighting::Reconstruction;
 use hce_runtime::subdivide::{subdivide, Refined};
 
 fn area(r: &Refined, f: usize) -> f64 {
@@ -58,14 +60,14 @@ fn single_node_tree_colours_every_vertex_with_its_colour() {
 }
 
 #[test]
-fn level_one_subtriangles_take_their_childs_colour() {
+fn nearest_level_one_subtriangles_take_their_childs_colour() {
     // The Appendix D tree: root split; Top, Left, Right leaves (nodes 1, 2, 4); Center (node 3)
     // split into nodes 5..8. Node k's colour is (k / 8, 1/2, 1/4).
     let c = example::single_triangle();
     let o = &c.objects[0];
     let node = |k: u32| [k as f32 / 8.0, 0.5, 0.25];
     let r = subdivide(&o.mesh, 1).unwrap();
-    let rgb = apply_baked_colours(o, &r, 1).unwrap();
+    let rgb = apply_baked_colours_with(o, &r, 1, Reconstruction::NearestNormal).unwrap();
     // Subtriangle with path p (Top, Left, Center, Right) lies in node 1 + p.
     let expected = vertex_means(&r, |f| node(1 + r.path(f)));
     for (v, (got, want)) in rgb.iter().zip(&expected).enumerate() {
@@ -79,12 +81,12 @@ fn level_one_subtriangles_take_their_childs_colour() {
 }
 
 #[test]
-fn level_two_paths_stop_at_leaves_and_descend_where_split() {
+fn nearest_level_two_paths_stop_at_leaves_and_descend_where_split() {
     let c = example::single_triangle();
     let o = &c.objects[0];
     let node = |k: u32| [k as f32 / 8.0, 0.5, 0.25];
     let r = subdivide(&o.mesh, 2).unwrap();
-    let rgb = apply_baked_colours(o, &r, 2).unwrap();
+    let rgb = apply_baked_colours_with(o, &r, 2, Reconstruction::NearestNormal).unwrap();
     // Paths 0..3 (Top's children) stop at leaf 1; 8..11 (Center's children) reach 5..8.
     let face_node = |p: u32| match p >> 2 {
         0 => 1,
@@ -99,7 +101,7 @@ fn level_two_paths_stop_at_leaves_and_descend_where_split() {
 }
 
 #[test]
-fn subtriangles_pick_the_normal_closest_to_their_own_across_borders() {
+fn nearest_subtriangles_pick_the_normal_closest_to_their_own_across_borders() {
     // grid(3, 0): single-node trees, normals (0,0,1) and (0.6,0,0.8) with red 0.0 and 0.01.
     let mut c = example::grid(3, 0);
     // Steepen the bumps (z x 5) so that some subtriangles face the tilted normal.
@@ -108,7 +110,7 @@ fn subtriangles_pick_the_normal_closest_to_their_own_across_borders() {
     }
     let o: &Object = &c.objects[0];
     let r = subdivide(&o.mesh, 2).unwrap();
-    let rgb = apply_baked_colours(o, &r, 2).unwrap();
+    let rgb = apply_baked_colours_with(o, &r, 2, Reconstruction::NearestNormal).unwrap();
     let mut picked = [0usize; 2];
     let face = |f: usize| {
         let p = r.indices[f].map(|i| r.positions[i as usize]);
@@ -165,4 +167,131 @@ fn mismatched_or_damaged_input_is_an_error() {
         apply_baked_colours(&o, &r, 1),
         Err(ColourError::Record { triangle: 0, .. })
     ));
+}
+
+/// The vertex of `r` at `p`.
+fn vertex_at(r: &Refined, p: [f32; 2]) -> usize {
+    r.positions
+        .iter()
+        .position(|q| q[0] == p[0] && q[1] == p[1])
+        .unwrap_or_else(|| panic!("no vertex at {p:?}"))
+}
+
+#[test]
+fn smooth_field_averages_leaf_corners_and_interpolates_t_vertices() {
+    // The Appendix D tree on the unit right triangle (v0 at the origin, v1 = (1,0), v2 = (0,1)):
+    // Top, Left, Right leaves of depth 1 (nodes 1, 2, 4); Center split into leaves 5..8. One
+    // normal per triangle, so the field is the nodal average of the red channel k / 8.
+    let c = example::single_triangle();
+    let o = &c.objects[0];
+    assert_eq!(o.triangles[0].normal_count, 1);
+    let red = |k: f64| k / 8.0;
+    let (big, small) = (0.25, 0.0625);
+    // Corner points: the coarse corners lie in one leaf each.
+    let v0 = red(1.0);
+    let v1 = red(2.0);
+    let v2 = red(4.0);
+    // Edge midpoints: two depth-1 leaves and the depth-2 corner leaf of Center there.
+    let m01 = (big * red(1.0) + big * red(2.0) + small * red(8.0)) / (2.0 * big + small);
+    let m12 = (big * red(2.0) + big * red(4.0) + small * red(5.0)) / (2.0 * big + small);
+    let m20 = (big * red(1.0) + big * red(4.0) + small * red(6.0)) / (2.0 * big + small);
+    for level in 1..=4 {
+        let r = subdivide(&o.mesh, level).unwrap();
+        let rgb = apply_baked_colours(o, &r, level).unwrap();
+        let at = |p: [f32; 2]| f64::from(rgb[vertex_at(&r, p)][0]);
+        let near = |got: f64, want: f64, what: &str| {
+            assert!(
+                (got - want).abs() < 1e-6,
+                "level {level}, {what}: {got} vs {want}"
+            )
+        };
+        near(at([0.0, 0.0]), v0, "v0");
+        near(at([1.0, 0.0]), v1, "v1");
+        near(at([0.0, 1.0]), v2, "v2");
+        near(at([0.5, 0.0]), m01, "m01");
+        near(at([0.5, 0.5]), m12, "m12");
+        near(at([0.0, 0.5]), m20, "m20");
+        if level >= 2 {
+            // T-vertices: the midpoints of the big leaves' inner edges take the mean of the
+            // edge's ends, not the average of the small leaves meeting there.
+            near(
+                at([0.25, 0.25]),
+                0.5 * (m01 + m20),
+                "T-vertex in Top's edge",
+            );
+            near(
+                at([0.5, 0.25]),
+                0.5 * (m01 + m12),
+                "T-vertex in Left's edge",
+            );
+            near(
+                at([0.25, 0.5]),
+                0.5 * (m20 + m12),
+                "T-vertex in Right's edge",
+            );
+            // Inside Top: linear between its corners.
+            near(at([0.25, 0.0]), 0.5 * (v0 + m01), "inside Top");
+        }
+        // Every channel but red is constant.
+        for c in &rgb {
+            assert!((c[1] - 0.5).abs() < 1e-6 && (c[2] - 0.25).abs() < 1e-6);
+        }
+    }
+}
+
+#[test]
+fn smooth_reconstruction_is_linear_in_the_normal() {
+    // Every triangle of a bumpy grid carries the same four normals with colours that are a linear
+    // function of the normal: the reconstruction must give each refined vertex that function of
+    // its own normal, to the quantisation of RGB9E5 and the slight shrinkage of the ridge term.
+    let mut c = example::grid(3, 0);
+    for z in c.objects[0].mesh.positions.iter_mut().skip(2).step_by(3) {
+        *z *= 5.0;
+    }
+    let o = &mut c.objects[0];
+    let normals = [
+        [0.0, 0.0, 1.0],
+        [0.6, 0.0, 0.8],
+        [0.0, 0.6, 0.8],
+        [-0.6, 0.0, 0.8],
+    ];
+    let f = |n: [f32; 3]| [1.0 + 0.5 * n[0] + 0.25 * n[1], 0.5, 0.5 - 0.125 * n[0]];
+    o.normals = normals.to_vec();
+    o.colours = normals.iter().map(|&n| rgb9e5::encode(f(n))).collect();
+    for rec in &mut o.triangles {
+        rec.normal_start = 0;
+        rec.normal_count = 4;
+        rec.colour_start = 0;
+    }
+    let o: &Object = o;
+    for level in 1..=3 {
+        let r = subdivide(&o.mesh, level).unwrap();
+        let smooth = apply_baked_colours(o, &r, level).unwrap();
+        let mut worst = 0.0f32;
+        for (got, n) in smooth.iter().zip(&r.normals) {
+            let want = f(*n);
+            for k in 0..3 {
+                worst = worst.max((got[k] - want[k]).abs() / want[k]);
+            }
+        }
+        assert!(worst < 0.005, "level {level}: worst relative error {worst}");
+    }
+}
+
+#[test]
+fn smooth_reconstruction_keeps_one_colour_trees_exact_and_is_the_default() {
+    let c = example::grid(3, 0);
+    let o = &c.objects[0];
+    let r = subdivide(&o.mesh, 2).unwrap();
+    assert_eq!(
+        apply_baked_colours(o, &r, 2).unwrap(),
+        apply_baked_colours_with(o, &r, 2, Reconstruction::Smooth).unwrap()
+    );
+    assert_ne!(
+        apply_baked_colours(o, &r, 2).unwrap(),
+        apply_baked_colours_with(o, &r, 2, Reconstruction::NearestNormal).unwrap()
+    );
+    assert_eq!("nearest".parse(), Ok(Reconstruction::NearestNormal));
+    assert_eq!("smooth".parse(), Ok(Reconstruction::Smooth));
+    assert!("bilinear".parse::<Reconstruction>().is_err());
 }

@@ -5,11 +5,14 @@
 //! unless `HCE_REQUIRE_GPU=1`, which makes them fail.
 #![cfg(feature = "gpu")]
 
+use hce_runtime::colour::apply_baked_colours;
 use hce_runtime::gpu::cpu_reference::{self, FlatTopology};
 use hce_runtime::gpu::testing::{
     context_or_skip, grid, octahedron, random_object, RandomTrees, SplitMix,
 };
-use hce_runtime::gpu::{decode_colours, refine_flat, ColourQuery};
+use hce_runtime::gpu::{decode_colours, refine_flat, refine_flat_with, ColourQuery};
+use hce_runtime::lighting::Reconstruction;
+use hce_runtime::Refined;
 
 fn test_objects() -> Vec<hce_format::Object> {
     let (p, t) = octahedron();
@@ -119,7 +122,8 @@ fn gpu_flat_refinement_matches_cpu() {
         };
         for level in 0..=4 {
             let cpu = cpu_reference::refine_flat_cpu(&object, &topo, level);
-            let gpu = refine_flat(&ctx, &object, level).unwrap();
+            let gpu =
+                refine_flat_with(&ctx, &object, level, Reconstruction::NearestNormal).unwrap();
             let what = format!("{} level {level}", object.name);
             assert_eq!(
                 gpu.vertex_count(),
@@ -155,6 +159,40 @@ fn gpu_flat_refinement_matches_cpu() {
             if differing_faces == 0 {
                 for (i, (g, c)) in gpu.colours.iter().zip(&cpu.colours).enumerate() {
                     assert!(close(*g, *c), "{what}: vertex colour {}: {g} vs {c}", i / 4);
+                }
+            }
+
+            // The smooth reconstruction against `apply_baked_colours` on the same refinement:
+            // the corner models are the same f32 table on both sides, so the colours differ
+            // only by f32 rounding of the blend and of the area weights.
+            let smooth = refine_flat_with(&ctx, &object, level, Reconstruction::Smooth).unwrap();
+            assert_eq!(smooth.indices, cpu.indices, "{what}: smooth indices");
+            let refined = Refined {
+                level,
+                positions: cpu
+                    .positions
+                    .chunks_exact(3)
+                    .map(|p| [p[0], p[1], p[2]])
+                    .collect(),
+                normals: vec![[0.0; 3]; cpu.positions.len() / 3],
+                indices: cpu
+                    .indices
+                    .chunks_exact(3)
+                    .map(|t| [t[0], t[1], t[2]])
+                    .collect(),
+                coarse_vertices: object.mesh.vertex_count(),
+                coarse_edges: topo.edge_count as usize,
+                coarse_triangles: object.triangles.len(),
+            };
+            let want = apply_baked_colours(&object, &refined, level).unwrap();
+            for (v, c) in want.iter().enumerate() {
+                let g = &smooth.colours[4 * v..4 * v + 3];
+                let scale = c.iter().fold(1e-3f32, |a, &b| a.max(b));
+                for k in 0..3 {
+                    assert!(
+                        (g[k] - c[k]).abs() <= 1e-5 * scale,
+                        "{what}: smooth vertex colour {v}: {g:?} vs {c:?}"
+                    );
                 }
             }
         }
@@ -274,7 +312,8 @@ fn gpu_flat_refinement_matches_cpu_on_real_meshes() {
         let topo = FlatTopology::new(name, &object.mesh).unwrap();
         for level in 1..=2 {
             let cpu = cpu_reference::refine_flat_cpu(&object, &topo, level);
-            let gpu = refine_flat(&ctx, &object, level).unwrap();
+            let gpu =
+                refine_flat_with(&ctx, &object, level, Reconstruction::NearestNormal).unwrap();
             assert_eq!(gpu.indices, cpu.indices, "{name} level {level}");
             let max_pos = gpu
                 .positions

@@ -15,9 +15,10 @@ mod common;
 use std::path::Path;
 
 use hce_format::{ControlMesh, Object, ObjectKind};
-use hce_runtime::colour::apply_baked_colours;
+use hce_runtime::colour::apply_baked_colours_with;
 use hce_runtime::gpu::testing::{context_or_skip, random_object, RandomTrees};
 use hce_runtime::gpu::{AdapterKind, GpuContext, LoopKernel, PatchScheme};
+use hce_runtime::lighting::Reconstruction;
 use hce_runtime::subdivide::subdivide;
 use hce_runtime::topology::{build_control_mesh, Creases, Topology, TopologyConfig};
 
@@ -95,11 +96,20 @@ fn flat_shaded_cube() -> Topology {
 /// An object over `mesh` with random HCE trees; the first normal of each triangle is its
 /// geometric normal, as a baker writes it.
 fn baked(name: &str, mesh: &ControlMesh, seed: u64) -> Object {
+    baked_to_depth(name, mesh, seed, RandomTrees::default().max_depth)
+}
+
+/// [`baked`] with trees at most `max_depth` deep.
+fn baked_to_depth(name: &str, mesh: &ControlMesh, seed: u64, max_depth: u32) -> Object {
+    let trees = RandomTrees {
+        max_depth,
+        ..RandomTrees::default()
+    };
     let mut o = random_object(
         name,
         mesh.positions.clone(),
         mesh.triangles.clone(),
-        RandomTrees::default(),
+        trees,
         seed,
     );
     o.kind = ObjectKind::Multiresolution;
@@ -120,8 +130,17 @@ struct Report {
 
 /// Refines `object` on the GPU at each of `levels` (reusing one output across levels, as a
 /// viewer does) and compares with the CPU reference.
+/// Both reconstructions are compared; the report is the smooth one's (the default).
 fn compare(ctx: &GpuContext, object: &Object, levels: &[u32]) -> Report {
-    compare_with(ctx, &[&LoopKernel::new(ctx)], object, levels)
+    let kernel = LoopKernel::new(ctx);
+    compare_with(
+        ctx,
+        &[&kernel],
+        object,
+        levels,
+        Reconstruction::NearestNormal,
+    );
+    compare_with(ctx, &[&kernel], object, levels, Reconstruction::Smooth)
         .pop()
         .unwrap()
 }
@@ -132,16 +151,18 @@ fn compare_with(
     kernels: &[&LoopKernel],
     object: &Object,
     levels: &[u32],
+    reconstruction: Reconstruction,
 ) -> Vec<Report> {
     let uploaded: Vec<_> = kernels
         .iter()
-        .map(|k| k.upload(ctx, object).unwrap())
+        .map(|k| k.upload_with(ctx, object, reconstruction).unwrap())
         .collect();
     let mut outs: Vec<_> = kernels.iter().map(|_| None).collect();
     let mut reports = vec![Report::default(); kernels.len()];
     for &level in levels {
         let cpu = subdivide(&object.mesh, level).unwrap();
-        let cpu_colours = apply_baked_colours(object, &cpu, level).unwrap();
+        let cpu_colours = apply_baked_colours_with(object, &cpu, level, reconstruction).unwrap();
+        let brightest = cpu_colours.iter().flatten().fold(0f32, |a, &b| a.max(b));
         for (k, kernel) in kernels.iter().enumerate() {
             let report = &mut reports[k];
             let name = format!("{} level {level}, kernel {k}", object.name);
@@ -192,15 +213,40 @@ fn compare_with(
                 let g = &gpu.colours[4 * v..4 * v + 4];
                 assert_eq!(g[3], 1.0);
                 let scale = c.iter().fold(0f32, |a, &b| a.max(b.abs())).max(1e-6);
-                let d = (0..3)
-                    .map(|k| f64::from((g[k] - c[k]).abs() / c[k].abs().max(1e-3 * scale)))
-                    .fold(0.0, f64::max);
-                if d > 1e-3 {
+                // The smooth field (c + G n, blended) is computed in f32 on both sides from the
+                // same table; where c and G n nearly cancel, a channel far below the vertex's
+                // brightest keeps only the absolute precision of the terms: 1e-4 of the
+                // brightest channel (at least 1e-2 of the object's brightest, for vertices the
+                // clamp at zero darkens) is the stated tolerance there.
+                let (d, limit) = match reconstruction {
+                    Reconstruction::Smooth => (
+                        (0..3)
+                            .map(|k| f64::from((g[k] - c[k]).abs() / scale.max(1e-2 * brightest)))
+                            .fold(0.0, f64::max),
+                        1e-4,
+                    ),
+                    Reconstruction::NearestNormal => (
+                        (0..3)
+                            .map(|k| f64::from((g[k] - c[k]).abs() / c[k].abs().max(1e-3 * scale)))
+                            .fold(0.0, f64::max),
+                        1e-3,
+                    ),
+                };
+                if d > limit {
+                    if reconstruction == Reconstruction::Smooth && report.colours_over < 5 {
+                        eprintln!("{name}: smooth vertex {v}: GPU {g:?}, CPU {c:?}");
+                    }
                     report.colours_over += 1;
                 } else {
                     report.max_colour = report.max_colour.max(d);
                 }
             }
+            // The smooth field has no choice to tip: every vertex agrees to f32 rounding.
+            assert!(
+                reconstruction == Reconstruction::NearestNormal || report.colours_over == 0,
+                "{name}: {} smooth vertex colours differ by more than 1e-4 of their brightest channel",
+                report.colours_over
+            );
             assert!(
                 report.colours_over * 2000 <= cpu_colours.len(),
                 "{name}: {} of {} vertex colours differ by more than 1e-3 relative",
@@ -319,6 +365,7 @@ fn workgroup_and_scratch_patches_match_cpu_bitwise_at_levels_0_to_5() {
             &[&workgroup, &scratch],
             &object,
             &[0, 1, 2, 3, 4, 5, 3],
+            Reconstruction::Smooth,
         );
         for (scheme, r) in ["workgroup", "scratch"].into_iter().zip(reports) {
             assert_eq!(
@@ -379,10 +426,20 @@ fn gpu_loop_matches_cpu_on_real_meshes() {
             );
             assert!(t.report.boundary_edges > 0);
         }
-        let object = baked(name, &t.mesh, 200 + i as u64);
+        // Random trees of depth 4 on every one of the bunny's 69,451 triangles (about 40 leaves
+        // each, far more than a bake makes) would need a lighting table beyond the 128 MiB a
+        // storage binding is guaranteed; depth 3 keeps it within.
+        let depth = if name == "stanford-bunny" { 3 } else { 4 };
+        let object = baked_to_depth(name, &t.mesh, 200 + i as u64, depth);
         let levels: Vec<u32> = (1..=top).collect();
         // Both patch kernels: the default picks only one of them on a given adapter.
-        let reports = compare_with(&ctx, &[&workgroup, &scratch], &object, &levels);
+        let reports = compare_with(
+            &ctx,
+            &[&workgroup, &scratch],
+            &object,
+            &levels,
+            Reconstruction::Smooth,
+        );
         for (scheme, r) in ["workgroup", "scratch"].into_iter().zip(reports) {
             eprintln!(
                 "{name}, {scheme} patches (max valence {max_valence:?}, {} crease edges): max position error {:.3e} of the diagonal, {} of {} positions bitwise equal",
@@ -540,7 +597,13 @@ fn workgroup_kernel_spans_two_dispatch_dimensions() {
     assert!(mesh.triangle_count() / 4 > limit as usize);
     let workgroup = LoopKernel::with_scheme(&ctx, PatchScheme::Workgroup);
     let scratch = LoopKernel::with_scheme(&ctx, PatchScheme::Scratch);
-    let reports = compare_with(&ctx, &[&workgroup, &scratch], &object, &[2]);
+    let reports = compare_with(
+        &ctx,
+        &[&workgroup, &scratch],
+        &object,
+        &[2],
+        Reconstruction::Smooth,
+    );
     for r in reports {
         assert_eq!(r.positions_bitwise, r.positions);
     }

@@ -14,6 +14,9 @@ pub use super::cpu_reference::DecodedColour;
 
 /// WGSL of the shared tree-walking functions, prepended to kernels that colour subtriangles.
 pub const TREE_WGSL: &str = include_str!("hce_tree.wgsl");
+/// The smooth reconstruction of baked lighting (`hce_light.wgsl`), prepended after
+/// [`TREE_WGSL`] by the kernels that colour vertices.
+pub const LIGHT_WGSL: &str = include_str!("hce_light.wgsl");
 
 /// One subtriangle to colour. 32 bytes, the layout of `Query` in `decode.wgsl`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]

@@ -11,9 +11,10 @@
 use hce_format::Object;
 
 use super::cpu_reference::{validate_tables, FlatTopology, RefinedMesh, MAX_LEVEL};
-use super::decode::{records_words, TREE_WGSL};
+use super::decode::{records_words, LIGHT_WGSL, TREE_WGSL};
 use super::util::{check_size, dispatch_size, read_back, storage_init, storage_output, PassTimer};
 use super::{GpuContext, GpuError};
+use crate::lighting::Reconstruction;
 
 /// The kernel's uniform block (`Params` in `flat.wgsl`).
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
@@ -34,7 +35,8 @@ struct Params {
     edge_sides_off: u32,
     vertex_corner_offsets_off: u32,
     vertex_corners_off: u32,
-    _pad: u32,
+    /// 1 for [`Reconstruction::Smooth`], 0 for the nearest-normal rule.
+    smooth: u32,
 }
 
 /// The compiled pipelines of the three steps.
@@ -56,6 +58,10 @@ pub struct FlatObject {
     bits: wgpu::Buffer,
     normals: wgpu::Buffer,
     colours: wgpu::Buffer,
+    /// How vertex colours are reconstructed, and the lighting table the smooth reconstruction
+    /// reads (one unused word for the nearest-normal rule).
+    pub reconstruction: Reconstruction,
+    light: wgpu::Buffer,
 }
 
 /// Output buffers of a refinement: drawable as they are (`positions` and `colours` as vertex
@@ -107,7 +113,7 @@ pub struct KernelTiming {
 
 impl FlatKernel {
     pub fn new(ctx: &GpuContext) -> Self {
-        let source = format!("{TREE_WGSL}\n{}", include_str!("flat.wgsl"));
+        let source = format!("{TREE_WGSL}\n{LIGHT_WGSL}\n{}", include_str!("flat.wgsl"));
         let module = ctx
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -136,6 +142,7 @@ impl FlatKernel {
         }];
         entries.extend((1..=6).map(|b| storage(b, true)));
         entries.extend((7..=10).map(|b| storage(b, false)));
+        entries.push(storage(11, true));
         let layout = ctx
             .device
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -170,6 +177,16 @@ impl FlatKernel {
 
     /// Validates `object` (tables and topology) and uploads it.
     pub fn upload(&self, ctx: &GpuContext, object: &Object) -> Result<FlatObject, GpuError> {
+        self.upload_with(ctx, object, Reconstruction::default())
+    }
+
+    /// [`FlatKernel::upload`] with the colour reconstruction chosen.
+    pub fn upload_with(
+        &self,
+        ctx: &GpuContext,
+        object: &Object,
+        reconstruction: Reconstruction,
+    ) -> Result<FlatObject, GpuError> {
         validate_tables(object)?;
         let topology = FlatTopology::new(&object.name, &object.mesh)?;
         let sections: [&[u32]; 7] = [
@@ -199,7 +216,11 @@ impl FlatKernel {
         )?;
         check_size(ctx, "HCE colours", object.colours.len() as u64 * 4)?;
         check_size(ctx, "HCE bits", object.bits.len() as u64 * 4)?;
+        let light = super::util::lighting_words(object, reconstruction)?;
+        check_size(ctx, "lighting table", light.len() as u64 * 4)?;
         Ok(FlatObject {
+            reconstruction,
+            light: storage_init(ctx, "lighting table", &light),
             name: object.name.clone(),
             coarse_positions: storage_init(ctx, "coarse positions", &object.mesh.positions),
             topo: storage_init(ctx, "topology", &packed),
@@ -297,7 +318,7 @@ impl FlatKernel {
             edge_sides_off: s[4],
             vertex_corner_offsets_off: s[5],
             vertex_corners_off: s[6],
-            _pad: 0,
+            smooth: u32::from(object.reconstruction == Reconstruction::Smooth),
         };
         let uniform = super::util::uniform_init(ctx, "flat params", &params);
         let buffers = [
@@ -312,6 +333,7 @@ impl FlatKernel {
             &o.indices,
             &o.faces,
             &o.colours,
+            &object.light,
         ];
         let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("hce flat"),
@@ -378,8 +400,18 @@ fn counts(object: &FlatObject, level: u32) -> Result<(u32, u32), GpuError> {
 
 /// One-shot convenience: upload `object`, refine it to `level` and read the mesh back.
 pub fn refine_flat(ctx: &GpuContext, object: &Object, level: u32) -> Result<RefinedMesh, GpuError> {
+    refine_flat_with(ctx, object, level, Reconstruction::default())
+}
+
+/// [`refine_flat`] with the colour reconstruction chosen.
+pub fn refine_flat_with(
+    ctx: &GpuContext,
+    object: &Object,
+    level: u32,
+    reconstruction: Reconstruction,
+) -> Result<RefinedMesh, GpuError> {
     let kernel = FlatKernel::new(ctx);
-    let uploaded = kernel.upload(ctx, object)?;
+    let uploaded = kernel.upload_with(ctx, object, reconstruction)?;
     let mut out = None;
     kernel.refine_into(ctx, &uploaded, level, &mut out, false)?;
     out.expect("refine_into allocates").read_back(ctx)

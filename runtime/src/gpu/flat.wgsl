@@ -27,7 +27,8 @@ struct Params {
     edge_sides_off: u32,
     vertex_corner_offsets_off: u32,
     vertex_corners_off: u32,
-    _pad: u32,
+    // 1: smooth reconstruction (hce_light.wgsl), 0: the paper's nearest normal.
+    smooth_light: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -41,6 +42,7 @@ struct Params {
 @group(0) @binding(8) var<storage, read_write> out_indices: array<u32>;
 @group(0) @binding(9) var<storage, read_write> out_faces: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read_write> out_colours: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read> hce_light: array<u32>;
 
 fn linear_id(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
     return gid.x + gid.y * groups.x * 64u;
@@ -203,7 +205,8 @@ fn out_position(v: u32) -> vec3<f32> {
 }
 
 // Step 2 (one invocation per fine triangle): its three vertex indices, its normal and area from
-// the positions of step 1, and its colour from the HCE tree (hce_tree.wgsl).
+// the positions of step 1, and, for the paper's rule, its colour from the HCE tree
+// (hce_tree.wgsl). The smooth reconstruction colours vertices in step 3 instead.
 @compute @workgroup_size(64)
 fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
               @builtin(num_workgroups) groups: vec3<u32>) {
@@ -232,10 +235,13 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
         normal = x / len;
     }
 
-    let rec = hce_records[t];
-    let node = hce_tree_node(rec, params.level, path);
-    let j = hce_choose_normal(rec, normal);
-    let rgb = hce_rgb9e5(hce_colours[rec.colour_start + node * rec.normal_count + j]);
+    var rgb = vec3<f32>(0.0);
+    if (params.smooth_light == 0u) {
+        let rec = hce_records[t];
+        let node = hce_tree_node(rec, params.level, path);
+        let j = hce_choose_normal(rec, normal);
+        rgb = hce_rgb9e5(hce_colours[rec.colour_start + node * rec.normal_count + j]);
+    }
     out_faces[g] = vec4<f32>(rgb, 0.5 * len);
 }
 
@@ -260,6 +266,8 @@ fn acc_add(acc: ptr<function, Acc>, g: u32) {
 // of cpu_reference::incident_paths: up triangles at (b, c), (b − 1, c), (b, c − 1), then down
 // triangles at (b, c), (b + 1, c), (b, c + 1).
 fn gather(acc: ptr<function, Acc>, t: u32, b: i32, c: i32) {
+    let area_before = (*acc).area;
+    let count_before = (*acc).count;
     let n = i32(params.n);
     let base = t << (2u * params.level);
     let ups = array<vec2<i32>, 3>(vec2<i32>(b, c), vec2<i32>(b - 1, c), vec2<i32>(b, c - 1));
@@ -275,6 +283,15 @@ fn gather(acc: ptr<function, Acc>, t: u32, b: i32, c: i32) {
         if (d.x >= 1 && d.y >= 1 && d.x + d.y <= n) {
             acc_add(acc, base + locate(vec2<i32>(3 * d.x - 1, 3 * d.y - 1)));
         }
+    }
+    // Smooth reconstruction: the field of coarse triangle t at this lattice point, weighted by
+    // the area of t's fine triangles around it (their own colours are zero in this mode). A flat
+    // object has one normal per triangle, so the field does not depend on the normal.
+    if (params.smooth_light == 1u) {
+        let shift = HCE_EVAL_BITS - params.level;
+        let rgb = hce_light_eval(t, u32(b) << shift, u32(c) << shift, vec3<f32>(0.0));
+        (*acc).weighted += rgb * ((*acc).area - area_before);
+        (*acc).plain += rgb * ((*acc).count - count_before);
     }
 }
 

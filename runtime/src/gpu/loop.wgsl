@@ -58,7 +58,8 @@ struct Params {
     vertex_corners_off: u32,
     // Always 1: the opaque condition of `keep`.
     exact: u32,
-    _pad1: u32,
+    // 1: smooth reconstruction (hce_light.wgsl), 0: the paper's nearest normal.
+    smooth_light: u32,
 }
 
 // Bits of the per-triangle flags word the Rust side derives from the tables.
@@ -85,6 +86,7 @@ const VERTEX_BOUNDARY: u32 = 1u;
 @group(0) @binding(10) var<storage, read_write> out_indices: array<u32>;
 @group(0) @binding(11) var<storage, read_write> out_faces: array<vec4<f32>>;
 @group(0) @binding(12) var<storage, read_write> out_colours: array<vec4<f32>>;
+@group(0) @binding(13) var<storage, read> hce_light: array<u32>;
 
 fn linear_id(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
     return gid.x + gid.y * groups.x * 64u;
@@ -590,9 +592,10 @@ fn out_position(v: u32) -> vec3<f32> {
     return vec3<f32>(out_positions[3u * v], out_positions[3u * v + 1u], out_positions[3u * v + 2u]);
 }
 
-// Step 2 (one invocation per fine triangle): its indices, then its area and colour from the
-// positions of step 1: the tree node along its path and the representative normal with the
-// largest dot product with its (unnormalised) face normal, as colour.rs chooses them.
+// Step 2 (one invocation per fine triangle): its indices, then its area and, for the paper's
+// rule, its colour from the positions of step 1: the tree node along its path and the
+// representative normal with the largest dot product with its (unnormalised) face normal, as
+// colour.rs chooses them. The smooth reconstruction colours vertices in step 3 instead.
 @compute @workgroup_size(64)
 fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
               @builtin(num_workgroups) groups: vec3<u32>) {
@@ -614,10 +617,13 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
     let p0 = out_position(i0);
     let x = cross3(out_position(i1) - p0, out_position(i2) - p0);
     let len = sqrt(x.x * x.x + x.y * x.y + x.z * x.z);
-    let rec = hce_records[t];
-    let node = hce_tree_node(rec, params.level, path);
-    let jn = hce_choose_normal(rec, x);
-    let rgb = hce_rgb9e5(hce_colours[rec.colour_start + node * rec.normal_count + jn]);
+    var rgb = vec3<f32>(0.0);
+    if (params.smooth_light == 0u) {
+        let rec = hce_records[t];
+        let node = hce_tree_node(rec, params.level, path);
+        let jn = hce_choose_normal(rec, x);
+        rgb = hce_rgb9e5(hce_colours[rec.colour_start + node * rec.normal_count + jn]);
+    }
     out_faces[g] = vec4<f32>(rgb, 0.5 * len);
 }
 
@@ -627,6 +633,8 @@ struct Acc {
     area: f32,
     plain: vec3<f32>,
     count: f32,
+    // The vertex's unit normal (the smooth reconstruction evaluates the field for it).
+    normal: vec3<f32>,
 }
 
 fn acc_add(acc: ptr<function, Acc>, g: u32) {
@@ -641,6 +649,8 @@ fn acc_add(acc: ptr<function, Acc>, g: u32) {
 // triangles anchored at (i, j), (i - 1, j), (i, j - 1), then down triangles at (i, j),
 // (i + 1, j), (i, j + 1).
 fn gather(acc: ptr<function, Acc>, t: u32, i: i32, j: i32) {
+    let area_before = (*acc).area;
+    let count_before = (*acc).count;
     let mm = i32(params.m);
     let base = t << (2u * params.level);
     var ups = array<vec2<i32>, 3>(vec2<i32>(i, j), vec2<i32>(i - 1, j), vec2<i32>(i, j - 1));
@@ -657,6 +667,14 @@ fn gather(acc: ptr<function, Acc>, t: u32, i: i32, j: i32) {
             acc_add(acc, base + locate(vec2<i32>(3 * d.x - 1, 3 * d.y - 1)));
         }
     }
+    // Smooth reconstruction: the field of coarse triangle t at this lattice point, weighted by
+    // the area of t's fine triangles around it (their own colours are zero in this mode).
+    if (params.smooth_light == 1u) {
+        let shift = HCE_EVAL_BITS - params.level;
+        let rgb = hce_light_eval(t, u32(i) << shift, u32(j) << shift, (*acc).normal);
+        (*acc).weighted += rgb * ((*acc).area - area_before);
+        (*acc).plain += rgb * ((*acc).count - count_before);
+    }
 }
 
 // Step 3 (one invocation per output vertex): gather every incident fine triangle, from each
@@ -672,7 +690,10 @@ fn colours_main(@builtin(global_invocation_id) gid: vec3<u32>,
     let mm = i32(params.m);
     let edge_base = params.coarse_vertices;
     let interior_base = edge_base + params.edge_count * params.per_edge;
-    var acc = Acc(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0);
+    var acc = Acc(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, vec3<f32>(0.0));
+    if (params.smooth_light == 1u) {
+        acc.normal = vec3<f32>(out_normals[3u * v], out_normals[3u * v + 1u], out_normals[3u * v + 2u]);
+    }
     if (v < edge_base) {
         let s = topo[params.vertex_corner_offsets_off + v];
         let e = topo[params.vertex_corner_offsets_off + v + 1u];

@@ -41,12 +41,13 @@
 use hce_format::Object;
 
 use super::cpu_reference::{validate_tables, FlatTopology, RefinedMesh};
-use super::decode::{records_words, TREE_WGSL};
+use super::decode::{records_words, LIGHT_WGSL, TREE_WGSL};
 use super::flat::KernelTiming;
 use super::util::{
     check_size, dispatch_size, read_back, storage_init, storage_output, PassTimer, WORKGROUP,
 };
 use super::{AdapterKind, GpuContext, GpuError};
+use crate::lighting::Reconstruction;
 use crate::subdivide::{prepare, MAX_LEVEL};
 
 /// Upper bound of the scratch buffer (bytes): the number of coarse triangles refined at once is
@@ -72,7 +73,8 @@ struct Params {
     offsets: [u32; SECTIONS],
     /// Always 1 (see `keep` in `loop.wgsl`).
     exact: u32,
-    _pad: u32,
+    /// 1 for [`Reconstruction::Smooth`], 0 for the nearest-normal rule.
+    smooth: u32,
 }
 
 /// Sections packed into the `topo` buffer, in this order (see [`LoopKernel::upload`]).
@@ -202,6 +204,10 @@ pub struct LoopObject {
     bits: wgpu::Buffer,
     normals: wgpu::Buffer,
     colours: wgpu::Buffer,
+    /// How vertex colours are reconstructed, and the lighting table the smooth reconstruction
+    /// reads (one unused word for the nearest-normal rule).
+    pub reconstruction: Reconstruction,
+    light: wgpu::Buffer,
 }
 
 /// Output buffers of a refinement: drawable as they are (`positions`, `normals` and `colours` as
@@ -273,7 +279,7 @@ impl LoopKernel {
     }
 
     pub fn with_scheme(ctx: &GpuContext, scheme: PatchScheme) -> Self {
-        let source = format!("{TREE_WGSL}\n{}", include_str!("loop.wgsl"));
+        let source = format!("{TREE_WGSL}\n{LIGHT_WGSL}\n{}", include_str!("loop.wgsl"));
         let module = ctx
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -365,7 +371,7 @@ impl LoopKernel {
             .entry(shape)
             .or_insert_with(|| {
                 let source = format!(
-                    "{TREE_WGSL}\n{}\n{}\n{}",
+                    "{TREE_WGSL}\n{LIGHT_WGSL}\n{}\n{}\n{}",
                     include_str!("loop.wgsl"),
                     shape.header(),
                     include_str!("loop_workgroup.wgsl")
@@ -400,6 +406,16 @@ impl LoopKernel {
     /// vertex incidence, HCE records, trees, normals and colours) and uploads it. A malformed
     /// table is an error here, never an out-of-bounds read on the GPU.
     pub fn upload(&self, ctx: &GpuContext, object: &Object) -> Result<LoopObject, GpuError> {
+        self.upload_with(ctx, object, Reconstruction::default())
+    }
+
+    /// [`LoopKernel::upload`] with the colour reconstruction chosen.
+    pub fn upload_with(
+        &self,
+        ctx: &GpuContext,
+        object: &Object,
+        reconstruction: Reconstruction,
+    ) -> Result<LoopObject, GpuError> {
         let invalid = |reason: String| GpuError::InvalidObject {
             object: object.name.clone(),
             reason,
@@ -486,6 +502,8 @@ impl LoopKernel {
         check_size(ctx, "HCE colours", object.colours.len() as u64 * 4)?;
         check_size(ctx, "HCE bits", object.bits.len() as u64 * 4)?;
         check_size(ctx, "HCE normals", object.normals.len() as u64 * 12)?;
+        let light = super::util::lighting_words(object, reconstruction)?;
+        check_size(ctx, "lighting table", light.len() as u64 * 4)?;
         Ok(LoopObject {
             name: object.name.clone(),
             vertex_count: topology.vertex_count,
@@ -500,6 +518,8 @@ impl LoopKernel {
             bits: storage_init(ctx, "bits", &object.bits),
             normals: storage_init(ctx, "normals", object.normals.as_flattened()),
             colours: storage_init(ctx, "colours", &object.colours),
+            reconstruction,
+            light: storage_init(ctx, "lighting table", &light),
         })
     }
 
@@ -630,7 +650,7 @@ impl LoopKernel {
             ring_cap: object.max_valence,
             offsets: object.offsets,
             exact: 1,
-            _pad: 0,
+            smooth: u32::from(object.reconstruction == Reconstruction::Smooth),
         };
         let uniform = super::util::uniform_init(ctx, "loop params", &params);
         let group = |pipeline: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| {
@@ -700,8 +720,12 @@ impl LoopKernel {
             &[
                 (0, &uniform),
                 (2, &object.topo),
+                (3, &object.records),
+                (4, &object.bits),
+                (9, &o.normals),
                 (11, &o.faces),
                 (12, &o.colours),
+                (13, &object.light),
             ],
         );
         // Two timestamps per step (one compute pass each), so the time of each step is known.

@@ -29,7 +29,7 @@ mod util;
 pub use context::{AdapterDescription, AdapterKind, ContextOptions, GpuContext};
 pub use cpu_reference::RefinedMesh;
 pub use decode::{decode_colours, ColourQuery, DecodedColour};
-pub use flat::{refine_flat, FlatKernel, FlatObject, FlatOutput, KernelTiming};
+pub use flat::{refine_flat, refine_flat_with, FlatKernel, FlatObject, FlatOutput, KernelTiming};
 pub use lod::{choose_level, Camera, LodParams};
 pub use loop_kernel::{refine_loop, LoopKernel, LoopMesh, LoopObject, LoopOutput, PatchScheme};
 pub use render::{

@@ -62,6 +62,7 @@ use super::{
     LoopOutput,
 };
 use crate::asset::{Asset, Bounds};
+use crate::lighting::Reconstruction;
 use crate::subdivide::{subdivide_into, Refined};
 
 /// How multiresolution objects are refined.
@@ -82,6 +83,8 @@ pub struct SceneOptions {
     /// Highest level a flat object is refined to; below it, its tree depth. Default 7
     /// (16 384 fine triangles per coarse one).
     pub flat_max_level: u32,
+    /// How baked colours become vertex colours (SPEC.md, Appendix G). Default: smooth.
+    pub reconstruction: Reconstruction,
 }
 
 impl Default for SceneOptions {
@@ -89,6 +92,7 @@ impl Default for SceneOptions {
         Self {
             multires: MultiresPath::default(),
             flat_max_level: 7,
+            reconstruction: Reconstruction::default(),
         }
     }
 }
@@ -129,6 +133,7 @@ enum Refiner {
         out: Option<LoopOutput>,
     },
     CpuReference {
+        reconstruction: Reconstruction,
         object: Box<Object>,
         scratch: Refined,
         out: Option<CpuOutput>,
@@ -245,19 +250,28 @@ impl GpuScene {
                 (ObjectKind::Flat, _) => {
                     let kernel = flat.get_or_insert_with(|| FlatKernel::new(ctx));
                     Refiner::Flat {
-                        object: Box::new(kernel.upload(ctx, &o.object)?),
+                        object: Box::new(kernel.upload_with(
+                            ctx,
+                            &o.object,
+                            options.reconstruction,
+                        )?),
                         out: None,
                     }
                 }
                 (ObjectKind::Multiresolution, MultiresPath::Gpu) => {
                     let kernel = loop_kernel.get_or_insert_with(|| LoopKernel::new(ctx));
                     Refiner::Loop {
-                        object: Box::new(kernel.upload(ctx, &o.object)?),
+                        object: Box::new(kernel.upload_with(
+                            ctx,
+                            &o.object,
+                            options.reconstruction,
+                        )?),
                         out: None,
                     }
                 }
                 (ObjectKind::Multiresolution, MultiresPath::CpuReference) => {
                     Refiner::CpuReference {
+                        reconstruction: options.reconstruction,
                         object: Box::new(o.object.clone()),
                         scratch: Refined::default(),
                         out: None,
@@ -392,6 +406,7 @@ impl GpuScene {
                 kernel.refine_into(ctx, object, level, out, false)?;
             }
             Refiner::CpuReference {
+                reconstruction,
                 object,
                 scratch,
                 out,
@@ -406,8 +421,13 @@ impl GpuScene {
                     });
                 }
                 subdivide_into(&object.mesh, level, scratch).map_err(|e| invalid(&name, e))?;
-                let colours = crate::colour::apply_baked_colours(object, scratch, level)
-                    .map_err(|e| invalid(&name, e))?;
+                let colours = crate::colour::apply_baked_colours_with(
+                    object,
+                    scratch,
+                    level,
+                    *reconstruction,
+                )
+                .map_err(|e| invalid(&name, e))?;
                 *out = Some(upload_cpu(ctx, out.take(), scratch, &colours, level)?);
             }
         }

@@ -202,3 +202,28 @@ impl PassTimer {
         Ok(Some((span(0, n - 1), passes)))
     }
 }
+
+/// The `hce_light` buffer of `hce_light.wgsl` ([`crate::lighting::LightingTable::to_words`]).
+/// One unused word for the nearest-normal rule (wgpu rejects empty buffers).
+pub fn lighting_words(
+    object: &hce_format::Object,
+    reconstruction: crate::lighting::Reconstruction,
+) -> Result<Vec<u32>, GpuError> {
+    if reconstruction != crate::lighting::Reconstruction::Smooth {
+        return Ok(vec![0]);
+    }
+    let table =
+        crate::lighting::LightingTable::build(object).map_err(|e| GpuError::InvalidObject {
+            object: object.name.clone(),
+            reason: e.to_string(),
+        })?;
+    let words = table.to_words();
+    if u32::try_from(words.len()).is_err() {
+        return Err(GpuError::TooLarge {
+            what: "lighting table",
+            needed: words.len() as u64 * 4,
+            limit: u64::from(u32::MAX) * 4,
+        });
+    }
+    Ok(words)
+}

@@ -62,6 +62,15 @@ pub struct RenderArgs {
     /// kernel, never needed otherwise.
     #[arg(long)]
     pub cpu_reference: bool,
+    /// How baked colours become vertex colours: `smooth` (continuous over the surface and
+    /// linear in the normal, SPEC.md Appendix G) or `nearest` (the paper's rule: each
+    /// subtriangle takes the colour of its closest representative normal, averaged at vertices).
+    #[arg(long, default_value = "smooth", value_parser = parse_reconstruction)]
+    pub reconstruction: hce_runtime::lighting::Reconstruction,
+}
+
+fn parse_reconstruction(s: &str) -> Result<hce_runtime::lighting::Reconstruction, String> {
+    s.parse()
 }
 
 /// Parses `WIDTHxHEIGHT`.
@@ -317,6 +326,7 @@ fn run_baked(
                 } else {
                     hce_runtime::gpu::MultiresPath::Gpu
                 },
+                reconstruction: args.reconstruction,
                 ..Default::default()
             },
             ..Default::default()

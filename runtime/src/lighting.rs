@@ -1,0 +1,673 @@
+//! Smooth reconstruction of baked lighting (SPEC.md, Appendix G): a field that is continuous in
+//! position over the surface and linear in the normal, so that a mesh refined to any level gets
+//! the shading its own normals call for and converges as the level grows.
+//!
+//! Two steps, both linear in the stored colours:
+//!
+//! * **Over normals**, per coarse triangle: the `n` colours `B_j` of a tree node, stored for the
+//!   triangle's representative normals `n_j` (Padrón et al., "Hierarchical radiosity for
+//!   multiresolution systems based on normal tests", 2010), are fitted by a linear function of
+//!   the normal, `B(n) = c + G n`, by ridge-regularised least squares. Irradiance is a very
+//!   smooth function of the normal (Ramamoorthi & Hanrahan, "An efficient representation for
+//!   irradiance environment maps", SIGGRAPH 2001: its first spherical-harmonic bands hold it to
+//!   a few percent), and over the spread of normals one coarse triangle's subtriangles cover,
+//!   the constant and linear band carry it. The ridge term keeps directions the set does not
+//!   span (a triangle with one normal, a cylinder's coplanar set, the radial direction of unit
+//!   normals) at zero slope.
+//! * **Over positions**, per object: every leaf element gets a model at each of its three
+//!   corners, the area-weighted average of the leaves meeting there (across coarse-triangle
+//!   borders, except across sharp edges and, for flat objects, folds), and a point inside a leaf
+//!   interpolates its leaf's corners linearly. A corner that lies inside the edge of a larger
+//!   leaf (a T-vertex) takes the value interpolated along that edge, so the field is continuous
+//!   everywhere (Cohen & Wallace, "Radiosity and Realistic Image Synthesis", 1993, section 9.2:
+//!   nodal averaging and T-vertices).
+//!
+//! A refined vertex with unit normal `n` at lattice point `p` of coarse triangle `t` then gets
+//! `max(0, c(p) + G(p) n)`, evaluated per channel. The corner models are computed once per
+//! object on the CPU ([`LightingTable::build`]); the GPU kernels read the same table.
+
+use std::collections::HashMap;
+
+use hce_format::{rgb9e5, Object, ObjectKind, Tree, TreeError, NO_NEIGHBOUR, SPOKE_SHARP};
+
+/// Denominator of the lattice in which leaf corners are identified: the finest split a tree can
+/// have (`hce_format::MAX_DEPTH` = 12).
+const TREE_LATTICE_BITS: u32 = 12;
+const TREE_LATTICE: i64 = 1 << TREE_LATTICE_BITS;
+
+/// Denominator of the lattice in which points are evaluated: deep enough for every render level
+/// the kernels accept (15) and every tree depth (12).
+pub const EVAL_LATTICE_BITS: u32 = 16;
+
+/// Ridge weight of the normal fit, per normal of the set (SPEC.md G.2).
+pub const RIDGE_PER_NORMAL: f64 = 1e-4;
+
+/// Flat objects join neighbouring coarse triangles whose normals differ by less than this many
+/// degrees (SPEC.md G.3); between steeper ones (the corner of a room) values do not mix.
+pub const FLAT_JOIN_DEGREES: f64 = 10.0;
+
+/// Floats per model: `c` (RGB), then `G` row by row (the red, green and blue gradients).
+pub const MODEL_FLOATS: usize = 12;
+
+/// How baked colours become vertex colours.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Reconstruction {
+    /// Continuous in position and linear in the normal (SPEC.md G.1 to G.4). The default.
+    #[default]
+    Smooth,
+    /// The paper's rule (Concheiro et al. 2012, section 4; SPEC.md G.5): each subtriangle takes
+    /// the colour of its tree node whose representative normal is closest to its own, and each
+    /// vertex averages its subtriangles' colours.
+    NearestNormal,
+}
+
+impl std::str::FromStr for Reconstruction {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "smooth" => Ok(Self::Smooth),
+            "nearest" | "nearest-normal" => Ok(Self::NearestNormal),
+            _ => Err(format!(
+                "unknown reconstruction '{s}': expected 'smooth' or 'nearest'"
+            )),
+        }
+    }
+}
+
+/// Why a lighting table cannot be built: the object's records, trees or colours are
+/// inconsistent (a validated object never is).
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum LightingError {
+    #[error("object '{object}', triangle {triangle}: {what}; re-bake the file")]
+    Record {
+        object: String,
+        triangle: usize,
+        what: String,
+    },
+    #[error("object '{object}', triangle {triangle}: bad HCE tree: {source}")]
+    Tree {
+        object: String,
+        triangle: usize,
+        #[source]
+        source: TreeError,
+    },
+}
+
+/// Per object: the models at the corners of every leaf element, in the layout the GPU kernels
+/// read. Leaves that meet at a point share its model.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightingTable {
+    /// Per coarse triangle: the index of its first leaf. Leaf `k - rank(k)` of the triangle's
+    /// tree (node `k`, breadth-first; SPEC.md B.2) is leaf `leaf_start[t] + k - rank(k)`.
+    pub leaf_start: Vec<u32>,
+    /// Three point indices per leaf, for its corners 0, 1, 2 in the order of SPEC.md 2.2.
+    pub leaf_points: Vec<u32>,
+    /// [`MODEL_FLOATS`] floats per point: `models[12 * point ..][..12]`.
+    pub models: Vec<f32>,
+}
+
+/// One coarse triangle's share of an object's baked lighting, bounds-checked.
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleLighting<'a> {
+    /// The normal set, geometric normal first.
+    pub normals: &'a [[f32; 3]],
+    pub tree: Tree<'a>,
+    /// Node-major: node `k`, normal `j` is `colours[k * normals.len() + j]`.
+    pub colours: &'a [u32],
+}
+
+/// The normals, tree and colours of triangle `t` of `object`, checked against what the object
+/// holds (SPEC.md A.9).
+pub fn triangle_lighting(object: &Object, t: usize) -> Result<TriangleLighting<'_>, LightingError> {
+    let record_err = |what: String| LightingError::Record {
+        object: object.name.clone(),
+        triangle: t,
+        what,
+    };
+    let rec = object
+        .triangles
+        .get(t)
+        .ok_or_else(|| record_err(format!("no record among {}", object.triangles.len())))?;
+    let (ns, nc) = (rec.normal_start as usize, rec.normal_count as usize);
+    let normals = ns
+        .checked_add(nc)
+        .filter(|_| nc >= 1)
+        .and_then(|end| object.normals.get(ns..end))
+        .ok_or_else(|| {
+            record_err(format!(
+                "normals {ns}+{nc} lie outside the {} stored normals",
+                object.normals.len()
+            ))
+        })?;
+    let tree =
+        Tree::new(&object.bits, object.bit_len, u64::from(rec.bits_start)).map_err(|source| {
+            LightingError::Tree {
+                object: object.name.clone(),
+                triangle: t,
+                source,
+            }
+        })?;
+    let nodes = tree.node_count() as usize;
+    let cs = rec.colour_start as usize;
+    let colours = nodes
+        .checked_mul(nc)
+        .and_then(|len| cs.checked_add(len))
+        .and_then(|end| object.colours.get(cs..end))
+        .ok_or_else(|| {
+            record_err(format!(
+                "{nodes} nodes x {nc} colours from {cs} lie outside the {} stored colours",
+                object.colours.len()
+            ))
+        })?;
+    Ok(TriangleLighting {
+        normals,
+        tree,
+        colours,
+    })
+}
+
+/// A node's triangle in the lattice of its coarse triangle: corner 0 at `origin`, corner 1 at
+/// `origin + sigma (side, 0)`, corner 2 at `origin + sigma (0, side)`.
+#[derive(Clone, Copy, Debug)]
+struct Cell {
+    origin: [i64; 2],
+    sigma: i64,
+    side: i64,
+}
+
+impl Cell {
+    fn root(side: i64) -> Self {
+        Cell {
+            origin: [0, 0],
+            sigma: 1,
+            side,
+        }
+    }
+
+    /// Child `c` (Top, Left, Center, Right).
+    fn child(self, c: u32) -> Cell {
+        let h = self.side / 2;
+        let s = self.sigma;
+        let [x, y] = self.origin;
+        match c {
+            0 => Cell { side: h, ..self },
+            1 => Cell {
+                origin: [x + s * h, y],
+                side: h,
+                ..self
+            },
+            2 => Cell {
+                origin: [x + s * h, y + s * h],
+                sigma: -s,
+                side: h,
+            },
+            _ => Cell {
+                origin: [x, y + s * h],
+                side: h,
+                ..self
+            },
+        }
+    }
+
+    fn corners(self) -> [[i64; 2]; 3] {
+        let [x, y] = self.origin;
+        let (s, d) = (self.sigma, self.side);
+        [[x, y], [x + s * d, y], [x, y + s * d]]
+    }
+}
+
+/// Identity of a leaf corner on the object's surface, shared by every leaf that meets there
+/// within one smooth region.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum PointKey {
+    /// A control vertex, within one group of its triangle fan joined across smooth edges.
+    Vertex { vertex: u32, group: u32 },
+    /// A point inside a joined coarse edge, at `param / 4096` from its lower-numbered vertex.
+    Edge { edge: u32, param: u32 },
+    /// A point that belongs to one coarse triangle only.
+    Face { triangle: u32, x: u32, y: u32 },
+}
+
+/// Union-find over triangle corners.
+struct Groups(Vec<u32>);
+
+impl Groups {
+    fn find(&mut self, mut a: u32) -> u32 {
+        while self.0[a as usize] != a {
+            let up = self.0[self.0[a as usize] as usize];
+            self.0[a as usize] = up;
+            a = up;
+        }
+        a
+    }
+    fn union(&mut self, a: u32, b: u32) {
+        let (ra, rb) = (self.find(a), self.find(b));
+        // The smaller root wins, so the result does not depend on the order of the unions.
+        if ra < rb {
+            self.0[rb as usize] = ra;
+        } else if rb < ra {
+            self.0[ra as usize] = rb;
+        }
+    }
+}
+
+/// The coarse-mesh facts the point identities need.
+struct Surface<'a> {
+    object: &'a Object,
+    /// `joined[3t + e]`: values mix across edge `e` of triangle `t`.
+    joined: Vec<bool>,
+    /// Group of each triangle corner's vertex (a root of the union-find over corners).
+    group: Vec<u32>,
+}
+
+impl<'a> Surface<'a> {
+    fn new(object: &'a Object) -> Self {
+        let m = &object.mesh;
+        let f = m.triangles.len() / 3;
+        let normals: Vec<[f64; 3]> = (0..f).map(|t| coarse_normal(object, t)).collect();
+        let cos_join = FLAT_JOIN_DEGREES.to_radians().cos();
+        let mut joined = vec![false; 3 * f];
+        for t in 0..f {
+            for e in 0..3 {
+                let u = m.neighbours.get(3 * t + e).copied().unwrap_or(NO_NEIGHBOUR);
+                if u == NO_NEIGHBOUR || u as usize >= f {
+                    continue;
+                }
+                let v = m.triangles[3 * t + e] as usize;
+                let spoke = m
+                    .ring_offsets
+                    .get(v)
+                    .zip(m.corner_spokes.get(3 * t + e))
+                    .and_then(|(&o, &k)| m.spoke_flags.get((o + k) as usize))
+                    .copied()
+                    .unwrap_or(SPOKE_SHARP);
+                let smooth = spoke & SPOKE_SHARP == 0;
+                joined[3 * t + e] = smooth
+                    && match object.kind {
+                        ObjectKind::Multiresolution => true,
+                        ObjectKind::Flat => dot(normals[t], normals[u as usize]) >= cos_join,
+                    };
+            }
+        }
+        let mut groups = Groups((0..3 * f as u32).collect());
+        for t in 0..f {
+            for e in 0..3 {
+                if !joined[3 * t + e] {
+                    continue;
+                }
+                let u = m.neighbours[3 * t + e] as usize;
+                let (a, b) = (m.triangles[3 * t + e], m.triangles[3 * t + (e + 1) % 3]);
+                for (c, v) in [(e, a), ((e + 1) % 3, b)] {
+                    if let Some(cu) = (0..3).find(|&cu| m.triangles[3 * u + cu] == v) {
+                        groups.union((3 * t + c) as u32, (3 * u + cu) as u32);
+                    }
+                }
+            }
+        }
+        let group = (0..3 * f as u32).map(|i| groups.find(i)).collect();
+        Surface {
+            object,
+            joined,
+            group,
+        }
+    }
+
+    /// The key of lattice point `(x, y)` (denominator 4096) of coarse triangle `t`.
+    fn key(&self, t: usize, x: i64, y: i64) -> PointKey {
+        let m = &self.object.mesh;
+        let n = TREE_LATTICE;
+        let corner = match (x, y) {
+            (0, 0) => Some(0),
+            (x, 0) if x == n => Some(1),
+            (0, y) if y == n => Some(2),
+            _ => None,
+        };
+        if let Some(c) = corner {
+            return PointKey::Vertex {
+                vertex: m.triangles[3 * t + c],
+                group: self.group[3 * t + c],
+            };
+        }
+        // Edge e runs from v_e to v_{e+1}; `p` is the distance from v_e.
+        let edge = if y == 0 {
+            Some((0, x))
+        } else if x + y == n {
+            Some((1, y))
+        } else if x == 0 {
+            Some((2, n - y))
+        } else {
+            None
+        };
+        if let Some((e, p)) = edge {
+            if self.joined[3 * t + e] {
+                let (a, b) = (m.triangles[3 * t + e], m.triangles[3 * t + (e + 1) % 3]);
+                let param = if a < b { p } else { n - p };
+                return PointKey::Edge {
+                    edge: m.edges[3 * t + e],
+                    param: param as u32,
+                };
+            }
+        }
+        PointKey::Face {
+            triangle: t as u32,
+            x: x as u32,
+            y: y as u32,
+        }
+    }
+}
+
+fn coarse_normal(object: &Object, t: usize) -> [f64; 3] {
+    let m = &object.mesh;
+    let p = |c: usize| {
+        let v = m.triangles[3 * t + c] as usize;
+        [0, 1, 2].map(|k| f64::from(m.positions.get(3 * v + k).copied().unwrap_or(0.0)))
+    };
+    let (p0, p1, p2) = (p(0), p(1), p(2));
+    let n = cross(sub(p1, p0), sub(p2, p0));
+    let l = dot(n, n).sqrt();
+    if l > 0.0 {
+        n.map(|x| x / l)
+    } else {
+        [0.0; 3]
+    }
+}
+
+fn coarse_area(object: &Object, t: usize) -> f64 {
+    let m = &object.mesh;
+    let p = |c: usize| {
+        let v = m.triangles[3 * t + c] as usize;
+        [0, 1, 2].map(|k| f64::from(m.positions.get(3 * v + k).copied().unwrap_or(0.0)))
+    };
+    let n = cross(sub(p(1), p(0)), sub(p(2), p(0)));
+    0.5 * dot(n, n).sqrt()
+}
+
+/// The fit of SPEC.md G.2 for one normal set: `B(n) = Σ_j B_j (alpha_j + beta_j · n)`.
+fn normal_weights(normals: &[[f32; 3]]) -> Vec<(f64, [f64; 3])> {
+    let k = normals.len();
+    let ns: Vec<[f64; 3]> = normals.iter().map(|n| n.map(f64::from)).collect();
+    let mean = [0, 1, 2].map(|a| ns.iter().map(|n| n[a]).sum::<f64>() / k as f64);
+    let d: Vec<[f64; 3]> = ns.iter().map(|n| sub(*n, mean)).collect();
+    let lambda = RIDGE_PER_NORMAL * k as f64;
+    let mut m = [[0.0f64; 3]; 3];
+    for a in 0..3 {
+        for b in 0..3 {
+            m[a][b] =
+                d.iter().map(|x| x[a] * x[b]).sum::<f64>() + if a == b { lambda } else { 0.0 };
+        }
+    }
+    let inv = invert3(m);
+    d.iter()
+        .map(|dj| {
+            let beta = mat_vec(inv, *dj);
+            (1.0 / k as f64 - dot(beta, mean), beta)
+        })
+        .collect()
+}
+
+fn invert3(m: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let c =
+        |r0: usize, c0: usize, r1: usize, c1: usize| m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0];
+    let adj = [
+        [c(1, 1, 2, 2), -c(0, 1, 2, 2), c(0, 1, 1, 2)],
+        [-c(1, 0, 2, 2), c(0, 0, 2, 2), -c(0, 0, 1, 2)],
+        [c(1, 0, 2, 1), -c(0, 0, 2, 1), c(0, 0, 1, 1)],
+    ];
+    let det = m[0][0] * adj[0][0] + m[0][1] * adj[1][0] + m[0][2] * adj[2][0];
+    // The ridge term makes the matrix positive definite: det >= lambda^3 > 0.
+    adj.map(|row| row.map(|x| x / det))
+}
+
+fn mat_vec(m: [[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    m.map(|row| dot(row, v))
+}
+
+/// A leaf element met while building the table.
+struct Leaf {
+    triangle: u32,
+    depth: u32,
+    cell: Cell,
+    /// Index of the leaf's first corner point in the point list (three consecutive slots of
+    /// `corner_points`).
+    corners: [usize; 3],
+}
+
+impl LightingTable {
+    /// Builds the table of `object` (SPEC.md G.2 to G.4).
+    pub fn build(object: &Object) -> Result<LightingTable, LightingError> {
+        let surface = Surface::new(object);
+        let mut point_index: HashMap<PointKey, usize> = HashMap::new();
+        let mut sums: Vec<[f64; MODEL_FLOATS]> = Vec::new();
+        let mut weights: Vec<f64> = Vec::new();
+        let mut leaves: Vec<Leaf> = Vec::new();
+        let mut leaf_start = Vec::with_capacity(object.triangles.len());
+        for t in 0..object.triangles.len() {
+            leaf_start.push(
+                u32::try_from(leaves.len()).map_err(|_| LightingError::Record {
+                    object: object.name.clone(),
+                    triangle: t,
+                    what: "more than 2^32 leaf elements in one object".into(),
+                })?,
+            );
+            let TriangleLighting {
+                normals,
+                tree,
+                colours,
+            } = triangle_lighting(object, t)?;
+            let nc = normals.len();
+            let fit = normal_weights(normals);
+            let area = coarse_area(object, t);
+            // Breadth-first walk: the children of the r-th subdivided node are 1 + 4r + c.
+            let mut cells = vec![Cell::root(TREE_LATTICE); 1];
+            let mut subdivided_seen = 0usize;
+            for info in tree.nodes() {
+                let k = info.index as usize;
+                let cell = cells[k];
+                if info.subdivided {
+                    let first = 1 + 4 * subdivided_seen;
+                    subdivided_seen += 1;
+                    // Blocks of children are consecutive, so the vector only ever grows at its end.
+                    cells.resize(first + 4, cell);
+                    for c in 0..4 {
+                        cells[first + c] = cell.child(c as u32);
+                    }
+                    continue;
+                }
+                let model = node_model(&colours[k * nc..(k + 1) * nc], &fit);
+                let w = area / (1u64 << (2 * info.depth)) as f64;
+                let mut corners = [0usize; 3];
+                for (slot, p) in corners.iter_mut().zip(cell.corners()) {
+                    let key = surface.key(t, p[0], p[1]);
+                    let i = *point_index.entry(key).or_insert_with(|| {
+                        sums.push([0.0; MODEL_FLOATS]);
+                        weights.push(0.0);
+                        sums.len() - 1
+                    });
+                    for (s, m) in sums[i].iter_mut().zip(model) {
+                        *s += w * m;
+                    }
+                    weights[i] += w;
+                    *slot = i;
+                }
+                leaves.push(Leaf {
+                    triangle: t as u32,
+                    depth: info.depth,
+                    cell,
+                    corners,
+                });
+            }
+        }
+        let mut values: Vec<[f64; MODEL_FLOATS]> = sums
+            .iter()
+            .zip(&weights)
+            .map(|(s, &w)| {
+                if w > 0.0 {
+                    s.map(|x| x / w)
+                } else {
+                    // Zero-area leaves only: average without weights is impossible here, and the
+                    // point carries no light that any refined triangle could show.
+                    [0.0; MODEL_FLOATS]
+                }
+            })
+            .collect();
+        // T-vertices: from the largest leaves down, a corner of smaller leaves inside a leaf's
+        // edge takes the value interpolated along that edge.
+        let mut order: Vec<usize> = (0..leaves.len()).collect();
+        order.sort_by_key(|&i| leaves[i].depth);
+        for &i in &order {
+            let leaf = &leaves[i];
+            let pts = leaf.cell.corners();
+            for e in 0..3 {
+                let (a, b) = (e, (e + 1) % 3);
+                resolve_edge(
+                    &surface,
+                    &point_index,
+                    &mut values,
+                    leaf.triangle as usize,
+                    (pts[a], leaf.corners[a]),
+                    (pts[b], leaf.corners[b]),
+                );
+            }
+        }
+        let too_many = |what: &str| LightingError::Record {
+            object: object.name.clone(),
+            triangle: object.triangles.len().saturating_sub(1),
+            what: format!("more than 2^32 {what} in one object's lighting table"),
+        };
+        let mut leaf_points = Vec::with_capacity(3 * leaves.len());
+        for leaf in &leaves {
+            for &p in &leaf.corners {
+                leaf_points.push(u32::try_from(p).map_err(|_| too_many("points"))?);
+            }
+        }
+        let models = values.iter().flatten().map(|&x| x as f32).collect();
+        Ok(LightingTable {
+            leaf_start,
+            leaf_points,
+            models,
+        })
+    }
+
+    /// The model at corner `corner` of leaf `leaf`.
+    fn model(&self, leaf: usize, corner: usize) -> &[f32] {
+        let at = self.leaf_points[3 * leaf + corner] as usize * MODEL_FLOATS;
+        &self.models[at..at + MODEL_FLOATS]
+    }
+
+    /// The table as the `hce_light` words of `hce_light.wgsl`: the word offset of the models,
+    /// each triangle's first leaf, three point indices per leaf, then the models as f32 bit
+    /// patterns.
+    pub fn to_words(&self) -> Vec<u32> {
+        let models_at = 1 + self.leaf_start.len() + self.leaf_points.len();
+        let mut words = Vec::with_capacity(models_at + self.models.len());
+        words.push(models_at as u32);
+        words.extend(&self.leaf_start);
+        words.extend(&self.leaf_points);
+        words.extend(self.models.iter().map(|x| x.to_bits()));
+        words
+    }
+
+    /// The reconstructed colour at lattice point `(x, y)` (denominator `2^16`) of coarse triangle
+    /// `t`, whose tree is `tree`, for a surface with unit normal `normal` (SPEC.md G.4).
+    pub fn evaluate(&self, tree: &Tree, t: usize, x: u32, y: u32, normal: [f32; 3]) -> [f32; 3] {
+        let (leaf, w) = locate(tree, x, y);
+        let leaf = self.leaf_start[t] as usize + leaf as usize;
+        let b: [[f32; 3]; 3] = [0, 1, 2].map(|c| eval_model(self.model(leaf, c), normal));
+        [0, 1, 2].map(|ch| (b[0][ch] * w[0] + b[1][ch] * w[1] + b[2][ch] * w[2]).max(0.0))
+    }
+}
+
+/// `c + G n` per channel, in the order the kernels use: `c + ((g.x n.x + g.y n.y) + g.z n.z)`.
+fn eval_model(m: &[f32], n: [f32; 3]) -> [f32; 3] {
+    [0, 1, 2].map(|ch| {
+        let g = &m[3 + 3 * ch..6 + 3 * ch];
+        m[ch] + (g[0] * n[0] + g[1] * n[1] + g[2] * n[2])
+    })
+}
+
+/// The leaf (counted among the tree's leaves, breadth-first) holding lattice point `(x, y)`
+/// (denominator `2^16`) and the point's barycentric weights of the leaf's corners 0, 1, 2
+/// (SPEC.md G.4). A point on the border between children goes to the first of Left (its `u` is
+/// at least half the side), Right (`v` at least half), Top (`u + v` at most half), Center.
+pub fn locate(tree: &Tree, x: u32, y: u32) -> (u32, [f32; 3]) {
+    let (mut u, mut v) = (x, y);
+    let mut side = 1u32 << EVAL_LATTICE_BITS;
+    let mut k = 0u32;
+    while tree.is_subdivided(k) {
+        let h = side / 2;
+        let c = if u >= h {
+            u -= h;
+            1
+        } else if v >= h {
+            v -= h;
+            3
+        } else if u + v <= h {
+            0
+        } else {
+            (u, v) = (h - u, h - v);
+            2
+        };
+        k = 1 + 4 * tree.rank(k) + c;
+        side = h;
+    }
+    // Leaves numbered before k: the k nodes before it minus the subdivided ones.
+    let leaf = k - tree.rank(k);
+    let s = side as f32;
+    let (w1, w2) = (u as f32 / s, v as f32 / s);
+    (leaf, [1.0 - w1 - w2, w1, w2])
+}
+
+/// Gives the corners of smaller leaves that lie inside the segment from `a` to `b` (a leaf edge
+/// of triangle `t`) the values interpolated along it.
+fn resolve_edge(
+    surface: &Surface,
+    index: &HashMap<PointKey, usize>,
+    values: &mut [[f64; MODEL_FLOATS]],
+    t: usize,
+    a: ([i64; 2], usize),
+    b: ([i64; 2], usize),
+) {
+    let (pa, pb) = (a.0, b.0);
+    if (pa[0] - pb[0]).abs() < 2 && (pa[1] - pb[1]).abs() < 2 {
+        return;
+    }
+    let pm = [(pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2];
+    let Some(&m) = index.get(&surface.key(t, pm[0], pm[1])) else {
+        return;
+    };
+    let (va, vb) = (values[a.1], values[b.1]);
+    values[m] = std::array::from_fn(|i| 0.5 * (va[i] + vb[i]));
+    resolve_edge(surface, index, values, t, a, (pm, m));
+    resolve_edge(surface, index, values, t, (pm, m), b);
+}
+
+/// The node's model `c, G` (SPEC.md G.2) from its colours for the triangle's normals.
+fn node_model(colours: &[u32], fit: &[(f64, [f64; 3])]) -> [f64; MODEL_FLOATS] {
+    let mut m = [0.0f64; MODEL_FLOATS];
+    for (&packed, (alpha, beta)) in colours.iter().zip(fit) {
+        let rgb = rgb9e5::decode(packed).map(f64::from);
+        for ch in 0..3 {
+            m[ch] += alpha * rgb[ch];
+            for a in 0..3 {
+                m[3 + 3 * ch + a] += beta[a] * rgb[ch];
+            }
+        }
+    }
+    m
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
