@@ -83,10 +83,41 @@ pub fn load(path: &Path) -> Result<Loaded, LoadError> {
     } else {
         "gltf"
     };
+    let buffers = load_buffers(path, &asset).map_err(invalid)?;
+    let container = gltf::container_bytes(&asset.json, &buffers)
+        .map_err(invalid)?
+        .ok_or_else(|| {
+            LoadError::Invalid(format!(
+                "{}: the asset does not use {} (no root extension object); bake it with `hce bake`",
+                path.display(),
+                gltf::EXTENSION_NAME
+            ))
+        })?
+        .to_vec();
+    // Malformed links are left out here; `hce validate` reports each of them.
+    let (links, _) = gltf::scan_primitive_links(&asset.json);
+    let geometries = gltf::linked_geometries(&asset.json, &buffers, &links);
+    let primitives = links
+        .into_iter()
+        .zip(geometries)
+        .map(|(link, computed)| LinkedPrimitive {
+            link,
+            computed: computed.map_err(|e| e.to_string()),
+        })
+        .collect();
+    Ok(Loaded {
+        format,
+        container,
+        primitives,
+    })
+}
+
+/// Loads a parsed asset's buffers: the BIN chunk, `data:` URIs, and files beside `path` named by
+/// plain relative URIs (never `..`, absolute paths or other schemes), each file once.
+pub fn load_buffers(path: &Path, asset: &Asset) -> Result<Vec<Vec<u8>>, gltf::GltfError> {
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let mut seen = std::collections::HashSet::new();
-    let buffers = asset
-        .buffers(|uri| {
+    asset.buffers(|uri| {
             // Only plain relative file names: a URI must not reach outside the asset's folder.
             if uri.contains("..") || uri.contains(':') || uri.starts_with('/') {
                 return Err("only relative paths inside the asset's folder are followed".into());
@@ -102,32 +133,6 @@ pub fn load(path: &Path) -> Result<Loaded, LoadError> {
             }
             std::fs::read(&file).map_err(|e| e.to_string())
         })
-        .map_err(invalid)?;
-    let container = gltf::container_bytes(&asset.json, &buffers)
-        .map_err(invalid)?
-        .ok_or_else(|| {
-            LoadError::Invalid(format!(
-                "{}: the asset does not use {} (no root extension object); bake it with `hce bake`",
-                path.display(),
-                gltf::EXTENSION_NAME
-            ))
-        })?
-        .to_vec();
-    let links = gltf::primitive_links(&asset.json).map_err(invalid)?;
-    let geometries = gltf::linked_geometries(&asset.json, &buffers, &links);
-    let primitives = links
-        .into_iter()
-        .zip(geometries)
-        .map(|(link, computed)| LinkedPrimitive {
-            link,
-            computed: computed.map_err(|e| e.to_string()),
-        })
-        .collect();
-    Ok(Loaded {
-        format,
-        container,
-        primitives,
-    })
 }
 
 fn histogram(values: impl IntoIterator<Item = u32>) -> BTreeMap<u32, u64> {
