@@ -796,7 +796,9 @@ fn validate_root(
     if !listed("extensionsUsed") {
         p.push(
             "extensionsUsed",
-            format!("does not list {EXTENSION_NAME}; an asset that uses it MUST list it (SPEC.md 3.2)"),
+            format!(
+                "does not list {EXTENSION_NAME}; an asset that uses it MUST list it (SPEC.md 3.2)"
+            ),
         );
     }
     if listed("extensionsRequired") {
@@ -810,7 +812,9 @@ fn validate_root(
         Ok(None) => {
             p.push(
                 root_at,
-                format!("missing: the asset does not use {EXTENSION_NAME}; bake it with `hce bake`"),
+                format!(
+                    "missing: the asset does not use {EXTENSION_NAME}; bake it with `hce bake`"
+                ),
             );
             return None;
         }

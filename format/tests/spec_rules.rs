@@ -70,7 +70,11 @@ fn bytes_after_the_last_section_are_an_error() {
     common::put_u64(&mut b, 16, len);
     common::reseal(&mut b);
     let p = validate_bytes(&b);
-    assert_problem(&p, &format!("file[{end}]"), "256 bytes after the last section");
+    assert_problem(
+        &p,
+        &format!("file[{end}]"),
+        "256 bytes after the last section",
+    );
 }
 
 #[test]
@@ -79,7 +83,11 @@ fn bake_parameters_must_be_a_json_object_or_empty() {
     c.metadata.bake_parameters = "levels=3".into();
     assert_problem(&problems_of(&c), "metadata.bake_parameters", "is not JSON");
     c.metadata.bake_parameters = "[1, 2]".into();
-    assert_problem(&problems_of(&c), "metadata.bake_parameters", "not an object");
+    assert_problem(
+        &problems_of(&c),
+        "metadata.bake_parameters",
+        "not an object",
+    );
 }
 
 /// The example GLB with its JSON edited, validated.
@@ -104,7 +112,11 @@ fn extension_must_be_used_and_not_required() {
 
 #[test]
 fn container_buffer_view_has_no_stride_or_target_and_is_4_aligned() {
-    let view = |j: &Value| j["extensions"][EXTENSION_NAME]["bufferView"].as_u64().unwrap() as usize;
+    let view = |j: &Value| {
+        j["extensions"][EXTENSION_NAME]["bufferView"]
+            .as_u64()
+            .unwrap() as usize
+    };
     let p = glb_problems(|j| {
         let v = view(j);
         j["bufferViews"][v]["byteStride"] = json!(4);
@@ -159,7 +171,11 @@ fn primitive_hash_object_range_and_mesh_rules() {
         j["meshes"][0]["primitives"][0]["extensions"][EXTENSION_NAME]["geometryHash"] =
             json!("0123456789abcdef")
     });
-    assert_problem(&p, "meshes[0].primitives[0]", "the mesh was edited after baking");
+    assert_problem(
+        &p,
+        "meshes[0].primitives[0]",
+        "the mesh was edited after baking",
+    );
     let p = glb_problems(|j| {
         j["meshes"][0]["primitives"][0]["extensions"][EXTENSION_NAME]["object"] = json!(4)
     });
@@ -168,7 +184,10 @@ fn primitive_hash_object_range_and_mesh_rules() {
     let p = glb_problems(|j| {
         let m = j["meshes"][0].clone();
         j["meshes"].as_array_mut().unwrap().push(m);
-        j["nodes"].as_array_mut().unwrap().push(json!({ "mesh": 1 }));
+        j["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({ "mesh": 1 }));
         j["scenes"][0]["nodes"] = json!([0, 1]);
     });
     assert_problem(

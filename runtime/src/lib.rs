@@ -15,6 +15,7 @@ pub mod colour;
 pub mod export;
 pub mod gltf_guard;
 pub mod import;
+pub mod scene_export;
 pub mod subdivide;
 pub mod topology;
 

@@ -118,21 +118,21 @@ pub fn load_buffers(path: &Path, asset: &Asset) -> Result<Vec<Vec<u8>>, gltf::Gl
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let mut seen = std::collections::HashSet::new();
     asset.buffers(|uri| {
-            // Only plain relative file names: a URI must not reach outside the asset's folder.
-            if uri.contains("..") || uri.contains(':') || uri.starts_with('/') {
-                return Err("only relative paths inside the asset's folder are followed".into());
-            }
-            // Each file is loaded once: many buffers naming one big file would otherwise
-            // multiply memory by the number of buffers.
-            let file = dir.join(uri);
-            let key = std::fs::canonicalize(&file).unwrap_or_else(|_| file.clone());
-            if !seen.insert(key) {
-                return Err(
-                    "another buffer already uses this file; hce loads each buffer file once".into(),
-                );
-            }
-            std::fs::read(&file).map_err(|e| e.to_string())
-        })
+        // Only plain relative file names: a URI must not reach outside the asset's folder.
+        if uri.contains("..") || uri.contains(':') || uri.starts_with('/') {
+            return Err("only relative paths inside the asset's folder are followed".into());
+        }
+        // Each file is loaded once: many buffers naming one big file would otherwise
+        // multiply memory by the number of buffers.
+        let file = dir.join(uri);
+        let key = std::fs::canonicalize(&file).unwrap_or_else(|_| file.clone());
+        if !seen.insert(key) {
+            return Err(
+                "another buffer already uses this file; hce loads each buffer file once".into(),
+            );
+        }
+        std::fs::read(&file).map_err(|e| e.to_string())
+    })
 }
 
 fn histogram(values: impl IntoIterator<Item = u32>) -> BTreeMap<u32, u64> {
