@@ -591,8 +591,8 @@ pub fn write_refined_scene(
                     // Skins and animations are not carried over: the refined meshes have no
                     // joints or weights.
                     o.remove("skin");
-                    match o.get("mesh").and_then(Value::as_u64) {
-                        Some(m) => match mesh_map.get(m as usize).copied().flatten() {
+                    if let Some(m) = o.get("mesh").and_then(Value::as_u64) {
+                        match mesh_map.get(m as usize).copied().flatten() {
                             Some(new) => {
                                 o.insert("mesh".into(), json!(new));
                             }
@@ -600,8 +600,7 @@ pub fn write_refined_scene(
                                 o.remove("mesh");
                                 o.remove("weights");
                             }
-                        },
-                        None => {}
+                        }
                     }
                 }
                 n
