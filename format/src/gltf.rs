@@ -240,9 +240,22 @@ pub fn root_link(json: &Value) -> Result<Option<RootLink>, GltfError> {
     }))
 }
 
-/// Every primitive's extension object, in mesh and primitive order.
+/// Every primitive's extension object, in mesh and primitive order; the first malformed one is
+/// an error (see [`scan_primitive_links`] to keep going).
 pub fn primitive_links(json: &Value) -> Result<Vec<PrimitiveLink>, GltfError> {
+    let (links, errors) = scan_primitive_links(json);
+    match errors.into_iter().next() {
+        Some(e) => Err(e),
+        None => Ok(links),
+    }
+}
+
+/// Every well-formed primitive extension object, in mesh and primitive order, and one error
+/// per malformed one (SPEC.md 3.3, the primitive schema), so that one bad primitive does not
+/// hide the others.
+pub fn scan_primitive_links(json: &Value) -> (Vec<PrimitiveLink>, Vec<GltfError>) {
     let mut out = Vec::new();
+    let mut errors = Vec::new();
     let meshes = json
         .get("meshes")
         .and_then(Value::as_array)
@@ -259,38 +272,62 @@ pub fn primitive_links(json: &Value) -> Result<Vec<PrimitiveLink>, GltfError> {
                 continue;
             };
             let loc = format!("meshes[{m}].primitives[{p}].extensions.{EXTENSION_NAME}");
+            let before = errors.len();
+            if !ext.is_object() {
+                errors.push(ext_error(&loc, "is not a JSON object"));
+                continue;
+            }
             let object = ext
                 .get("object")
                 .and_then(Value::as_u64)
-                .and_then(|o| u32::try_from(o).ok())
-                .ok_or_else(|| ext_error(&loc, "object is missing or not an integer in 0..2^32"))?;
-            let hash = ext
-                .get("geometryHash")
+                .and_then(|o| u32::try_from(o).ok());
+            if object.is_none() {
+                errors.push(ext_error(
+                    format!("{loc}.object"),
+                    "is missing or not an integer in 0..2^32",
+                ));
+            }
+            let text = ext.get("geometryHash");
+            let hash = text
                 .and_then(Value::as_str)
                 .filter(|h| {
                     h.len() == 16 && h.bytes().all(|c| matches!(c, b'0'..=b'9' | b'a'..=b'f'))
                 })
-                .and_then(|h| u64::from_str_radix(h, 16).ok())
-                .ok_or_else(|| {
-                    ext_error(&loc, "geometryHash must be 16 lowercase hexadecimal digits")
-                })?;
+                .and_then(|h| u64::from_str_radix(h, 16).ok());
+            if hash.is_none() {
+                let found = text.map_or("nothing".to_owned(), Value::to_string);
+                errors.push(ext_error(
+                    format!("{loc}.geometryHash"),
+                    format!("must be 16 lowercase hexadecimal digits, found {found}"),
+                ));
+            }
             let first_triangle = match ext.get("firstTriangle") {
-                None => 0,
-                Some(v) => v
-                    .as_u64()
-                    .and_then(|f| u32::try_from(f).ok())
-                    .ok_or_else(|| ext_error(&loc, "firstTriangle is not an integer in 0..2^32"))?,
+                None => Some(0),
+                Some(v) => {
+                    let f = v.as_u64().and_then(|f| u32::try_from(f).ok());
+                    if f.is_none() {
+                        errors.push(ext_error(
+                            format!("{loc}.firstTriangle"),
+                            "is not an integer in 0..2^32",
+                        ));
+                    }
+                    f
+                }
             };
-            out.push(PrimitiveLink {
-                mesh: m,
-                primitive: p,
-                object,
-                geometry_hash: hash,
-                first_triangle,
-            });
+            if let (Some(object), Some(geometry_hash), Some(first_triangle), true) =
+                (object, hash, first_triangle, errors.len() == before)
+            {
+                out.push(PrimitiveLink {
+                    mesh: m,
+                    primitive: p,
+                    object,
+                    geometry_hash,
+                    first_triangle,
+                });
+            }
         }
     }
-    Ok(out)
+    (out, errors)
 }
 
 fn index_of(v: &Value, key: &str, loc: &str) -> Result<usize, GltfError> {
@@ -629,4 +666,208 @@ pub fn linked_geometries(
                 .clone()
         })
         .collect()
+}
+
+/// Validates a glTF asset that uses the extension (SPEC.md 3.3, 3.5, Appendix C and E.2):
+/// the root object and its buffer view, the embedded container (every rule of
+/// [`crate::validate_bytes`]), and every primitive link: well-formed, object in range, one mesh
+/// per object, triangle range inside the object and not overlapping another primitive's,
+/// triangles still hashing to `geometryHash` (and to the object's hash when the primitive is the
+/// whole object). `buffers` are the asset's loaded buffers ([`Asset::buffers`]). An empty result
+/// means the asset is valid; an asset that does not use the extension is one problem.
+pub fn validate_asset(json: &Value, buffers: &[Vec<u8>]) -> Vec<crate::Problem> {
+    let mut p = crate::validate::Problems::default();
+    let container = validate_root(json, buffers, &mut p);
+    let (links, errors) = scan_primitive_links(json);
+    for e in errors {
+        push_error(&mut p, e);
+    }
+    let Some(container) = container else {
+        return p.finish();
+    };
+    let geometries = linked_geometries(json, buffers, &links);
+    let mut ranges: Vec<(u32, u64, u64, String)> = Vec::new();
+    let mut mesh_of: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
+    for (l, g) in links.iter().zip(geometries) {
+        let at = format!("meshes[{}].primitives[{}]", l.mesh, l.primitive);
+        let Some(object) = container.objects.get(l.object as usize) else {
+            p.push(
+                format!("{at}.extensions.{EXTENSION_NAME}.object"),
+                format!(
+                    "object {} is out of range; the container has {} objects (SPEC.md 3.5)",
+                    l.object,
+                    container.objects.len()
+                ),
+            );
+            continue;
+        };
+        match mesh_of.entry(l.object) {
+            std::collections::hash_map::Entry::Vacant(v) => {
+                v.insert(l.mesh);
+            }
+            std::collections::hash_map::Entry::Occupied(o) if *o.get() != l.mesh => p.push(
+                format!("{at}.extensions.{EXTENSION_NAME}.object"),
+                format!(
+                    "object {} is already linked from meshes[{}]; an object may be shared by primitives of one mesh only (instance the mesh instead) (SPEC.md 3.3)",
+                    l.object,
+                    o.get()
+                ),
+            ),
+            std::collections::hash_map::Entry::Occupied(_) => {}
+        }
+        let (hash, triangles) = match g {
+            Ok(g) => g,
+            Err(e) => {
+                p.push(at, e.to_string());
+                continue;
+            }
+        };
+        if hash != l.geometry_hash {
+            p.push(
+                at.clone(),
+                format!(
+                    "geometry hash {hash:016x} differs from the baked {:016x}: the mesh was edited after baking; bake it again",
+                    l.geometry_hash
+                ),
+            );
+        } else if l.first_triangle == 0
+            && triangles == object.triangles.len()
+            && hash != object.geometry_hash
+        {
+            p.push(
+                at.clone(),
+                format!(
+                    "geometryHash {hash:016x} covers the whole of object {} but differs from its geometry_hash {:016x} (SPEC.md 3.3)",
+                    l.object, object.geometry_hash
+                ),
+            );
+        }
+        let end = u64::from(l.first_triangle) + triangles as u64;
+        if end > object.triangles.len() as u64 {
+            p.push(
+                at.clone(),
+                format!(
+                    "triangles {}..{end} exceed object {}'s {} triangles",
+                    l.first_triangle,
+                    l.object,
+                    object.triangles.len()
+                ),
+            );
+        }
+        ranges.push((l.object, u64::from(l.first_triangle), end, at));
+    }
+    ranges.sort();
+    for w in ranges.windows(2) {
+        if w[0].0 == w[1].0 && w[1].1 < w[0].2 {
+            p.push(
+                w[1].3.clone(),
+                format!(
+                    "triangle range overlaps that of {} for object {} (SPEC.md 3.3)",
+                    w[0].3, w[0].0
+                ),
+            );
+        }
+    }
+    p.finish()
+}
+
+fn push_error(p: &mut crate::validate::Problems, e: GltfError) {
+    match e {
+        GltfError::Extension { location, message } => {
+            p.push(location, format!("{message} (SPEC.md 3.3)"))
+        }
+        other => p.push("file", other.to_string()),
+    }
+}
+
+/// The root object, `extensionsUsed` / `extensionsRequired` and the container's buffer view
+/// (SPEC.md 3.2, 3.3); then the container itself. Returns the container when it could be read.
+fn validate_root(
+    json: &Value,
+    buffers: &[Vec<u8>],
+    p: &mut crate::validate::Problems,
+) -> Option<crate::Container> {
+    let root_at = format!("extensions.{EXTENSION_NAME}");
+    let listed = |key: &str| {
+        json.get(key)
+            .and_then(Value::as_array)
+            .is_some_and(|a| a.iter().any(|e| e == EXTENSION_NAME))
+    };
+    if !listed("extensionsUsed") {
+        p.push(
+            "extensionsUsed",
+            format!(
+                "does not list {EXTENSION_NAME}; an asset that uses it MUST list it (SPEC.md 3.2)"
+            ),
+        );
+    }
+    if listed("extensionsRequired") {
+        p.push(
+            "extensionsRequired",
+            format!("lists {EXTENSION_NAME}; it MUST NOT be required, loaders without it draw the plain meshes (SPEC.md 3.2)"),
+        );
+    }
+    let link = match root_link(json) {
+        Ok(Some(l)) => l,
+        Ok(None) => {
+            p.push(
+                root_at,
+                format!(
+                    "missing: the asset does not use {EXTENSION_NAME}; bake it with `hce bake`"
+                ),
+            );
+            return None;
+        }
+        Err(e) => {
+            push_error(p, e);
+            return None;
+        }
+    };
+    if let Some(v) = json.get("extensions").and_then(|e| e.get(EXTENSION_NAME)) {
+        match v.get("version") {
+            None => {}
+            Some(Value::String(s)) if is_version(s) => {}
+            Some(other) => p.push(
+                format!("{root_at}.version"),
+                format!("{other} does not match \"major.minor\" (^[0-9]+\\.[0-9]+$, SPEC.md 3.3)"),
+            ),
+        }
+    }
+    let view_at = format!("bufferViews[{}]", link.buffer_view);
+    if let Some(view) = json
+        .get("bufferViews")
+        .and_then(Value::as_array)
+        .and_then(|v| v.get(link.buffer_view))
+    {
+        for key in ["byteStride", "target"] {
+            if view.get(key).is_some() {
+                p.push(
+                    format!("{view_at}.{key}"),
+                    "the container's buffer view MUST NOT have byteStride or target (SPEC.md 3.3)",
+                );
+            }
+        }
+        let offset = view.get("byteOffset").and_then(Value::as_u64).unwrap_or(0);
+        if offset % 4 != 0 {
+            p.push(
+                format!("{view_at}.byteOffset"),
+                format!("{offset} is not a multiple of 4 (SPEC.md 3.3; 256 is recommended)"),
+            );
+        }
+    }
+    let bytes = match buffer_view_bytes(json, buffers, link.buffer_view) {
+        Ok(b) => b,
+        Err(e) => {
+            p.push(format!("{root_at}.bufferView"), e.to_string());
+            return None;
+        }
+    };
+    crate::validate::validate_bytes_into(bytes, p)
+}
+
+/// `^[0-9]+\.[0-9]+$`, the schema's version pattern.
+fn is_version(s: &str) -> bool {
+    let digits = |x: &str| !x.is_empty() && x.bytes().all(|c| c.is_ascii_digit());
+    s.split_once('.')
+        .is_some_and(|(a, b)| digits(a) && digits(b))
 }

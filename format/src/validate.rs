@@ -25,13 +25,13 @@ impl fmt::Display for Problem {
 }
 
 #[derive(Default)]
-struct Problems {
+pub(crate) struct Problems {
     list: Vec<Problem>,
     dropped: usize,
 }
 
 impl Problems {
-    fn push(&mut self, location: impl Into<String>, message: impl Into<String>) {
+    pub(crate) fn push(&mut self, location: impl Into<String>, message: impl Into<String>) {
         if self.list.len() < MAX_PROBLEMS {
             self.list.push(Problem {
                 location: location.into(),
@@ -42,7 +42,7 @@ impl Problems {
         }
     }
 
-    fn finish(mut self) -> Vec<Problem> {
+    pub(crate) fn finish(mut self) -> Vec<Problem> {
         if self.dropped > 0 {
             self.list.push(Problem {
                 location: "file".into(),
@@ -57,11 +57,17 @@ impl Problems {
 /// means the file is valid.
 pub fn validate_bytes(bytes: &[u8]) -> Vec<Problem> {
     let mut p = Problems::default();
+    let _ = validate_bytes_into(bytes, &mut p);
+    p.finish()
+}
+
+/// [`validate_bytes`] into `p`; returns the container when its content could be read.
+pub(crate) fn validate_bytes_into(bytes: &[u8], p: &mut Problems) -> Option<Container> {
     let layout = match read_layout(bytes) {
         Ok(l) => l,
         Err(e) => {
             p.push("file", e.to_string());
-            return p.finish();
+            return None;
         }
     };
     for (i, s) in layout.sections.iter().enumerate() {
@@ -76,7 +82,8 @@ pub fn validate_bytes(bytes: &[u8]) -> Vec<Problem> {
             );
         }
     }
-    check_padding(bytes, &layout, &mut p);
+    check_padding(bytes, &layout, p);
+    check_trailing(&layout, p);
     match read_from_layout(
         bytes,
         &layout,
@@ -84,10 +91,15 @@ pub fn validate_bytes(bytes: &[u8]) -> Vec<Problem> {
             verify_checksums: false,
         },
     ) {
-        Ok(c) => validate_into(&c, &mut p),
-        Err(e) => p.push("file", e.to_string()),
+        Ok(c) => {
+            validate_into(&c, p);
+            Some(c)
+        }
+        Err(e) => {
+            p.push("file", e.to_string());
+            None
+        }
     }
-    p.finish()
 }
 
 fn check_padding(bytes: &[u8], layout: &Layout, p: &mut Problems) {
@@ -114,7 +126,29 @@ fn check_padding(bytes: &[u8], layout: &Layout, p: &mut Problems) {
     }
 }
 
-/// Validates the content of a container (SPEC.md Appendix C, rules 1–10).
+/// SPEC.md A.1: `file_length` is the end of the section that ends last (or of the directory),
+/// so bytes after it are an error even when they are zero.
+fn check_trailing(layout: &Layout, p: &mut Problems) {
+    let end = layout
+        .sections
+        .iter()
+        .map(|s| s.offset + s.length)
+        .max()
+        .unwrap_or(0)
+        .max(layout.directory_end());
+    let file_length = layout.header.file_length;
+    if file_length > end {
+        p.push(
+            format!("file[{end}]"),
+            format!(
+                "{} bytes after the last section: file_length must be the end of the last section (SPEC.md A.1)",
+                file_length - end
+            ),
+        );
+    }
+}
+
+/// Validates the content of a container (SPEC.md Appendix C, rules 1–11).
 pub fn validate(c: &Container) -> Vec<Problem> {
     let mut p = Problems::default();
     validate_into(c, &mut p);
@@ -122,10 +156,52 @@ pub fn validate(c: &Container) -> Vec<Problem> {
 }
 
 fn validate_into(c: &Container, p: &mut Problems) {
+    validate_metadata(&c.metadata, p);
     for (i, o) in c.objects.iter().enumerate() {
         let at = format!("objects[{i}]");
         validate_mesh(&at, &o.mesh, p);
+        validate_geometry_hash(&at, o, p);
         validate_shading(&at, o, p);
+    }
+}
+
+/// SPEC.md A.6: the bake parameters are a JSON object text or empty.
+fn validate_metadata(m: &Metadata, p: &mut Problems) {
+    if m.bake_parameters.is_empty() {
+        return;
+    }
+    match serde_json::from_str::<serde_json::Value>(&m.bake_parameters) {
+        Ok(v) if v.is_object() => {}
+        Ok(_) => p.push(
+            "metadata.bake_parameters",
+            "is JSON but not an object; it must be a JSON object text or empty (SPEC.md A.6)",
+        ),
+        Err(e) => p.push(
+            "metadata.bake_parameters",
+            format!("is not JSON ({e}); it must be a JSON object text or empty (SPEC.md A.6)"),
+        ),
+    }
+}
+
+/// Rule 11 (SPEC.md A.7, 2.5): the stored geometry hash is that of the control triangles.
+fn validate_geometry_hash(at: &str, o: &Object, p: &mut Problems) {
+    let m = &o.mesh;
+    let nv = m.positions.len() / 3;
+    if m.positions.len() % 3 != 0
+        || m.triangles.len() % 3 != 0
+        || m.triangles.iter().any(|&v| v as usize >= nv)
+    {
+        return; // Reported by rule 1; the hash cannot be computed.
+    }
+    let computed = geometry_hash(m.triangles.iter().map(|&v| m.position(v)));
+    if computed != o.geometry_hash {
+        p.push(
+            format!("{at}.geometry_hash"),
+            format!(
+                "stored {:016x} but the control triangles hash to {computed:016x}: POSN or TRIS was edited after baking (SPEC.md A.7, 2.5)",
+                o.geometry_hash
+            ),
+        );
     }
 }
 
@@ -320,6 +396,10 @@ fn validate_mesh(at: &str, m: &ControlMesh, p: &mut Problems) {
         }
     }
 
+    if rings_ok {
+        check_spoke_pairs(at, m, p);
+    }
+
     let tri_ok = |t: usize| m.triangle(t).iter().all(|&v| (v as usize) < nv);
     // Rule 4: corner spokes.
     if cs_ok && rings_ok && flags_ok {
@@ -452,6 +532,64 @@ fn validate_mesh(at: &str, m: &ControlMesh, p: &mut Problems) {
                 }
             }
         }
+    }
+}
+
+/// Rule 2 (the rest): every spoke `v → w` has its reverse `w → v`, both carry the same sharp
+/// bit (an edge is sharp or not, whichever end looks at it), and so `R = 2·E` (SPEC.md A.7).
+fn check_spoke_pairs(at: &str, m: &ControlMesh, p: &mut Problems) {
+    let nv = m.positions.len() / 3;
+    let mut spoke_of: std::collections::HashMap<(u32, u32), usize> =
+        std::collections::HashMap::with_capacity(m.ring.len());
+    for v in 0..nv {
+        let Some((a, b)) = valence_ok(m, v) else {
+            continue;
+        };
+        for s in a..b {
+            spoke_of.insert((v as u32, m.ring[s]), s);
+        }
+    }
+    for v in 0..nv {
+        let Some((a, b)) = valence_ok(m, v) else {
+            continue;
+        };
+        for s in a..b {
+            let w = m.ring[s];
+            if w as usize >= nv || w as usize == v {
+                continue; // Reported above.
+            }
+            match spoke_of.get(&(w, v as u32)) {
+                None => p.push(
+                    format!("{at}.mesh.ring[{s}]"),
+                    format!("vertex {v} has spoke {w} but vertex {w}'s ring has no spoke {v}: every edge is in both endpoints' rings (SPEC.md A.7)"),
+                ),
+                Some(&r) => {
+                    // Reported once, from the end with the smaller index.
+                    let sharp = m.spoke_flags[s] & SPOKE_SHARP;
+                    if (v as u32) < w && sharp != m.spoke_flags[r] & SPOKE_SHARP {
+                        p.push(
+                            format!("{at}.mesh.spoke_flags[{s}]"),
+                            format!(
+                                "edge ({v}, {w}) is {} seen from {v} but {} seen from {w} (spoke_flags[{r}]): the sharp bit must be set on both ends or neither (SPEC.md C.3)",
+                                if sharp != 0 { "sharp" } else { "smooth" },
+                                if sharp != 0 { "smooth" } else { "sharp" },
+                            ),
+                        );
+                    }
+                }
+            }
+        }
+    }
+    let edge_count = m.edges.iter().max().map_or(0, |&e| u64::from(e) + 1);
+    if m.ring.len() as u64 != 2 * edge_count {
+        p.push(
+            format!("{at}.mesh.ring"),
+            format!(
+                "ring_length {} but {edge_count} edges need 2 x {edge_count} = {} spokes (SPEC.md A.7)",
+                m.ring.len(),
+                2 * edge_count
+            ),
+        );
     }
 }
 

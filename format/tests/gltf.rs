@@ -74,7 +74,7 @@ fn truncated_and_corrupted_glb_are_errors() {
     let mut json = asset.json.clone();
     json["meshes"][0]["primitives"][0]["extensions"][EXTENSION_NAME]["geometryHash"] = json!("XYZ");
     let e = primitive_links(&json).unwrap_err().to_string();
-    assert!(e.contains("meshes[0].primitives[0].extensions.EXT_hce_baked_lighting: geometryHash must be 16 lowercase hexadecimal digits"), "{e}");
+    assert!(e.contains("meshes[0].primitives[0].extensions.EXT_hce_baked_lighting.geometryHash: must be 16 lowercase hexadecimal digits, found \"XYZ\""), "{e}");
     let mut json = asset.json.clone();
     json["bufferViews"][2]["byteLength"] = json!(1u64 << 40);
     let buffers = asset.buffers(|_| Err("none".into())).unwrap();

@@ -76,7 +76,9 @@ fn non_unit_normals_and_colour_overrun_are_all_reported() {
         has(&p, "objects[0].mesh.positions[1]: coordinate is not finite"),
         "{p:?}"
     );
-    assert_eq!(p.len(), 3, "{p:?}");
+    // Editing a position also breaks the stored geometry hash.
+    assert!(has(&p, "objects[0].geometry_hash: stored"), "{p:?}");
+    assert_eq!(p.len(), 4, "{p:?}");
 }
 
 #[test]

@@ -16,6 +16,7 @@ pub mod export;
 pub mod gltf_guard;
 pub mod import;
 pub mod lighting;
+pub mod scene_export;
 pub mod subdivide;
 pub mod topology;
 

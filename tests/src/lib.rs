@@ -1,2 +1,4 @@
 //! End-to-end tests of the hce toolchain live in `tests/tests/`; this library holds their shared
-//! helpers.
+//! helpers and the conformance suite's generator ([`conformance`]).
+
+pub mod conformance;

@@ -1,5 +1,5 @@
-//! `hce subdivide` on a baked `.hce`: every object is refined from its stored control mesh and
-//! the output carries the applied colours as COLOR_0.
+//! `hce subdivide --merge` on a baked `.hce`: every object is refined from its stored control
+//! mesh and the objects are merged into one mesh carrying the applied colours as COLOR_0.
 
 use hce_format::{example, write};
 use std::process::Command;
@@ -14,7 +14,14 @@ fn baked_hce_subdivides_to_a_glb_with_colours() {
     std::fs::write(&input, write(&c).unwrap()).unwrap();
     let output = dir.path().join("out.glb");
     let out = Command::new(env!("CARGO_BIN_EXE_hce"))
-        .args(["subdivide", input.to_str().unwrap(), "--levels", "2", "-o"])
+        .args([
+            "subdivide",
+            input.to_str().unwrap(),
+            "--merge",
+            "--levels",
+            "2",
+            "-o",
+        ])
         .arg(&output)
         .output()
         .unwrap();

@@ -83,26 +83,7 @@ pub fn load(path: &Path) -> Result<Loaded, LoadError> {
     } else {
         "gltf"
     };
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let mut seen = std::collections::HashSet::new();
-    let buffers = asset
-        .buffers(|uri| {
-            // Only plain relative file names: a URI must not reach outside the asset's folder.
-            if uri.contains("..") || uri.contains(':') || uri.starts_with('/') {
-                return Err("only relative paths inside the asset's folder are followed".into());
-            }
-            // Each file is loaded once: many buffers naming one big file would otherwise
-            // multiply memory by the number of buffers.
-            let file = dir.join(uri);
-            let key = std::fs::canonicalize(&file).unwrap_or_else(|_| file.clone());
-            if !seen.insert(key) {
-                return Err(
-                    "another buffer already uses this file; hce loads each buffer file once".into(),
-                );
-            }
-            std::fs::read(&file).map_err(|e| e.to_string())
-        })
-        .map_err(invalid)?;
+    let buffers = load_buffers(path, &asset).map_err(invalid)?;
     let container = gltf::container_bytes(&asset.json, &buffers)
         .map_err(invalid)?
         .ok_or_else(|| {
@@ -113,7 +94,8 @@ pub fn load(path: &Path) -> Result<Loaded, LoadError> {
             ))
         })?
         .to_vec();
-    let links = gltf::primitive_links(&asset.json).map_err(invalid)?;
+    // Malformed links are left out here; `hce validate` reports each of them.
+    let (links, _) = gltf::scan_primitive_links(&asset.json);
     let geometries = gltf::linked_geometries(&asset.json, &buffers, &links);
     let primitives = links
         .into_iter()
@@ -127,6 +109,29 @@ pub fn load(path: &Path) -> Result<Loaded, LoadError> {
         format,
         container,
         primitives,
+    })
+}
+
+/// Loads a parsed asset's buffers: the BIN chunk, `data:` URIs, and files beside `path` named by
+/// plain relative URIs (never `..`, absolute paths or other schemes), each file once.
+pub fn load_buffers(path: &Path, asset: &Asset) -> Result<Vec<Vec<u8>>, gltf::GltfError> {
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut seen = std::collections::HashSet::new();
+    asset.buffers(|uri| {
+        // Only plain relative file names: a URI must not reach outside the asset's folder.
+        if uri.contains("..") || uri.contains(':') || uri.starts_with('/') {
+            return Err("only relative paths inside the asset's folder are followed".into());
+        }
+        // Each file is loaded once: many buffers naming one big file would otherwise
+        // multiply memory by the number of buffers.
+        let file = dir.join(uri);
+        let key = std::fs::canonicalize(&file).unwrap_or_else(|_| file.clone());
+        if !seen.insert(key) {
+            return Err(
+                "another buffer already uses this file; hce loads each buffer file once".into(),
+            );
+        }
+        std::fs::read(&file).map_err(|e| e.to_string())
     })
 }
 

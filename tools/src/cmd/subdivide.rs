@@ -1,24 +1,33 @@
 //! `hce subdivide`: import a mesh, build its control-mesh tables and Loop-subdivide it on the
 //! CPU (the reference the GPU kernel and the baker share), writing OBJ, glTF or GLB.
 //!
-//! A baked input (`.hce`, or `.glb`/`.gltf` carrying `EXT_hce_baked_lighting`) is instead
-//! refined from each object's stored control mesh, and its baked colours are applied as the
-//! runtime applies them ([`hce_runtime::colour::apply_baked_colours`]), written as `COLOR_0`.
+//! A baked input (`.hce`, or `.glb`/`.gltf` carrying `EXT_hce_baked_lighting`) is loaded with
+//! [`hce_runtime::asset::Asset::open`] and each object refined as the runtime refines it
+//! ([`hce_runtime::scene_export::refine_object`]: Loop for multiresolution objects, linear
+//! 1-to-4 for flat ones, colours from [`hce_runtime::colour::apply_baked_colours`]); the scene
+//! is written back whole ([`hce_runtime::scene_export::write_refined_scene`]), or with
+//! `--merge` as one mesh in object space.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{anyhow, Context, Result};
 use clap::Args;
+use hce_format::ObjectKind;
+use hce_runtime::asset::{Asset, AssetFormat};
+use hce_runtime::scene_export::{refine_object, write_refined_scene, RefinedObject};
 use hce_runtime::topology::{Creases, NonManifold, TopologyConfig};
 
 #[derive(Args)]
 #[command(
     after_help = "A baked input (.hce, or .glb/.gltf with EXT_hce_baked_lighting) is \
-refined from every object's stored control mesh (--creases, --weld-tolerance and \
---refuse-nonmanifold do not apply), its baked colours are applied per subtriangle and averaged \
-at the vertices, and all objects are written into one mesh in object space (no node transforms \
-applied) with COLOR_0 as linear floats, clamped to [0, 1]."
+refined from every object's stored control mesh as the runtime refines it (multiresolution \
+objects by Loop subdivision, flat objects linearly; --creases, --weld-tolerance and \
+--refuse-nonmanifold do not apply) and written as a .glb/.gltf scene: every node, name, \
+transform, shared mesh, material, camera and light kept, each baked primitive refined with \
+NORMAL and COLOR_0 (the baked light over the base colour, one exposure per scene, as hce bake \
+writes it). --merge writes instead all objects into one mesh in object space (no node \
+transforms) with COLOR_0 the drawn radiosity clamped to [0, 1]; an .obj output implies it."
 )]
 pub struct SubdivideArgs {
     /// Input mesh (.obj, .gltf or .glb; glTF mesh instances are placed by their node
@@ -43,11 +52,15 @@ pub struct SubdivideArgs {
     /// Print the topology report and the time of each stage.
     #[arg(long)]
     pub stats: bool,
+    /// Baked input: write all objects merged into one mesh in object space (node transforms
+    /// not applied) instead of the scene.
+    #[arg(long)]
+    pub merge: bool,
 }
 
 pub fn run(args: SubdivideArgs) -> Result<()> {
-    if let Some(container) = baked_container(&args.input)? {
-        return run_baked(&args, &container);
+    if is_baked(&args.input)? {
+        return run_baked(&args);
     }
     let t0 = Instant::now();
     let input = hce_runtime::import::load_mesh(&args.input)?;
@@ -106,51 +119,30 @@ pub fn run(args: SubdivideArgs) -> Result<()> {
     Ok(())
 }
 
-/// The container of a baked input, or `None` for a plain mesh.
-fn baked_container(path: &Path) -> Result<Option<hce_format::Container>> {
+/// Whether the input is baked: a `.hce`, or a glTF that uses the extension.
+fn is_baked(path: &Path) -> Result<bool> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     match ext.as_deref() {
-        Some("hce") => {
-            let bytes =
-                std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
-            let c = hce_format::read(&bytes)
-                .with_context(|| format!("{}: not a valid .hce container", path.display()))?;
-            Ok(Some(c))
-        }
+        Some("hce") => Ok(true),
         Some("glb") | Some("gltf") => {
             let bytes =
                 std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
             let asset = hce_format::gltf::Asset::parse(&bytes)
                 .with_context(|| format!("{}: not a valid glTF asset", path.display()))?;
-            if hce_format::gltf::root_link(&asset.json)
+            Ok(hce_format::gltf::root_link(&asset.json)
                 .with_context(|| format!("{}: bad EXT_hce_baked_lighting", path.display()))?
-                .is_none()
-            {
-                return Ok(None);
-            }
-            let dir = path.parent().map(Path::to_owned).unwrap_or_default();
-            let buffers = asset
-                .buffers(|uri| {
-                    std::fs::read(dir.join(uri)).map_err(|e| format!("cannot read {uri}: {e}"))
-                })
-                .with_context(|| format!("{}: cannot load buffers", path.display()))?;
-            let data = hce_format::gltf::container_bytes(&asset.json, &buffers)
-                .with_context(|| format!("{}: cannot find the baked container", path.display()))?
-                .ok_or_else(|| anyhow!("{}: the baked container is missing", path.display()))?;
-            let c = hce_format::read(data).with_context(|| {
-                format!("{}: the embedded container is not valid", path.display())
-            })?;
-            Ok(Some(c))
+                .is_some())
         }
-        _ => Ok(None),
+        _ => Ok(false),
     }
 }
 
-/// Refines every object of a baked container, applies its colours and writes one mesh.
-fn run_baked(args: &SubdivideArgs, container: &hce_format::Container) -> Result<()> {
+/// Refines every object of a baked asset as the runtime does and writes the scene (or, with
+/// `--merge` or an OBJ output, one merged mesh).
+fn run_baked(args: &SubdivideArgs) -> Result<()> {
     if args.creases != Creases::None || args.weld_tolerance != 0.0 || args.refuse_nonmanifold {
         eprintln!(
             "note: {} is baked; --creases, --weld-tolerance and --refuse-nonmanifold are \
@@ -159,45 +151,103 @@ fn run_baked(args: &SubdivideArgs, container: &hce_format::Container) -> Result<
         );
     }
     let t0 = Instant::now();
+    let asset = Asset::open(&args.input)?;
+    for w in &asset.warnings {
+        eprintln!("warning: {w}");
+    }
+    let refined = asset
+        .objects
+        .iter()
+        .map(|o| {
+            refine_object(&o.object, args.levels).map_err(|e| {
+                anyhow!(
+                    "{}: object {} '{}': {e}",
+                    args.input.display(),
+                    o.index,
+                    o.name()
+                )
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let t1 = Instant::now();
+    if args.stats {
+        for (o, r) in asset.objects.iter().zip(&refined) {
+            println!(
+                "object '{}' ({}): level {}: {} vertices, {} triangles",
+                o.name(),
+                match o.kind() {
+                    ObjectKind::Flat => "flat, linear",
+                    ObjectKind::Multiresolution => "multiresolution, Loop",
+                },
+                args.levels,
+                r.mesh.positions.len(),
+                r.mesh.indices.len()
+            );
+        }
+    }
+    let obj_output = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    if args.merge || obj_output {
+        if obj_output && !args.merge {
+            eprintln!("note: OBJ cannot hold the scene; writing all objects merged (--merge)");
+        }
+        write_merged(args, &refined)?;
+    } else {
+        let gltf = match asset.format {
+            AssetFormat::Hce => None,
+            AssetFormat::Glb | AssetFormat::Gltf => {
+                let bytes = std::fs::read(&args.input)
+                    .with_context(|| format!("{}: cannot read", args.input.display()))?;
+                let parsed = hce_format::gltf::Asset::parse(&bytes)
+                    .with_context(|| format!("{}: not a valid glTF asset", args.input.display()))?;
+                let buffers = super::inspect::load_buffers(&args.input, &parsed)
+                    .with_context(|| format!("{}: cannot load buffers", args.input.display()))?;
+                Some((parsed.json, buffers))
+            }
+        };
+        write_refined_scene(
+            &args.output,
+            &asset,
+            gltf.as_ref().map(|(j, b)| (j, b.as_slice())),
+            &refined,
+        )
+        .with_context(|| format!("{}: cannot write", args.output.display()))?;
+    }
+    if args.stats {
+        let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
+        println!(
+            "{} objects; time: load, subdivide and colour {:.1} ms, write {:.1} ms",
+            asset.objects.len(),
+            ms(t0, t1),
+            ms(t1, Instant::now())
+        );
+    }
+    Ok(())
+}
+
+/// All objects in one mesh, in object space, `COLOR_0` the drawn radiosity (clamped).
+fn write_merged(args: &SubdivideArgs, refined: &[RefinedObject]) -> Result<()> {
     let mut positions = Vec::new();
     let mut normals = Vec::new();
     let mut colours = Vec::new();
     let mut indices = Vec::new();
-    for object in &container.objects {
-        let refined =
-            hce_runtime::subdivide::subdivide(&object.mesh, args.levels).with_context(|| {
-                format!(
-                    "{}: object '{}': cannot subdivide",
-                    args.input.display(),
-                    object.name
-                )
-            })?;
-        let rgb = hce_runtime::colour::apply_baked_colours(object, &refined, args.levels)
-            .with_context(|| format!("{}: cannot apply colours", args.input.display()))?;
+    for r in refined {
         let offset = u32::try_from(positions.len())
             .ok()
-            .filter(|o| o.checked_add(refined.positions.len() as u32).is_some())
+            .filter(|o| o.checked_add(r.mesh.positions.len() as u32).is_some())
             .ok_or_else(|| {
                 anyhow!(
                     "{}: too many vertices for 32-bit indices",
                     args.input.display()
                 )
             })?;
-        indices.extend(refined.indices.iter().map(|t| t.map(|i| i + offset)));
-        positions.extend_from_slice(&refined.positions);
-        normals.extend_from_slice(&refined.normals);
-        colours.extend(rgb);
-        if args.stats {
-            println!(
-                "object '{}': level {}: {} vertices, {} triangles",
-                object.name,
-                args.levels,
-                refined.positions.len(),
-                refined.indices.len()
-            );
-        }
+        indices.extend(r.mesh.indices.iter().map(|t| t.map(|i| i + offset)));
+        positions.extend_from_slice(&r.mesh.positions);
+        normals.extend_from_slice(&r.mesh.normals);
+        colours.extend_from_slice(&r.colours);
     }
-    let t1 = Instant::now();
     hce_runtime::export::write_mesh_with_colours(
         &args.output,
         &positions,
@@ -205,16 +255,5 @@ fn run_baked(args: &SubdivideArgs, container: &hce_format::Container) -> Result<
         &colours,
         &indices,
     )?;
-    if args.stats {
-        let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
-        println!(
-            "{} objects: {} vertices, {} triangles; time: subdivide and colour {:.1} ms, write {:.1} ms",
-            container.objects.len(),
-            positions.len(),
-            indices.len(),
-            ms(t0, t1),
-            ms(t1, Instant::now())
-        );
-    }
     Ok(())
 }

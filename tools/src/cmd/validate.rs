@@ -3,9 +3,9 @@
 //! triangle ranges inside their object and geometry hashes that still match the mesh.
 //! Prints one line per problem; the exit status says valid (0), invalid (3) or unreadable (4).
 
-use super::inspect::{load, EXIT_INVALID};
+use super::inspect::{load_buffers, LoadError, EXIT_INVALID};
 use clap::Args;
-use hce_format::{read_with, validate_bytes, ReadOptions};
+use hce_format::{gltf, validate_bytes};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -14,71 +14,27 @@ pub struct ValidateArgs {
     pub file: PathBuf,
 }
 
-/// Every problem of the file, as `location: message` lines.
-pub fn problems(args: &ValidateArgs) -> Result<Vec<String>, super::inspect::LoadError> {
-    let loaded = load(&args.file)?;
-    let mut out: Vec<String> = validate_bytes(&loaded.container)
-        .iter()
-        .map(ToString::to_string)
-        .collect();
-    if loaded.primitives.is_empty() {
-        return Ok(out);
-    }
-    let container = read_with(
-        &loaded.container,
-        &ReadOptions {
-            verify_checksums: false,
-        },
-    )
-    .ok();
-    let mut ranges: Vec<(u32, u64, u64, String)> = Vec::new();
-    for p in &loaded.primitives {
-        let l = &p.link;
-        let at = format!("meshes[{}].primitives[{}]", l.mesh, l.primitive);
-        let object = container
-            .as_ref()
-            .and_then(|c| c.objects.get(l.object as usize));
-        let Some(c) = &container else { continue };
-        let Some(object) = object else {
-            out.push(format!(
-                "{at}: object {} is out of range; the container has {} objects",
-                l.object,
-                c.objects.len()
-            ));
-            continue;
-        };
-        match &p.computed {
-            Err(e) => out.push(format!("{at}: {e}")),
-            Ok((hash, triangles)) => {
-                if *hash != l.geometry_hash {
-                    out.push(format!(
-                        "{at}: geometry hash {:016x} differs from the baked {:016x}: the mesh was edited after baking; bake it again",
-                        hash, l.geometry_hash
-                    ));
-                }
-                let end = u64::from(l.first_triangle) + *triangles as u64;
-                if end > object.triangles.len() as u64 {
-                    out.push(format!(
-                        "{at}: triangles {}..{end} exceed object {}'s {} triangles",
-                        l.first_triangle,
-                        l.object,
-                        object.triangles.len()
-                    ));
-                }
-                ranges.push((l.object, u64::from(l.first_triangle), end, at));
-            }
-        }
-    }
-    ranges.sort();
-    for w in ranges.windows(2) {
-        if w[0].0 == w[1].0 && w[1].1 < w[0].2 {
-            out.push(format!(
-                "{}: triangle range overlaps that of {} for object {} (SPEC.md 3.3)",
-                w[1].3, w[0].3, w[0].0
-            ));
-        }
-    }
-    Ok(out)
+/// Every problem of the file, as `location: message` lines: the container's (SPEC.md
+/// Appendix C) and, for glTF assets, the extension's and every primitive link's
+/// ([`hce_format::gltf::validate_asset`]). `Err` only when the file cannot be read or parsed
+/// at all.
+pub fn problems(args: &ValidateArgs) -> Result<Vec<String>, LoadError> {
+    let path = &args.file;
+    let bytes =
+        std::fs::read(path).map_err(|e| LoadError::Io(format!("{}: {e}", path.display())))?;
+    let is_gltf = bytes.starts_with(b"glTF")
+        || path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"));
+    let problems = if is_gltf {
+        let invalid = |e: gltf::GltfError| LoadError::Invalid(format!("{}: {e}", path.display()));
+        let asset = gltf::Asset::parse(&bytes).map_err(invalid)?;
+        let buffers = load_buffers(path, &asset).map_err(invalid)?;
+        gltf::validate_asset(&asset.json, &buffers)
+    } else {
+        validate_bytes(&bytes)
+    };
+    Ok(problems.iter().map(ToString::to_string).collect())
 }
 
 /// Runs the command; exits with a documented status on failure (see `hce --help`).

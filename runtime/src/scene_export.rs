@@ -1,0 +1,693 @@
+//! A baked asset refined to one level and written back as a glTF scene (`hce subdivide BAKED`):
+//! every node with its name, transform (TRS or matrix, as in the input), children, camera,
+//! lights and extras; every mesh (nodes sharing a mesh keep sharing it); materials, textures,
+//! samplers and images; cameras and `KHR_lights_punctual` lights. Each baked primitive becomes
+//! the refined surface of its part of its object, with `NORMAL` and `COLOR_0`; primitives
+//! without baked data are copied as they are.
+//!
+//! # Refinement
+//!
+//! Each object is refined as the runtime refines it ([`refine_object`]): multiresolution
+//! objects by Loop subdivision ([`crate::subdivide`]), flat objects by the linear 1-to-4 split
+//! of the flat kernel (SPEC.md A.7; its CPU twin `gpu::cpu_reference::refine_flat_cpu`), both
+//! coloured by [`crate::colour::apply_baked_colours`]. Flat objects get their vertices split at
+//! coarse-triangle borders so that `NORMAL` can be the face normal (they are drawn faceted);
+//! positions and colours are the runtime's.
+//!
+//! # `COLOR_0`
+//!
+//! As in `hce bake`'s output, `COLOR_0` is the light arriving at the vertex rather than the
+//! outgoing radiosity, because glTF viewers multiply it by the base colour: the drawn radiosity
+//! divided per channel by the primitive's `baseColorFactor` (floored at 0.02), times one
+//! exposure per scene (the reciprocal of the 90th percentile of the vertices' largest channel),
+//! clamped to [0, 1]; primitives with an emissive material get white.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use hce_format::gltf::{hash_hex, write_glb, PrimitiveLink};
+use hce_format::{Object, ObjectKind};
+use serde_json::{json, Map, Value};
+
+use crate::asset::Asset;
+use crate::export::{write_atomic, ExportError};
+use crate::subdivide::{subdivide, Refined};
+
+const ARRAY_BUFFER: u32 = 34962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+const FLOAT: u32 = 5126;
+const UNSIGNED_INT: u32 = 5125;
+
+/// Why a scene cannot be refined or written.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneExportError {
+    #[error("object {index} '{name}': {message}")]
+    Object {
+        index: usize,
+        name: String,
+        message: String,
+    },
+    #[error("{location}: {message}")]
+    Gltf { location: String, message: String },
+    #[error(transparent)]
+    Export(#[from] ExportError),
+}
+
+/// One object refined to a level: what the runtime draws, plus normals.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RefinedObject {
+    /// The Loop or linear refinement (fine triangle `t · 4^level + path`).
+    pub mesh: Refined,
+    /// Linear radiosity per vertex of `mesh`, from [`crate::colour::apply_baked_colours`].
+    pub colours: Vec<[f32; 3]>,
+}
+
+/// Refines `object` to `level` the way the runtime draws it: Loop subdivision for
+/// multiresolution objects, the linear 1-to-4 split for flat ones; then its baked colours.
+pub fn refine_object(object: &Object, level: u32) -> Result<RefinedObject, String> {
+    let mesh = match object.kind {
+        ObjectKind::Multiresolution => subdivide(&object.mesh, level).map_err(|e| e.to_string())?,
+        ObjectKind::Flat => refine_linear(object, level)?,
+    };
+    let colours =
+        crate::colour::apply_baked_colours(object, &mesh, level).map_err(|e| e.to_string())?;
+    Ok(RefinedObject { mesh, colours })
+}
+
+/// The flat kernel's CPU twin, as a [`Refined`] (normals: per vertex, area-weighted).
+#[cfg(feature = "gpu")]
+fn refine_linear(object: &Object, level: u32) -> Result<Refined, String> {
+    use crate::gpu::cpu_reference::{refine_flat_cpu, FlatTopology};
+    if level > crate::subdivide::MAX_LEVEL {
+        return Err(format!(
+            "level {level} is out of range; use 0..={}",
+            crate::subdivide::MAX_LEVEL
+        ));
+    }
+    let topo = FlatTopology::new(&object.name, &object.mesh).map_err(|e| e.to_string())?;
+    let flat = refine_flat_cpu(object, &topo, level);
+    let positions: Vec<[f32; 3]> = flat
+        .positions
+        .chunks_exact(3)
+        .map(|p| [p[0], p[1], p[2]])
+        .collect();
+    let indices: Vec<[u32; 3]> = flat
+        .indices
+        .chunks_exact(3)
+        .map(|t| [t[0], t[1], t[2]])
+        .collect();
+    let mut normals = vec![[0f32; 3]; positions.len()];
+    for t in &indices {
+        let n = face_normal(t.map(|i| positions[i as usize]));
+        for &i in t {
+            for k in 0..3 {
+                normals[i as usize][k] += n[k];
+            }
+        }
+    }
+    Ok(Refined {
+        level,
+        positions,
+        normals: normals.into_iter().map(unit_or_up).collect(),
+        indices,
+        coarse_vertices: topo.vertex_count as usize,
+        coarse_edges: topo.edge_count as usize,
+        coarse_triangles: topo.triangle_count as usize,
+    })
+}
+
+#[cfg(not(feature = "gpu"))]
+fn refine_linear(_: &Object, _: u32) -> Result<Refined, String> {
+    Err(
+        "flat objects are refined by hce-runtime's flat-kernel reference, which needs the \
+         `gpu` feature; build with it"
+            .into(),
+    )
+}
+
+/// Area-weighted (unnormalised) normal of a triangle.
+fn face_normal(p: [[f32; 3]; 3]) -> [f32; 3] {
+    let u = [0, 1, 2].map(|k| p[1][k] - p[0][k]);
+    let w = [0, 1, 2].map(|k| p[2][k] - p[0][k]);
+    [
+        u[1] * w[2] - u[2] * w[1],
+        u[2] * w[0] - u[0] * w[2],
+        u[0] * w[1] - u[1] * w[0],
+    ]
+}
+
+/// `n` normalised, or +Y when it has no direction (glTF requires unit normals).
+fn unit_or_up(n: [f32; 3]) -> [f32; 3] {
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if len > 0.0 && len.is_finite() {
+        n.map(|x| x / len)
+    } else {
+        [0.0, 1.0, 0.0]
+    }
+}
+
+/// Vertex data of one object as written: positions, normals and radiosity per output vertex,
+/// and the output index triples of its fine triangles (in fine-triangle order).
+struct ObjectGeometry {
+    positions: Vec<[f32; 3]>,
+    normals: Vec<[f32; 3]>,
+    radiosity: Vec<[f32; 3]>,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl ObjectGeometry {
+    /// Multiresolution objects keep the refined mesh as it is; flat objects get their vertices
+    /// split per coarse triangle, each copy with the coarse face's normal.
+    fn new(object: &Object, r: &RefinedObject) -> Self {
+        let m = &r.mesh;
+        if object.kind == ObjectKind::Multiresolution {
+            return Self {
+                positions: m.positions.clone(),
+                normals: m.normals.iter().copied().map(unit_or_up).collect(),
+                radiosity: r.colours.clone(),
+                triangles: m.indices.clone(),
+            };
+        }
+        let per = 1usize << (2 * m.level);
+        let mut out = Self {
+            positions: Vec::new(),
+            normals: Vec::new(),
+            radiosity: Vec::new(),
+            triangles: Vec::with_capacity(m.indices.len()),
+        };
+        for t in 0..m.coarse_triangles {
+            let tri = object.mesh.triangle(t).map(|v| object.mesh.position(v));
+            let normal = unit_or_up(face_normal(tri));
+            let mut local: HashMap<u32, u32> = HashMap::new();
+            for f in &m.indices[t * per..(t + 1) * per] {
+                let tri = f.map(|i| {
+                    *local.entry(i).or_insert_with(|| {
+                        out.positions.push(m.positions[i as usize]);
+                        out.normals.push(normal);
+                        out.radiosity.push(r.colours[i as usize]);
+                        (out.positions.len() - 1) as u32
+                    })
+                });
+                out.triangles.push(tri);
+            }
+        }
+        out
+    }
+}
+
+/// The scene being written: JSON arrays and the one binary buffer.
+struct Writer<'a> {
+    input: &'a Value,
+    buffers: &'a [Vec<u8>],
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+    copied: HashMap<usize, usize>,
+}
+
+impl Writer<'_> {
+    fn view(&mut self, bytes: &[u8], target: Option<u32>, stride: Option<u64>) -> usize {
+        let offset = self.bin.len().next_multiple_of(4);
+        self.bin.resize(offset, 0);
+        self.bin.extend_from_slice(bytes);
+        let mut v = json!({ "buffer": 0, "byteOffset": offset, "byteLength": bytes.len() });
+        if let Some(t) = target {
+            v["target"] = json!(t);
+        }
+        if let Some(s) = stride {
+            v["byteStride"] = json!(s);
+        }
+        self.views.push(v);
+        self.views.len() - 1
+    }
+
+    fn vec3(&mut self, data: &[[f32; 3]], with_bounds: bool) -> usize {
+        let bytes: Vec<u8> = data
+            .iter()
+            .flatten()
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
+        let view = self.view(&bytes, Some(ARRAY_BUFFER), None);
+        let mut a = json!({ "bufferView": view, "componentType": FLOAT, "count": data.len(), "type": "VEC3" });
+        if with_bounds && !data.is_empty() {
+            let lo = (0..3).map(|k| data.iter().map(|p| p[k]).fold(f32::INFINITY, f32::min));
+            let hi = (0..3).map(|k| data.iter().map(|p| p[k]).fold(f32::NEG_INFINITY, f32::max));
+            a["min"] = json!(lo.collect::<Vec<_>>());
+            a["max"] = json!(hi.collect::<Vec<_>>());
+        }
+        self.accessors.push(a);
+        self.accessors.len() - 1
+    }
+
+    fn indices(&mut self, tris: &[[u32; 3]]) -> usize {
+        let bytes: Vec<u8> = tris
+            .iter()
+            .flatten()
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
+        let view = self.view(&bytes, Some(ELEMENT_ARRAY_BUFFER), None);
+        self.accessors.push(json!({ "bufferView": view, "componentType": UNSIGNED_INT, "count": 3 * tris.len(), "type": "SCALAR" }));
+        self.accessors.len() - 1
+    }
+
+    /// Copies a buffer view of the input (its bytes, stride and target) into the output.
+    fn copy_view(&mut self, index: usize) -> Result<usize, SceneExportError> {
+        let bytes = hce_format::gltf::buffer_view_bytes(self.input, self.buffers, index)
+            .map_err(|e| SceneExportError::Gltf {
+                location: format!("bufferViews[{index}]"),
+                message: e.to_string(),
+            })?
+            .to_vec();
+        let v = &self.input["bufferViews"][index];
+        let target = v.get("target").and_then(Value::as_u64).map(|t| t as u32);
+        let stride = v.get("byteStride").and_then(Value::as_u64);
+        let out = self.view(&bytes, target, stride);
+        for key in ["name", "extras"] {
+            if let Some(x) = v.get(key) {
+                self.views[out][key] = x.clone();
+            }
+        }
+        Ok(out)
+    }
+
+    /// Copies an input accessor (and its views, sparse ones included), once.
+    fn copy_accessor(&mut self, index: usize) -> Result<usize, SceneExportError> {
+        if let Some(&a) = self.copied.get(&index) {
+            return Ok(a);
+        }
+        let mut a = self
+            .input
+            .get("accessors")
+            .and_then(|a| a.get(index))
+            .cloned()
+            .ok_or_else(|| SceneExportError::Gltf {
+                location: format!("accessors[{index}]"),
+                message: "does not exist".into(),
+            })?;
+        if let Some(v) = a.get("bufferView").and_then(Value::as_u64) {
+            a["bufferView"] = json!(self.copy_view(v as usize)?);
+        }
+        for part in ["indices", "values"] {
+            if let Some(v) = a
+                .get("sparse")
+                .and_then(|s| s.get(part))
+                .and_then(|p| p.get("bufferView"))
+                .and_then(Value::as_u64)
+            {
+                a["sparse"][part]["bufferView"] = json!(self.copy_view(v as usize)?);
+            }
+        }
+        self.accessors.push(a);
+        let out = self.accessors.len() - 1;
+        self.copied.insert(index, out);
+        Ok(out)
+    }
+
+    /// A primitive without baked data, with its accessors copied.
+    fn copy_primitive(&mut self, prim: &Value) -> Result<Value, SceneExportError> {
+        let mut p = prim.clone();
+        if let Some(attrs) = prim.get("attributes").and_then(Value::as_object) {
+            for (name, a) in attrs {
+                if let Some(i) = a.as_u64() {
+                    p["attributes"][name] = json!(self.copy_accessor(i as usize)?);
+                }
+            }
+        }
+        if let Some(i) = prim.get("indices").and_then(Value::as_u64) {
+            p["indices"] = json!(self.copy_accessor(i as usize)?);
+        }
+        if let Some(targets) = prim.get("targets").and_then(Value::as_array) {
+            for (t, target) in targets.iter().enumerate() {
+                for (name, a) in target.as_object().into_iter().flatten() {
+                    if let Some(i) = a.as_u64() {
+                        p["targets"][t][name] = json!(self.copy_accessor(i as usize)?);
+                    }
+                }
+            }
+        }
+        Ok(p)
+    }
+}
+
+/// Base colour (RGB factor) and whether the material emits, for `COLOR_0`.
+fn material_response(input: &Value, material: Option<u64>) -> ([f32; 3], bool) {
+    let m = material.and_then(|m| input.get("materials")?.get(m as usize));
+    let Some(m) = m else {
+        return ([1.0; 3], false);
+    };
+    let base = m
+        .get("pbrMetallicRoughness")
+        .and_then(|p| p.get("baseColorFactor"))
+        .and_then(Value::as_array)
+        .map(|f| [0, 1, 2].map(|k| f.get(k).and_then(Value::as_f64).unwrap_or(1.0) as f32))
+        .unwrap_or([1.0; 3]);
+    let emissive = m
+        .get("emissiveFactor")
+        .and_then(Value::as_array)
+        .is_some_and(|f| f.iter().any(|x| x.as_f64().unwrap_or(0.0) > 0.0));
+    (base, emissive)
+}
+
+/// Writes `asset` with every object refined (`refined[k]` for object `k`) as a `.glb` or
+/// `.gltf` (buffer embedded as a data URI). `input` is the glTF JSON and `buffers` its loaded
+/// buffers, `None` for a `.hce` file (then each object becomes one node and mesh of its name).
+pub fn write_refined_scene(
+    path: &Path,
+    asset: &Asset,
+    input: Option<(&Value, &[Vec<u8>])>,
+    refined: &[RefinedObject],
+) -> Result<(), SceneExportError> {
+    let synthetic;
+    let (input, buffers) = match input {
+        Some(i) => i,
+        None => {
+            synthetic = hce_scene_json(asset);
+            (&synthetic, &[][..])
+        }
+    };
+    let links: Vec<PrimitiveLink> = if asset.format == crate::asset::AssetFormat::Hce {
+        (0..asset.objects.len())
+            .map(|k| PrimitiveLink {
+                mesh: k,
+                primitive: 0,
+                object: k as u32,
+                geometry_hash: asset.objects[k].object.geometry_hash,
+                first_triangle: 0,
+            })
+            .collect()
+    } else {
+        hce_format::gltf::primitive_links(input).map_err(|e| SceneExportError::Gltf {
+            location: "meshes".into(),
+            message: e.to_string(),
+        })?
+    };
+    let link_of: HashMap<(usize, usize), &PrimitiveLink> =
+        links.iter().map(|l| ((l.mesh, l.primitive), l)).collect();
+    let geometry: Vec<ObjectGeometry> = asset
+        .objects
+        .iter()
+        .zip(refined)
+        .map(|(o, r)| ObjectGeometry::new(&o.object, r))
+        .collect();
+
+    // COLOR_0 per linked primitive, before the exposure: radiosity over base colour.
+    struct Part {
+        object: usize,
+        triangles: std::ops::Range<usize>,
+        light: Vec<[f32; 3]>,
+        emissive: bool,
+    }
+    let mut parts: HashMap<(usize, usize), Part> = HashMap::new();
+    let mut maxima = Vec::new();
+    let meshes = input
+        .get("meshes")
+        .and_then(Value::as_array)
+        .cloned()
+        .unwrap_or_default();
+    for (m, mesh) in meshes.iter().enumerate() {
+        let prims = mesh
+            .get("primitives")
+            .and_then(Value::as_array)
+            .cloned()
+            .unwrap_or_default();
+        for (p, prim) in prims.iter().enumerate() {
+            let Some(l) = link_of.get(&(m, p)) else {
+                continue;
+            };
+            let k = l.object as usize;
+            let Some(g) = geometry.get(k) else { continue };
+            let level = refined[k].mesh.level;
+            let coarse = hce_format::gltf::primitive_geometry(input, buffers, m, p)
+                .map(|(_, t)| t)
+                .unwrap_or(refined[k].mesh.coarse_triangles);
+            let first = (l.first_triangle as usize) << (2 * level);
+            let triangles = first..first + (coarse << (2 * level));
+            let (base, emissive) =
+                material_response(input, prim.get("material").and_then(Value::as_u64));
+            let light: Vec<[f32; 3]> = g
+                .radiosity
+                .iter()
+                .map(|c| [0, 1, 2].map(|i| c[i] / base[i].max(0.02)))
+                .collect();
+            if !emissive {
+                let mut used = vec![false; light.len()];
+                for t in &g.triangles[triangles.clone()] {
+                    for &i in t {
+                        used[i as usize] = true;
+                    }
+                }
+                maxima.extend(
+                    light
+                        .iter()
+                        .zip(&used)
+                        .filter(|(_, &u)| u)
+                        .map(|(c, _)| c[0].max(c[1]).max(c[2])),
+                );
+            }
+            parts.insert(
+                (m, p),
+                Part {
+                    object: k,
+                    triangles,
+                    light,
+                    emissive,
+                },
+            );
+        }
+    }
+    maxima.sort_unstable_by(f32::total_cmp);
+    let p90 = maxima
+        .get((maxima.len() * 9 / 10).min(maxima.len().saturating_sub(1)))
+        .copied()
+        .unwrap_or(1.0);
+    let exposure = if p90 > 0.0 && p90.is_finite() {
+        1.0 / p90
+    } else {
+        1.0
+    };
+
+    let mut w = Writer {
+        input,
+        buffers,
+        bin: Vec::new(),
+        views: Vec::new(),
+        accessors: Vec::new(),
+        copied: HashMap::new(),
+    };
+    // Positions and normals once per object, shared by its primitives and instances.
+    let mut object_accessors: HashMap<usize, (usize, usize)> = HashMap::new();
+    let mut out_meshes = Vec::new();
+    let mut mesh_map: Vec<Option<usize>> = vec![None; meshes.len()];
+    for (m, mesh) in meshes.iter().enumerate() {
+        let prims = mesh
+            .get("primitives")
+            .and_then(Value::as_array)
+            .cloned()
+            .unwrap_or_default();
+        let mut out_prims = Vec::new();
+        for (p, prim) in prims.iter().enumerate() {
+            let Some(part) = parts.get(&(m, p)) else {
+                out_prims.push(w.copy_primitive(prim)?);
+                continue;
+            };
+            let g = &geometry[part.object];
+            let (pos, nrm) = match object_accessors.get(&part.object) {
+                Some(&a) => a,
+                None => {
+                    let a = (w.vec3(&g.positions, true), w.vec3(&g.normals, false));
+                    object_accessors.insert(part.object, a);
+                    a
+                }
+            };
+            let colours: Vec<[f32; 3]> = part
+                .light
+                .iter()
+                .map(|c| {
+                    if part.emissive {
+                        [1.0; 3]
+                    } else {
+                        c.map(|x| {
+                            let x = x * exposure;
+                            if x.is_nan() {
+                                0.0
+                            } else {
+                                x.clamp(0.0, 1.0)
+                            }
+                        })
+                    }
+                })
+                .collect();
+            let col = w.vec3(&colours, false);
+            let idx = w.indices(&g.triangles[part.triangles.clone()]);
+            let mut out = Map::new();
+            out.insert(
+                "attributes".into(),
+                json!({ "POSITION": pos, "NORMAL": nrm, "COLOR_0": col }),
+            );
+            out.insert("indices".into(), json!(idx));
+            out.insert("mode".into(), json!(4));
+            for key in ["material", "extras"] {
+                if let Some(v) = prim.get(key) {
+                    out.insert(key.into(), v.clone());
+                }
+            }
+            out_prims.push(Value::Object(out));
+        }
+        if out_prims.is_empty() {
+            continue;
+        }
+        let mut out = json!({ "primitives": out_prims });
+        for key in ["name", "weights", "extras"] {
+            if let Some(v) = mesh.get(key) {
+                out[key] = v.clone();
+            }
+        }
+        mesh_map[m] = Some(out_meshes.len());
+        out_meshes.push(out);
+    }
+
+    // Images stored in buffer views are copied; URIs are kept.
+    let images: Option<Vec<Value>> = input
+        .get("images")
+        .and_then(Value::as_array)
+        .map(|list| {
+            list.iter()
+                .map(|img| {
+                    let mut img = img.clone();
+                    if let Some(v) = img.get("bufferView").and_then(Value::as_u64) {
+                        img["bufferView"] = json!(w.copy_view(v as usize)?);
+                    }
+                    Ok(img)
+                })
+                .collect::<Result<_, SceneExportError>>()
+        })
+        .transpose()?;
+
+    let mut root = Map::new();
+    let mut asset_info = json!({ "version": "2.0", "generator": "hce subdivide" });
+    if let Some(c) = input.get("asset").and_then(|a| a.get("copyright")) {
+        asset_info["copyright"] = c.clone();
+    }
+    root.insert("asset".into(), asset_info);
+    for key in [
+        "scene",
+        "scenes",
+        "cameras",
+        "materials",
+        "textures",
+        "samplers",
+        "extras",
+    ] {
+        if let Some(v) = input.get(key) {
+            root.insert(key.into(), v.clone());
+        }
+    }
+    if let Some(nodes) = input.get("nodes").and_then(Value::as_array) {
+        let nodes: Vec<Value> = nodes
+            .iter()
+            .map(|n| {
+                let mut n = n.clone();
+                if let Some(o) = n.as_object_mut() {
+                    // Skins and animations are not carried over: the refined meshes have no
+                    // joints or weights.
+                    o.remove("skin");
+                    if let Some(m) = o.get("mesh").and_then(Value::as_u64) {
+                        match mesh_map.get(m as usize).copied().flatten() {
+                            Some(new) => {
+                                o.insert("mesh".into(), json!(new));
+                            }
+                            None => {
+                                o.remove("mesh");
+                                o.remove("weights");
+                            }
+                        }
+                    }
+                }
+                n
+            })
+            .collect();
+        root.insert("nodes".into(), json!(nodes));
+    }
+    if !out_meshes.is_empty() {
+        root.insert("meshes".into(), json!(out_meshes));
+    }
+    if let Some(images) = images {
+        root.insert("images".into(), json!(images));
+    }
+    // Root extensions (KHR_lights_punctual, ...) without ours: the output carries no container.
+    let ours = hce_format::gltf::EXTENSION_NAME;
+    if let Some(ext) = input.get("extensions").and_then(Value::as_object) {
+        let ext: Map<String, Value> = ext
+            .iter()
+            .filter(|(k, _)| *k != ours)
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect();
+        if !ext.is_empty() {
+            root.insert("extensions".into(), Value::Object(ext));
+        }
+    }
+    for key in ["extensionsUsed", "extensionsRequired"] {
+        if let Some(list) = input.get(key).and_then(Value::as_array) {
+            let list: Vec<Value> = list.iter().filter(|e| *e != ours).cloned().collect();
+            if !list.is_empty() {
+                root.insert(key.into(), json!(list));
+            }
+        }
+    }
+    let bin_len = w.bin.len();
+    let mut buffer = json!({ "byteLength": bin_len });
+    let gltf_text = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf"));
+    if gltf_text {
+        buffer["uri"] = json!(format!(
+            "data:application/octet-stream;base64,{}",
+            crate::export::base64(&w.bin)
+        ));
+    }
+    if bin_len > 0 {
+        root.insert("buffers".into(), json!([buffer]));
+        root.insert("bufferViews".into(), json!(w.views));
+        root.insert("accessors".into(), json!(w.accessors));
+    }
+    let json = Value::Object(root);
+    let bytes = if gltf_text {
+        serde_json::to_vec(&json).map_err(|e| SceneExportError::Gltf {
+            location: "file".into(),
+            message: e.to_string(),
+        })?
+    } else {
+        write_glb(&json, &w.bin).map_err(|e| SceneExportError::Gltf {
+            location: "file".into(),
+            message: e.to_string(),
+        })?
+    };
+    write_atomic(path, &bytes)?;
+    Ok(())
+}
+
+/// The scene of a bare container: one node and one mesh per object, named after it, in its own
+/// object space (a container has no scene graph).
+fn hce_scene_json(asset: &Asset) -> Value {
+    let nodes: Vec<Value> = asset
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(k, o)| json!({ "name": o.name(), "mesh": k }))
+        .collect();
+    let meshes: Vec<Value> = asset
+        .objects
+        .iter()
+        .map(|o| {
+            json!({ "name": o.name(), "primitives": [{ "attributes": {}, "extensions": {
+                hce_format::gltf::EXTENSION_NAME: { "object": o.index,
+                    "geometryHash": hash_hex(o.object.geometry_hash) } } }] })
+        })
+        .collect();
+    json!({
+        "scene": 0,
+        "scenes": [{ "nodes": (0..asset.objects.len()).collect::<Vec<_>>() }],
+        "nodes": nodes,
+        "meshes": meshes,
+    })
+}

@@ -1,0 +1,352 @@
+//! The conformance suite's generator (`conformance/`, described in its README): valid files from
+//! the format's examples and a bundled sample, invalid files made by breaking exactly one rule
+//! of a valid one, and `manifest.json` with each file's expected `hce validate` outcome and
+//! problems, and for valid files refined positions of probe vertices at levels 1 to 3.
+//!
+//! Everything is deterministic: the same sources give the same bytes. Run
+//! `cargo run -p hce-tests --bin gen-conformance` to rewrite the directory.
+
+use std::path::Path;
+
+use hce_format::gltf::{validate_asset, Asset, EXTENSION_NAME};
+use hce_format::{example, validate_bytes, write, Container, Problem, SPOKE_SHARP};
+use hce_runtime::scene_export::{refine_object, RefinedObject};
+use serde_json::{json, Value};
+
+/// Levels whose probes the manifest records.
+pub const PROBE_LEVELS: [u32; 3] = [1, 2, 3];
+
+/// One file of the suite.
+pub struct Case {
+    /// Path inside `conformance/`, e.g. `invalid/trailing-bytes.hce`.
+    pub file: String,
+    pub bytes: Vec<u8>,
+    /// What the file shows, for people.
+    pub description: String,
+    /// Whether the bytes come from `hce bake` (their exact bytes follow the baker; the
+    /// regeneration check compares only their expectations).
+    pub baked: bool,
+}
+
+/// A probe column: the name of a field and how to compute it for vertex `v` of a refined
+/// object. Colours at probe vertices are one more entry of [`PROBE_FIELDS`].
+type ProbeField = (&'static str, fn(&RefinedObject, usize) -> Value);
+
+/// The fields recorded per probe vertex.
+pub const PROBE_FIELDS: &[ProbeField] = &[("position", probe_position)];
+
+/// `[x, y, z]` as shortest round-trip decimals plus the exact `f32` bits in hex.
+fn probe_position(r: &RefinedObject, v: usize) -> Value {
+    let p = r.mesh.positions[v];
+    json!({
+        "xyz": p,
+        "bits": p.map(|x| format!("{:08x}", x.to_bits())),
+    })
+}
+
+/// Every case, valid ones first. `cornell` is the bundled Cornell box, already baked.
+pub fn cases(cornell_baked: Vec<u8>) -> Vec<Case> {
+    let case = |file: &str, bytes: Vec<u8>, description: &str| Case {
+        file: file.into(),
+        bytes,
+        description: description.into(),
+        baked: false,
+    };
+    let hce = |c: &Container| write(c).expect("example containers are consistent");
+    let mut out = vec![
+        case(
+            "valid/triangle.hce",
+            hce(&example::single_triangle()),
+            "SPEC.md Appendix D: one multiresolution triangle, a 9-node tree",
+        ),
+        case(
+            "valid/two-triangles.hce",
+            hce(&example::two_triangles()),
+            "two triangles sharing an interior edge",
+        ),
+        case(
+            "valid/grid.hce",
+            hce(&example::grid(3, 2)),
+            "a 3 x 3 grid (18 triangles), trees 2 deep",
+        ),
+        case(
+            "valid/triangle.glb",
+            example::triangle_glb(),
+            "the Appendix D container in a GLB, linked from one primitive",
+        ),
+        Case {
+            file: "valid/cornell-box.glb".into(),
+            bytes: cornell_baked,
+            description: "samples/cornell-box.glb baked by hce bake (flat objects)".into(),
+            baked: true,
+        },
+    ];
+
+    // Container mutations: each breaks one rule (SPEC.md Appendix C).
+    let mut c = example::two_triangles();
+    c.objects[0].mesh.positions[0] = 0.25;
+    out.push(case(
+        "invalid/geometry-hash-mismatch.hce",
+        hce(&c),
+        "rule 11: POSN edited after baking, the object's geometry_hash no longer matches",
+    ));
+    let mut c = example::two_triangles();
+    let m = &mut c.objects[0].mesh;
+    if let Some(s) = (0..m.ring.len()).find(|&s| m.spoke_flags[s] == 0) {
+        m.spoke_flags[s] |= SPOKE_SHARP;
+    }
+    out.push(case(
+        "invalid/sharp-one-end.hce",
+        hce(&c),
+        "rule 3: the sharp bit on one spoke of the interior edge only",
+    ));
+    let mut b = hce(&example::single_triangle());
+    b.extend_from_slice(&[0u8; 256]);
+    let len = b.len() as u64;
+    b[16..24].copy_from_slice(&len.to_le_bytes());
+    reseal_header(&mut b);
+    out.push(case(
+        "invalid/trailing-bytes.hce",
+        b,
+        "A.1: 256 zero bytes after the last section, counted in file_length",
+    ));
+    let mut b = hce(&example::single_triangle());
+    let last = b.len() - 1;
+    b[last] ^= 1;
+    out.push(case(
+        "invalid/section-checksum.hce",
+        b,
+        "A.4: one bit flipped in COLR, its CRC-32 no longer matches",
+    ));
+    let mut b = hce(&example::single_triangle());
+    b[0] = 0x09;
+    out.push(case(
+        "invalid/high-bit-stripped.hce",
+        b,
+        "A.2: the identifier's first byte lost its high bit (7-bit transfer)",
+    ));
+    let mut c = example::single_triangle();
+    c.metadata.bake_parameters = "levels=3".into();
+    out.push(case(
+        "invalid/bake-parameters-not-json.hce",
+        hce(&c),
+        "A.6: bake_parameters is neither empty nor a JSON object",
+    ));
+
+    // glTF mutations of the valid GLB (SPEC.md Section 3).
+    let glb = |file: &str, description: &str, edit: &dyn Fn(&mut Value)| {
+        let a = Asset::from_glb(&example::triangle_glb()).expect("the example GLB parses");
+        let mut j = a.json;
+        edit(&mut j);
+        let bytes =
+            hce_format::gltf::write_glb(&j, a.bin.as_deref().unwrap_or(&[])).expect("a small GLB");
+        case(file, bytes, description)
+    };
+    let view = |j: &Value| {
+        j["extensions"][EXTENSION_NAME]["bufferView"]
+            .as_u64()
+            .unwrap_or(0) as usize
+    };
+    let link = "/meshes/0/primitives/0/extensions/EXT_hce_baked_lighting";
+    out.extend([
+        glb(
+            "invalid/extension-not-used.glb",
+            "3.2: EXT_hce_baked_lighting missing from extensionsUsed",
+            &|j| j["extensionsUsed"] = json!([]),
+        ),
+        glb(
+            "invalid/extension-required.glb",
+            "3.2: EXT_hce_baked_lighting listed in extensionsRequired",
+            &|j| j["extensionsRequired"] = json!([EXTENSION_NAME]),
+        ),
+        glb(
+            "invalid/buffer-view-stride-target.glb",
+            "3.3: the container's buffer view has byteStride and target",
+            &|j| {
+                let v = view(j);
+                j["bufferViews"][v]["byteStride"] = json!(4);
+                j["bufferViews"][v]["target"] = json!(34962);
+            },
+        ),
+        glb(
+            "invalid/bad-version.glb",
+            "3.3: version \"1\" does not match ^[0-9]+\\.[0-9]+$",
+            &|j| j["extensions"][EXTENSION_NAME]["version"] = json!("1"),
+        ),
+        glb(
+            "invalid/uppercase-geometry-hash.glb",
+            "3.3: geometryHash in uppercase: one problem at the property",
+            &|j| {
+                let h = j
+                    .pointer(&format!("{link}/geometryHash"))
+                    .and_then(Value::as_str)
+                    .unwrap_or("")
+                    .to_uppercase();
+                if let Some(x) = j.pointer_mut(&format!("{link}/geometryHash")) {
+                    *x = json!(h);
+                }
+            },
+        ),
+        glb(
+            "invalid/stale-primitive-hash.glb",
+            "3.5: geometryHash differs from the primitive's triangles (edited after baking)",
+            &|j| {
+                if let Some(x) = j.pointer_mut(&format!("{link}/geometryHash")) {
+                    *x = json!("0123456789abcdef");
+                }
+            },
+        ),
+        glb(
+            "invalid/object-out-of-range.glb",
+            "3.5: the primitive names object 4 of a 1-object container",
+            &|j| {
+                if let Some(x) = j.pointer_mut(&format!("{link}/object")) {
+                    *x = json!(4);
+                }
+            },
+        ),
+    ]);
+    out
+}
+
+/// Recomputes the header CRC (A.3) after an edit of the header.
+fn reseal_header(b: &mut [u8]) {
+    let n = u32::from_le_bytes([b[12], b[13], b[14], b[15]]) as usize;
+    let mut h = crc32fast::Hasher::new();
+    h.update(&b[..28]);
+    h.update(&b[32..32 + 32 * n]);
+    let crc = h.finalize();
+    b[28..32].copy_from_slice(&crc.to_le_bytes());
+}
+
+/// What `hce validate` reports for a file, from the library it calls.
+pub fn expected_problems(file: &str, bytes: &[u8]) -> Vec<Problem> {
+    if file.ends_with(".hce") {
+        return validate_bytes(bytes);
+    }
+    let a = Asset::parse(bytes).expect("suite GLBs parse");
+    let buffers = a
+        .buffers(|_| Err("no external buffers".into()))
+        .expect("GLB buffers");
+    validate_asset(&a.json, &buffers)
+}
+
+/// The containers' objects of a valid file, in container order.
+fn objects(file: &str, bytes: &[u8]) -> Vec<hce_format::Object> {
+    let container = if file.ends_with(".hce") {
+        bytes.to_vec()
+    } else {
+        let a = Asset::parse(bytes).expect("suite GLBs parse");
+        let buffers = a.buffers(|_| Err("none".into())).expect("GLB buffers");
+        hce_format::gltf::container_bytes(&a.json, &buffers)
+            .ok()
+            .flatten()
+            .expect("a container")
+            .to_vec()
+    };
+    hce_format::read(&container).expect("valid").objects
+}
+
+/// Probe vertices of a refined object: the first, one in the middle and the last.
+fn probe_vertices(count: usize) -> Vec<usize> {
+    let mut v = vec![0, count / 2, count.saturating_sub(1)];
+    v.dedup();
+    v
+}
+
+/// Per object and level, the probe vertices and their fields.
+pub fn probes(file: &str, bytes: &[u8]) -> Value {
+    let objects = objects(file, bytes);
+    let mut out = Vec::new();
+    for (k, o) in objects.iter().enumerate() {
+        for level in PROBE_LEVELS {
+            let r = refine_object(o, level).expect("valid objects refine");
+            let vertices: Vec<Value> = probe_vertices(r.mesh.positions.len())
+                .into_iter()
+                .map(|v| {
+                    let mut entry = json!({ "vertex": v });
+                    for (name, f) in PROBE_FIELDS {
+                        entry[*name] = f(&r, v);
+                    }
+                    entry
+                })
+                .collect();
+            out.push(json!({
+                "object": k,
+                "name": o.name,
+                "level": level,
+                "vertex_count": r.mesh.positions.len(),
+                "triangle_count": r.mesh.indices.len(),
+                "probes": vertices,
+            }));
+        }
+    }
+    json!(out)
+}
+
+/// The manifest of `cases`.
+pub fn manifest(cases: &[Case]) -> Value {
+    let entries: Vec<Value> = cases
+        .iter()
+        .map(|c| {
+            let problems = expected_problems(&c.file, &c.bytes);
+            let valid = problems.is_empty();
+            let mut e = json!({
+                "file": c.file,
+                "description": c.description,
+                "valid": valid,
+                "exit_status": if valid { 0 } else { 3 },
+                "problems": problems.iter().map(|p| json!({ "location": p.location, "message": p.message })).collect::<Vec<_>>(),
+            });
+            if c.baked {
+                e["generated_by"] = json!("hce bake");
+            }
+            if valid {
+                e["refined"] = probes(&c.file, &c.bytes);
+            }
+            e
+        })
+        .collect();
+    json!({
+        "suite": "hce conformance",
+        "spec": "SPEC.md, container 1.0",
+        "probe_levels": PROBE_LEVELS,
+        "cases": entries,
+    })
+}
+
+/// Bakes the bundled Cornell box at low settings (a moment in the dev profile).
+pub fn bake_cornell(samples: &Path, scratch: &Path) -> Vec<u8> {
+    use hce_bake::pipeline::{bake_file, PipelineOptions};
+    let output = scratch.join("cornell-box.glb");
+    let options = PipelineOptions {
+        levels: 2,
+        bake: hce_bake::BakeParams {
+            bf_epsilon: 5e-2,
+            ..hce_bake::BakeParams::default()
+        },
+        output: output.clone(),
+        ..PipelineOptions::default()
+    };
+    bake_file(
+        &samples.join("cornell-box.glb"),
+        &options,
+        &|_: &str, _: usize, _: usize| {},
+    )
+    .expect("the sample bakes");
+    std::fs::read(&output).expect("the baked sample")
+}
+
+/// Writes every case and `manifest.json` under `dir`.
+pub fn generate(dir: &Path, cases: &[Case]) -> std::io::Result<()> {
+    for c in cases {
+        let path = dir.join(&c.file);
+        if let Some(p) = path.parent() {
+            std::fs::create_dir_all(p)?;
+        }
+        std::fs::write(path, &c.bytes)?;
+    }
+    let mut text = serde_json::to_string_pretty(&manifest(cases)).map_err(std::io::Error::other)?;
+    text.push('\n');
+    std::fs::write(dir.join("manifest.json"), text)
+}
