@@ -3,7 +3,10 @@
 pub mod bake;
 pub mod bench_gpu;
 pub mod demo;
+pub mod compare;
 pub mod inspect;
+#[cfg(feature = "gpu")]
+pub mod reference;
 pub mod render;
 pub mod subdivide;
 pub mod validate;
