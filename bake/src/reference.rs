@@ -300,7 +300,11 @@ impl<'a> PathTracer<'a> {
 
     /// Gives object `object` smooth shading: `normals` are its world-space vertex normals,
     /// one per position (see the module documentation). Errors name a wrong count.
-    pub fn set_vertex_normals(&mut self, object: usize, normals: &[[f32; 3]]) -> Result<(), String> {
+    pub fn set_vertex_normals(
+        &mut self,
+        object: usize,
+        normals: &[[f32; 3]],
+    ) -> Result<(), String> {
         let o = self
             .scene
             .objects
@@ -316,7 +320,8 @@ impl<'a> PathTracer<'a> {
         }
         let start = self.object_start[object];
         for (t, tri) in o.triangles.iter().enumerate() {
-            let n = tri.map(|v| DVec3::from(normals[v as usize].map(f64::from)).normalize_or_zero());
+            let n =
+                tri.map(|v| DVec3::from(normals[v as usize].map(f64::from)).normalize_or_zero());
             self.tris[start + t].shading = Some(n);
         }
         Ok(())
@@ -501,15 +506,16 @@ impl<'a> PathTracer<'a> {
     /// What the ray from `origin` along unit `dir` meets first, if anything.
     pub fn first_hit(&self, origin: [f64; 3], dir: [f64; 3]) -> Option<Hit> {
         let (o, d) = (DVec3::from(origin), DVec3::from(dir));
-        self.nearest(o, d, f64::INFINITY).map(|(i, distance, _, _)| {
-            let (object, triangle) = self.locate(i);
-            Hit {
-                object,
-                triangle,
-                distance,
-                back: self.tris[i].n.dot(d) >= 0.0,
-            }
-        })
+        self.nearest(o, d, f64::INFINITY)
+            .map(|(i, distance, _, _)| {
+                let (object, triangle) = self.locate(i);
+                Hit {
+                    object,
+                    triangle,
+                    distance,
+                    back: self.tris[i].n.dot(d) >= 0.0,
+                }
+            })
     }
 
     fn radiance_with(&self, o: DVec3, d: DVec3, paths: u32, rng: &mut Pcg) -> (DVec3, Option<Hit>) {
@@ -738,9 +744,15 @@ mod tests {
         // The same first hits for a fan of rays from inside the box.
         let eye = DVec3::new(0.278, 0.273, -0.2);
         for k in 0..400 {
-            let (a, b) = (f64::from(k % 20) / 19.0 - 0.5, f64::from(k / 20) / 19.0 - 0.5);
+            let (a, b) = (
+                f64::from(k % 20) / 19.0 - 0.5,
+                f64::from(k / 20) / 19.0 - 0.5,
+            );
             let d = DVec3::new(a * 0.9, b * 0.9, 1.0).normalize().to_array();
-            let (h1, h2) = (bvh.first_hit(eye.to_array(), d), brute.first_hit(eye.to_array(), d));
+            let (h1, h2) = (
+                bvh.first_hit(eye.to_array(), d),
+                brute.first_hit(eye.to_array(), d),
+            );
             let key = |h: Option<Hit>| h.map(|h| (h.object, h.triangle, h.back));
             assert_eq!(key(h1), key(h2), "ray {k}");
             let (d1, d2) = (h1.unwrap().distance, h2.unwrap().distance);
@@ -780,7 +792,11 @@ mod tests {
         assert!(hit.unwrap().back && l == [0.0; 3]);
         // A small image, the same bits on one thread as on all.
         let ray = |x: u32, y: u32| {
-            let d = DVec3::new(0.3 * f64::from(x) / 7.0 - 0.15, 0.15 - 0.3 * f64::from(y) / 5.0, 1.0);
+            let d = DVec3::new(
+                0.3 * f64::from(x) / 7.0 - 0.15,
+                0.15 - 0.3 * f64::from(y) / 5.0,
+                1.0,
+            );
             ([0.278, 0.273, -0.8], d.normalize().to_array())
         };
         let all = pt.render(8, 6, 8, 5, ray, || {});

@@ -110,9 +110,13 @@ pub fn parse_obj(text: &str) -> Result<Mesh, ObjError> {
     Ok(m)
 }
 
-/// The room around `mesh` (see the module documentation); `name` names the object.
-pub fn room_with_mesh(name: &str, mesh: &Mesh) -> Scene {
+/// The room around `mesh` (see the module documentation), the mesh first turned by
+/// `turn_degrees` about +Y (counter-clockwise seen from above) to face the camera; `name` names
+/// the object.
+pub fn room_with_mesh(name: &str, mesh: &Mesh, turn_degrees: f64) -> Scene {
     let mut mesh = mesh.clone();
+    let turn = glam::DQuat::from_rotation_y(turn_degrees.to_radians());
+    mesh.map_positions(|p| turn * p);
     let (lo, hi) = mesh.bounds().unwrap_or((DVec3::ZERO, DVec3::ONE));
     let scale = MESH_SIZE / (hi - lo).max_element().max(1e-12);
     let base = DVec3::new((lo.x + hi.x) / 2.0, lo.y, (lo.z + hi.z) / 2.0);
@@ -153,7 +157,7 @@ mod tests {
     fn the_mesh_fits_stands_on_the_floor_and_the_camera_is_inside() {
         let mesh = parse_obj(TETRA).unwrap();
         assert_eq!((mesh.positions.len(), mesh.triangles.len()), (4, 4));
-        let s = room_with_mesh("tetra", &mesh);
+        let s = room_with_mesh("tetra", &mesh, 30.0);
         let o = s.object("tetra").unwrap();
         assert!(o.multires);
         let (lo, hi) = o.primitives[0].mesh.bounds().unwrap();
@@ -172,8 +176,14 @@ mod tests {
         let fin = format!("{TETRA}v 1 1 1\nf 1 2 5\nf 2 1 5\n");
         let m = parse_obj(&fin).unwrap();
         assert_eq!((m.positions.len(), m.triangles.len()), (4, 4));
-        assert!(matches!(parse_obj("v 0 0 0\nf 1 2 3\n"), Err(ObjError::Syntax { line: 2, .. })));
-        assert!(matches!(parse_obj("v 0 0\n"), Err(ObjError::Syntax { line: 1, .. })));
+        assert!(matches!(
+            parse_obj("v 0 0 0\nf 1 2 3\n"),
+            Err(ObjError::Syntax { line: 2, .. })
+        ));
+        assert!(matches!(
+            parse_obj("v 0 0\n"),
+            Err(ObjError::Syntax { line: 1, .. })
+        ));
         assert!(matches!(parse_obj("# nothing\n"), Err(ObjError::Empty)));
     }
 }

@@ -73,7 +73,12 @@ pub fn read_exr(path: &Path) -> Result<Rgb> {
             img.pixels[pos.y() * w + pos.x()] = [r, g, b];
         },
     )
-    .map_err(|e| InvalidImage(format!("{}: not a readable RGB(A) EXR: {e}", path.display())))?;
+    .map_err(|e| {
+        InvalidImage(format!(
+            "{}: not a readable RGB(A) EXR: {e}",
+            path.display()
+        ))
+    })?;
     Ok(image.layer_data.channel_data.pixels)
 }
 
@@ -87,7 +92,12 @@ pub fn read_mask(path: &Path) -> Result<(usize, usize, Vec<bool>)> {
     let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
     decoder.set_transformations(png::Transformations::normalize_to_color8());
     let mut reader = decoder.read_info().map_err(|e| bad(&e))?;
-    let mut buf = vec![0; reader.output_buffer_size().ok_or_else(|| bad(&"too large"))?];
+    let mut buf = vec![
+        0;
+        reader
+            .output_buffer_size()
+            .ok_or_else(|| bad(&"too large"))?
+    ];
     let info = reader.next_frame(&mut buf).map_err(|e| bad(&e))?;
     let channels = info.color_type.samples();
     let (w, h) = (info.width as usize, info.height as usize);

@@ -2,8 +2,8 @@
 
 pub mod bake;
 pub mod bench_gpu;
-pub mod demo;
 pub mod compare;
+pub mod demo;
 pub mod inspect;
 #[cfg(feature = "gpu")]
 pub mod reference;

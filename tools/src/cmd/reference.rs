@@ -178,7 +178,8 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
             let rgba8: Vec<u8> = rgba
                 .chunks_exact(4)
                 .flat_map(|p| {
-                    let [r, g, b] = hce_runtime::gpu::tone_map_aces([p[0], p[1], p[2]], args.exposure);
+                    let [r, g, b] =
+                        hce_runtime::gpu::tone_map_aces([p[0], p[1], p[2]], args.exposure);
                     [r, g, b, 255]
                 })
                 .collect();
@@ -216,7 +217,10 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
     if let Some(path) = &args.mask {
         let ids: Vec<Option<usize>> = pixels
             .iter()
-            .map(|(_, h)| h.filter(|h| !h.back && placed[h.object].multires).map(|h| h.object))
+            .map(|(_, h)| {
+                h.filter(|h| !h.back && placed[h.object].multires)
+                    .map(|h| h.object)
+            })
             .collect();
         let mask = interior_mask(&ids, width, height, args.mask_margin);
         let on = mask.iter().filter(|&&m| m).count();
@@ -228,7 +232,10 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
             })
             .collect();
         write_png(path, width, height, &rgba8)?;
-        println!("wrote {} ({on} pixels on multiresolution objects)", path.display());
+        println!(
+            "wrote {} ({on} pixels on multiresolution objects)",
+            path.display()
+        );
     }
     Ok(())
 }
@@ -256,13 +263,11 @@ pub fn interior_mask(ids: &[Option<usize>], w: u32, h: u32, margin: u32) -> Vec<
         for x in 0..w {
             let id = at(x, y);
             let same = id.is_some()
-                && (y - m..=y + m)
-                    .filter(|yy| (0..h).contains(yy))
-                    .all(|yy| {
-                        (x - m..=x + m)
-                            .filter(|xx| (0..w).contains(xx))
-                            .all(|xx| at(xx, yy) == id)
-                    });
+                && (y - m..=y + m).filter(|yy| (0..h).contains(yy)).all(|yy| {
+                    (x - m..=x + m)
+                        .filter(|xx| (0..w).contains(xx))
+                        .all(|xx| at(xx, yy) == id)
+                });
             out.push(same);
         }
     }
@@ -321,36 +326,40 @@ fn build_scene(
             let normal_m = Mat3::from_mat4(m).inverse().transpose();
             let place = |p: [f32; 3]| m.transform_point3(Vec3::from(p)).to_array();
             let wind = |t: [u32; 3]| if mirrored { [t[0], t[2], t[1]] } else { t };
-            let (positions, triangles, vertex_normals, cells): (Vec<[f32; 3]>, Vec<[u32; 3]>, _, _) =
-                match &refined {
-                    Some(r) => (
-                        r.positions.iter().map(|&p| place(p)).collect(),
-                        r.indices.iter().map(|&t| wind(t)).collect(),
-                        Some(
-                            r.normals
-                                .iter()
-                                .map(|&n| (normal_m * Vec3::from(n)).normalize_or_zero().to_array())
-                                .collect::<Vec<_>>(),
-                        ),
-                        Some(hce_runtime::subtriangle_cells(level)),
+            let (positions, triangles, vertex_normals, cells): (
+                Vec<[f32; 3]>,
+                Vec<[u32; 3]>,
+                _,
+                _,
+            ) = match &refined {
+                Some(r) => (
+                    r.positions.iter().map(|&p| place(p)).collect(),
+                    r.indices.iter().map(|&t| wind(t)).collect(),
+                    Some(
+                        r.normals
+                            .iter()
+                            .map(|&n| (normal_m * Vec3::from(n)).normalize_or_zero().to_array())
+                            .collect::<Vec<_>>(),
                     ),
-                    None => (
-                        object
-                            .mesh
-                            .positions
-                            .chunks_exact(3)
-                            .map(|p| place([p[0], p[1], p[2]]))
-                            .collect(),
-                        object
-                            .mesh
-                            .triangles
-                            .chunks_exact(3)
-                            .map(|t| wind([t[0], t[1], t[2]]))
-                            .collect(),
-                        None,
-                        None,
-                    ),
-                };
+                    Some(hce_runtime::subtriangle_cells(level)),
+                ),
+                None => (
+                    object
+                        .mesh
+                        .positions
+                        .chunks_exact(3)
+                        .map(|p| place([p[0], p[1], p[2]]))
+                        .collect(),
+                    object
+                        .mesh
+                        .triangles
+                        .chunks_exact(3)
+                        .map(|t| wind([t[0], t[1], t[2]]))
+                        .collect(),
+                    None,
+                    None,
+                ),
+            };
             let per_coarse = 1usize << (2 * if refined.is_some() { level } else { 0 });
             let n = triangles.len();
             let reflectance: Vec<[f32; 3]> = (0..n)

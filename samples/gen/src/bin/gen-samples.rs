@@ -3,9 +3,9 @@
 //!
 //! Usage: `cargo run -p hce-samples --bin gen-samples [-- OUT_DIR]`
 //!
-//! `gen-samples room --mesh MESH.obj -o ROOM.glb [--name NAME]` writes instead a test room
+//! `gen-samples room --mesh MESH.obj -o ROOM.glb [--name NAME] [--turn DEG]` writes instead a test room
 //! around one mesh ([`hce_samples::room`]): a closed room lit by a ceiling light, the mesh
-//! scaled to fit, standing on the floor, multiresolution, and a camera looking at it.
+//! turned `DEG` degrees about +Y (default 0), scaled to fit, standing on the floor, multiresolution, and a camera looking at it.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -40,17 +40,26 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     result
 }
 
-/// `room --mesh PATH -o OUT.glb [--name NAME]`.
+/// `room --mesh PATH -o OUT.glb [--name NAME] [--turn DEG]`.
 fn room(args: &[String]) -> Result<()> {
-    let usage = "usage: gen-samples room --mesh MESH.obj -o ROOM.glb [--name NAME]";
-    let (mut mesh, mut out, mut name) = (None, None, None);
+    let usage = "usage: gen-samples room --mesh MESH.obj -o ROOM.glb [--name NAME] [--turn DEG]";
+    let (mut mesh, mut out, mut name, mut turn) = (None, None, None, 0.0);
     let mut it = args.iter();
     while let Some(a) = it.next() {
-        let value = it.next().with_context(|| format!("{a} needs a value; {usage}"));
+        let value = it
+            .next()
+            .with_context(|| format!("{a} needs a value; {usage}"));
         match a.as_str() {
             "--mesh" => mesh = Some(PathBuf::from(value?)),
             "-o" | "--output" => out = Some(PathBuf::from(value?)),
             "--name" => name = Some(value?.clone()),
+            "--turn" => {
+                turn = value?
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|t| t.is_finite())
+                    .with_context(|| format!("--turn takes degrees; {usage}"))?
+            }
             _ => anyhow::bail!("unknown argument {a:?}; {usage}"),
         }
     }
@@ -67,7 +76,7 @@ fn room(args: &[String]) -> Result<()> {
         .with_context(|| format!("{}: cannot read", mesh_path.display()))?;
     let mesh = hce_samples::room::parse_obj(&text)
         .with_context(|| format!("{}: not a usable OBJ", mesh_path.display()))?;
-    let scene = hce_samples::room::room_with_mesh(&name, &mesh);
+    let scene = hce_samples::room::room_with_mesh(&name, &mesh, turn);
     let bytes = hce_samples::glb::write_glb(&scene).context("cannot build the GLB")?;
     write_atomically(&out, &bytes)?;
     println!(
