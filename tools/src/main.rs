@@ -1,4 +1,5 @@
-//! `hce`: bake, inspect, validate, subdivide, render and demo assets with baked global illumination.
+//! `hce`: bake, inspect, validate, subdivide, render and demo assets with baked global illumination;
+//! path-trace references and compare images with them.
 
 use clap::{Parser, Subcommand};
 
@@ -29,6 +30,14 @@ enum Command {
     /// to PNG or EXR.
     #[command(after_help = EXIT_CODES)]
     Render(cmd::render::RenderArgs),
+    /// Path-trace what `hce render --level L` draws (same geometry, camera and units), as ground
+    /// truth: a linear EXR and a mask of multiresolution-object pixels.
+    #[cfg(feature = "gpu")]
+    #[command(after_help = EXIT_CODES)]
+    Reference(cmd::reference::ReferenceArgs),
+    /// Relative RMS difference and bias of an EXR against a reference EXR, over a mask.
+    #[command(after_help = EXIT_CODES)]
+    Compare(cmd::compare::CompareArgs),
     /// Bake a bundled sample and render it at levels 0 to 3 side by side: a first look at hce.
     #[command(after_help = EXIT_CODES)]
     Demo(cmd::demo::DemoArgs),
@@ -49,6 +58,9 @@ fn main() {
     let result = match cli.command {
         Command::Bake(args) => cmd::bake::run(args),
         Command::Render(args) => cmd::render::run(args),
+        #[cfg(feature = "gpu")]
+        Command::Reference(args) => cmd::reference::run(args),
+        Command::Compare(args) => cmd::compare::run(args),
         Command::Demo(args) => cmd::demo::run(args),
         Command::BenchGpu(args) => cmd::bench_gpu::run(args),
         Command::Subdivide(args) => cmd::subdivide::run(args),
@@ -80,6 +92,8 @@ fn exit_status(e: &anyhow::Error) -> i32 {
             || c.is::<hce_format::ReadError>()
             || c.is::<hce_format::gltf::GltfError>()
             || c.is::<hce_runtime::AssetError>()
+            || c.is::<hce_bake::import::ImportError>()
+            || c.is::<cmd::compare::InvalidImage>()
     });
     if invalid_input {
         3

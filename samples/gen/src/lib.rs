@@ -2,13 +2,15 @@
 //!
 //! Everything here is plain geometry built in code (so anyone can regenerate or change the
 //! samples) and a small glTF 2.0 binary writer. The `gen-samples` binary writes the three
-//! `.glb` files committed under `samples/`.
+//! `.glb` files committed under `samples/`; `gen-samples room --mesh PATH -o OUT.glb` writes a
+//! test room around any OBJ ([`room`]).
 
 pub mod chess;
 pub mod cornell;
 pub mod glb;
 pub mod lathe;
 pub mod mesh;
+pub mod room;
 pub mod scene;
 pub mod scenes;
 pub mod shapes;

@@ -12,11 +12,11 @@ use crate::teapot::{self, TeapotParams};
 
 /// Gap left under objects that stand on a surface, so that their bottom is not coplanar with
 /// it (coplanar, overlapping faces make radiosity and depth testing ambiguous).
-const REST_GAP: f64 = 0.0005;
+pub(crate) const REST_GAP: f64 = 0.0005;
 
 /// A room of size `size` (x, y, z) around the origin on the floor, with an area light of side
 /// `light` at the middle of its ceiling; returns the objects and adds their materials.
-fn room_with_light(scene: &mut Scene, size: DVec3, light: f64, emission: [f64; 3]) {
+pub(crate) fn room_with_light(scene: &mut Scene, size: DVec3, light: f64, emission: [f64; 3]) {
     let floor_m = scene.material(Material::diffuse("floor", [0.45, 0.42, 0.38]));
     let wall_m = scene.material(Material::diffuse("wall", [0.72, 0.70, 0.66]));
     let ceiling_m = scene.material(Material::diffuse("ceiling", [0.80, 0.80, 0.80]));

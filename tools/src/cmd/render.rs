@@ -135,12 +135,12 @@ pub fn parse_camera(s: &str) -> Result<Option<hce_runtime::gpu::Camera>> {
     }))
 }
 
-enum Format {
+pub enum Format {
     Png,
     Exr,
 }
 
-fn output_format(path: &Path) -> Result<Format> {
+pub fn output_format(path: &Path) -> Result<Format> {
     match path
         .extension()
         .and_then(|e| e.to_str())

@@ -2,6 +2,10 @@
 //! `samples/` of the repository by default, and prints their triangle counts.
 //!
 //! Usage: `cargo run -p hce-samples --bin gen-samples [-- OUT_DIR]`
+//!
+//! `gen-samples room --mesh MESH.obj -o ROOM.glb [--name NAME] [--turn DEG]` writes instead a test room
+//! around one mesh ([`hce_samples::room`]): a closed room lit by a ceiling light, the mesh
+//! turned `DEG` degrees about +Y (default 0), scaled to fit, standing on the floor, multiresolution, and a camera looking at it.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -36,7 +40,60 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     result
 }
 
+/// `room --mesh PATH -o OUT.glb [--name NAME] [--turn DEG]`.
+fn room(args: &[String]) -> Result<()> {
+    let usage = "usage: gen-samples room --mesh MESH.obj -o ROOM.glb [--name NAME] [--turn DEG]";
+    let (mut mesh, mut out, mut name, mut turn) = (None, None, None, 0.0);
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let value = it
+            .next()
+            .with_context(|| format!("{a} needs a value; {usage}"));
+        match a.as_str() {
+            "--mesh" => mesh = Some(PathBuf::from(value?)),
+            "-o" | "--output" => out = Some(PathBuf::from(value?)),
+            "--name" => name = Some(value?.clone()),
+            "--turn" => {
+                turn = value?
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|t| t.is_finite())
+                    .with_context(|| format!("--turn takes degrees; {usage}"))?
+            }
+            _ => anyhow::bail!("unknown argument {a:?}; {usage}"),
+        }
+    }
+    let (mesh_path, out) = match (mesh, out) {
+        (Some(m), Some(o)) => (m, o),
+        _ => anyhow::bail!("{usage}"),
+    };
+    let name = name.unwrap_or_else(|| {
+        mesh_path
+            .file_stem()
+            .map_or("mesh".into(), |s| s.to_string_lossy().into_owned())
+    });
+    let text = std::fs::read_to_string(&mesh_path)
+        .with_context(|| format!("{}: cannot read", mesh_path.display()))?;
+    let mesh = hce_samples::room::parse_obj(&text)
+        .with_context(|| format!("{}: not a usable OBJ", mesh_path.display()))?;
+    let scene = hce_samples::room::room_with_mesh(&name, &mesh, turn);
+    let bytes = hce_samples::glb::write_glb(&scene).context("cannot build the GLB")?;
+    write_atomically(&out, &bytes)?;
+    println!(
+        "{}: {} bytes, {} triangles, '{name}' {} triangles (multires)",
+        out.display(),
+        bytes.len(),
+        scene.triangle_count(),
+        mesh.triangles.len()
+    );
+    Ok(())
+}
+
 fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("room") {
+        return room(&args[1..]);
+    }
     let out: PathBuf = match std::env::args_os().nth(1) {
         Some(dir) => dir.into(),
         None => Path::new(env!("CARGO_MANIFEST_DIR"))

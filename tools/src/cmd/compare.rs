@@ -1,0 +1,219 @@
+//! `hce compare`: how far an image is from a reference, over an optional mask.
+//!
+//! Both images are linear EXRs of the same size (`hce render -o x.exr`, `hce reference -o
+//! y.exr`); the second is the reference. Over the pixels the mask selects (all of them without
+//! one), with `a` and `b` the RGB of the first and second image:
+//!
+//! * relative RMS difference `sqrt(Σ |a - b|² / Σ |b|²)`, the sums over pixels and the three
+//!   channels (and per channel, the sums over pixels only);
+//! * mean relative bias `Σ (a - b) / Σ b`, over pixels and channels: positive when the first
+//!   image is brighter on the whole;
+//! * the number of pixels compared.
+//!
+//! A mask is a PNG of the same size (`hce reference --mask`): pixels whose first channel is at
+//! least half of full scale are compared.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use serde::Serialize;
+
+#[derive(Args, Debug)]
+pub struct CompareArgs {
+    /// The image to judge (linear .exr).
+    pub image: PathBuf,
+    /// The reference (linear .exr).
+    pub reference: PathBuf,
+    /// Compare only where this PNG (same size) is white.
+    #[arg(long, value_name = "PATH.png")]
+    pub mask: Option<PathBuf>,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// An image the command cannot use: undecodable, or a size that does not match (exit status 3).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct InvalidImage(pub String);
+
+/// The figures `hce compare` prints.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Comparison {
+    pub pixels: u64,
+    /// `sqrt(Σ |a - b|² / Σ |b|²)` over pixels and channels.
+    pub relative_rms: f64,
+    /// The same per channel (R, G, B).
+    pub relative_rms_rgb: [f64; 3],
+    /// `Σ (a - b) / Σ b` over pixels and channels.
+    pub relative_bias: f64,
+}
+
+/// A linear RGB image.
+pub struct Rgb {
+    pub width: usize,
+    pub height: usize,
+    pub pixels: Vec<[f32; 3]>,
+}
+
+/// Reads the first RGBA layer of an EXR (alpha ignored).
+pub fn read_exr(path: &Path) -> Result<Rgb> {
+    // A missing or unreadable file is an I/O error (exit status 4), not a bad image.
+    std::fs::File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |size, _| Rgb {
+            width: size.width(),
+            height: size.height(),
+            pixels: vec![[0.0; 3]; size.width() * size.height()],
+        },
+        |img: &mut Rgb, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            let w = img.width;
+            img.pixels[pos.y() * w + pos.x()] = [r, g, b];
+        },
+    )
+    .map_err(|e| {
+        InvalidImage(format!(
+            "{}: not a readable RGB(A) EXR: {e}",
+            path.display()
+        ))
+    })?;
+    Ok(image.layer_data.channel_data.pixels)
+}
+
+/// Reads a PNG mask: `true` where the first channel is at least half of full scale.
+pub fn read_mask(path: &Path) -> Result<(usize, usize, Vec<bool>)> {
+    let file =
+        std::fs::File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
+    let bad = |e: &dyn std::fmt::Display| {
+        InvalidImage(format!("{}: not a readable PNG mask: {e}", path.display()))
+    };
+    let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
+    decoder.set_transformations(png::Transformations::normalize_to_color8());
+    let mut reader = decoder.read_info().map_err(|e| bad(&e))?;
+    let mut buf = vec![
+        0;
+        reader
+            .output_buffer_size()
+            .ok_or_else(|| bad(&"too large"))?
+    ];
+    let info = reader.next_frame(&mut buf).map_err(|e| bad(&e))?;
+    let channels = info.color_type.samples();
+    let (w, h) = (info.width as usize, info.height as usize);
+    let mask = buf[..info.buffer_size()]
+        .chunks_exact(info.line_size)
+        .flat_map(|row| row.chunks_exact(channels).take(w).map(|p| p[0] >= 128))
+        .collect();
+    Ok((w, h, mask))
+}
+
+/// Compares `a` with the reference `b` over `mask` (every pixel when `None`).
+pub fn compare(a: &Rgb, b: &Rgb, mask: Option<&[bool]>) -> Result<Comparison> {
+    let (mut d2, mut b2, mut diff, mut sum) = ([0f64; 3], [0f64; 3], 0f64, 0f64);
+    let mut pixels = 0u64;
+    for (i, (pa, pb)) in a.pixels.iter().zip(&b.pixels).enumerate() {
+        if mask.is_some_and(|m| !m[i]) {
+            continue;
+        }
+        pixels += 1;
+        for c in 0..3 {
+            let (x, y) = (f64::from(pa[c]), f64::from(pb[c]));
+            d2[c] += (x - y) * (x - y);
+            b2[c] += y * y;
+            diff += x - y;
+            sum += y;
+        }
+    }
+    if pixels == 0 {
+        bail!(InvalidImage("the mask selects no pixel".into()));
+    }
+    let (d2_all, b2_all): (f64, f64) = (d2.iter().sum(), b2.iter().sum());
+    if !(b2_all > 0.0 && sum != 0.0) {
+        bail!(InvalidImage(
+            "the reference is black where compared: a relative difference is undefined".into()
+        ));
+    }
+    let rel = |d: f64, b: f64| if b > 0.0 { (d / b).sqrt() } else { f64::NAN };
+    Ok(Comparison {
+        pixels,
+        relative_rms: rel(d2_all, b2_all),
+        relative_rms_rgb: [0, 1, 2].map(|c| rel(d2[c], b2[c])),
+        relative_bias: diff / sum,
+    })
+}
+
+pub fn run(args: CompareArgs) -> Result<()> {
+    let a = read_exr(&args.image)?;
+    let b = read_exr(&args.reference)?;
+    if (a.width, a.height) != (b.width, b.height) {
+        bail!(InvalidImage(format!(
+            "{} is {}x{} but the reference {} is {}x{}; render both at the same --size",
+            args.image.display(),
+            a.width,
+            a.height,
+            args.reference.display(),
+            b.width,
+            b.height
+        )));
+    }
+    let mask = match &args.mask {
+        Some(path) => {
+            let (w, h, m) = read_mask(path)?;
+            if (w, h) != (a.width, a.height) {
+                bail!(InvalidImage(format!(
+                    "the mask {} is {w}x{h} but the images are {}x{}",
+                    path.display(),
+                    a.width,
+                    a.height
+                )));
+            }
+            Some(m)
+        }
+        None => None,
+    };
+    let c = compare(&a, &b, mask.as_deref())?;
+    if args.json {
+        println!("{}", serde_json::to_string(&c)?);
+    } else {
+        println!("pixels: {}", c.pixels);
+        println!(
+            "relative RMS: {:.5} (R {:.5}, G {:.5}, B {:.5})",
+            c.relative_rms, c.relative_rms_rgb[0], c.relative_rms_rgb[1], c.relative_rms_rgb[2]
+        );
+        println!("relative bias: {:+.5}", c.relative_bias);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn known_answers_with_and_without_a_mask() {
+        // Reference all (1, 2, 2): |b|² = 9 per pixel. Image: pixel 0 equal, pixel 1 off by
+        // (+1, 0, 0), pixel 2 off by (0, -2, +2) and masked out in the second comparison.
+        let b = Rgb {
+            width: 3,
+            height: 1,
+            pixels: vec![[1.0, 2.0, 2.0]; 3],
+        };
+        let a = Rgb {
+            width: 3,
+            height: 1,
+            pixels: vec![[1.0, 2.0, 2.0], [2.0, 2.0, 2.0], [1.0, 0.0, 4.0]],
+        };
+        let all = compare(&a, &b, None).unwrap();
+        assert_eq!(all.pixels, 3);
+        assert!((all.relative_rms - (9.0f64 / 27.0).sqrt()).abs() < 1e-12);
+        assert!((all.relative_rms_rgb[0] - (1.0f64 / 3.0).sqrt()).abs() < 1e-12);
+        assert!((all.relative_rms_rgb[1] - (4.0f64 / 12.0).sqrt()).abs() < 1e-12);
+        assert!((all.relative_bias - 1.0 / 15.0).abs() < 1e-12);
+        let masked = compare(&a, &b, Some(&[true, true, false])).unwrap();
+        assert_eq!(masked.pixels, 2);
+        assert!((masked.relative_rms - (1.0f64 / 18.0).sqrt()).abs() < 1e-12);
+        assert!((masked.relative_bias - 0.1).abs() < 1e-12);
+        assert!(compare(&a, &b, Some(&[false; 3])).is_err());
+    }
+}
