@@ -10,6 +10,7 @@ use super::flat::{FlatKernel, KernelTiming};
 use super::loop_kernel::{LoopKernel, PatchScheme};
 use super::util::{check_size, dispatch_size, read_back, storage_output, uniform_init, PassTimer};
 use super::{GpuContext, GpuError};
+use crate::lighting::Reconstruction;
 
 /// Where a time came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -55,8 +56,19 @@ pub fn bench_flat(
     levels: &[u32],
     repeats: u32,
 ) -> Result<Vec<BenchRow>, GpuError> {
+    bench_flat_with(ctx, object, levels, repeats, Reconstruction::default())
+}
+
+/// [`bench_flat`] with the colour reconstruction chosen, to compare both in one run.
+pub fn bench_flat_with(
+    ctx: &GpuContext,
+    object: &Object,
+    levels: &[u32],
+    repeats: u32,
+    reconstruction: Reconstruction,
+) -> Result<Vec<BenchRow>, GpuError> {
     let kernel = FlatKernel::new(ctx);
-    let uploaded = kernel.upload(ctx, object)?;
+    let uploaded = kernel.upload_with(ctx, object, reconstruction)?;
     let coarse = u64::from(uploaded.topology.triangle_count);
     let mut rows = Vec::new();
     for &level in levels {
@@ -89,20 +101,28 @@ pub fn bench_loop(
     levels: &[u32],
     repeats: u32,
 ) -> Result<Vec<BenchRow>, GpuError> {
-    bench_loop_with(ctx, object, levels, repeats, PatchScheme::Auto)
+    bench_loop_with(
+        ctx,
+        object,
+        levels,
+        repeats,
+        PatchScheme::Auto,
+        Reconstruction::default(),
+    )
 }
 
-/// [`bench_loop`] with step 1 forced to `scheme`, to compare the workgroup and scratch kernels
-/// in one run.
+/// [`bench_loop`] with step 1 forced to `scheme` and the colour reconstruction chosen, to
+/// compare the workgroup and scratch kernels, or the two reconstructions, in one run.
 pub fn bench_loop_with(
     ctx: &GpuContext,
     object: &Object,
     levels: &[u32],
     repeats: u32,
     scheme: PatchScheme,
+    reconstruction: Reconstruction,
 ) -> Result<Vec<BenchRow>, GpuError> {
     let kernel = LoopKernel::with_scheme(ctx, scheme);
-    let uploaded = kernel.upload(ctx, object)?;
+    let uploaded = kernel.upload_with(ctx, object, reconstruction)?;
     let coarse = u64::from(uploaded.triangle_count);
     let mut rows = Vec::new();
     for &level in levels {

@@ -32,6 +32,10 @@ pub struct BenchGpuArgs {
     /// scratch, or both (scratch then auto, to compare them in one run).
     #[arg(long, default_value = "auto", value_parser = ["auto", "workgroup", "scratch", "both"])]
     pub patch: String,
+    /// Colour reconstruction the kernels run: smooth (the default of the renderer), nearest
+    /// (the paper's rule), or both (nearest then smooth, with the time ratio per level).
+    #[arg(long, default_value = "both", value_parser = ["smooth", "nearest", "both"])]
+    pub reconstruction: String,
 }
 
 #[cfg(not(feature = "gpu"))]
@@ -42,7 +46,10 @@ pub fn run(_args: BenchGpuArgs) -> Result<()> {
 #[cfg(feature = "gpu")]
 pub fn run(args: BenchGpuArgs) -> Result<()> {
     use anyhow::Context;
-    use hce_runtime::gpu::bench::{bench_flat, bench_loop_with, write_bandwidth, BenchRow, Timer};
+    use hce_runtime::gpu::bench::{
+        bench_flat_with, bench_loop_with, write_bandwidth, BenchRow, Timer,
+    };
+    use hce_runtime::lighting::Reconstruction;
     use hce_runtime::gpu::testing::{grid, random_object, RandomTrees};
     use hce_runtime::gpu::PatchScheme;
     use hce_runtime::gpu::{plain_mesh, ContextOptions, GpuContext};
@@ -75,6 +82,26 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
         timer_name(bandwidth.timer),
         peak / 1e9
     );
+    let reconstructions: &[(&str, Reconstruction)] = match args.reconstruction.as_str() {
+        "smooth" => &[("smooth", Reconstruction::Smooth)],
+        "nearest" => &[("nearest", Reconstruction::NearestNormal)],
+        _ => &[
+            ("nearest", Reconstruction::NearestNormal),
+            ("smooth", Reconstruction::Smooth),
+        ],
+    };
+    // Per level, the time of the first reconstruction measured (to print the ratio of the second).
+    let ratio = |rows: &[Vec<BenchRow>]| {
+        if let [a, b] = rows {
+            for (x, y) in a.iter().zip(b) {
+                println!(
+                    "level {}: smooth / nearest kernel time {:.2}x",
+                    x.level,
+                    y.seconds / x.seconds.max(1e-12)
+                );
+            }
+        }
+    };
     let print = |title: &str, rows: Vec<BenchRow>| {
         println!("kernel: {title}");
         println!(
@@ -121,10 +148,19 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
                 random_object("grid", p, t, RandomTrees::default(), 7)
             }
         };
-        print(
-            "flat refinement (positions, faces + HCE decoding, vertex colours)",
-            bench_flat(&ctx, &object, &levels, args.repeats)?,
-        );
+        let mut all = Vec::new();
+        for &(rname, reconstruction) in reconstructions {
+            let rows = bench_flat_with(&ctx, &object, &levels, args.repeats, reconstruction)?;
+            print(
+                &format!(
+                    "flat refinement, {rname} colours (positions, faces + HCE decoding, vertex \
+                     colours)"
+                ),
+                rows.clone(),
+            );
+            all.push(rows);
+        }
+        ratio(&all);
     }
     if args.kernel != "flat" {
         let (positions, triangles, normals) = match &args.mesh {
@@ -173,13 +209,26 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
             _ => &[("auto", PatchScheme::Auto)],
         };
         for &(name, scheme) in schemes {
-            print(
-                &format!(
-                    "Loop subdivision, {name} patches (patches: positions + normals, faces + HCE \
-                     decoding, vertex colours)"
-                ),
-                bench_loop_with(&ctx, &object, &levels, args.repeats, scheme)?,
-            );
+            let mut all = Vec::new();
+            for &(rname, reconstruction) in reconstructions {
+                let rows = bench_loop_with(
+                    &ctx,
+                    &object,
+                    &levels,
+                    args.repeats,
+                    scheme,
+                    reconstruction,
+                )?;
+                print(
+                    &format!(
+                        "Loop subdivision, {name} patches, {rname} colours (patches: positions + \
+                         normals, faces + HCE decoding, vertex colours)"
+                    ),
+                    rows.clone(),
+                );
+                all.push(rows);
+            }
+            ratio(&all);
         }
     }
     Ok(())
