@@ -2,7 +2,8 @@
 # How far `hce render` is from path-traced ground truth on multiresolution objects, per
 # subdivision level: for each mesh, a test room around it (`gen-samples room`), baked twice
 # (default normal sets, and `--max-normals 0`: the geometric normal alone), each bake drawn at
-# levels 0..LEVELS with `hce render --cpu-reference --level L`, against `hce reference` of the
+# levels 0..LEVELS with `hce render --cpu-reference --level L` (the smooth reconstruction, and
+# for the default bake also the paper's nearest-normal rule), against `hce reference` of the
 # same level; prints the relative RMS difference and bias over the reference's mask (pixels
 # of the multiresolution object away from its silhouette), one row per mesh and level.
 # The reference's own noise adds in quadrature: two 256-path references of the spot room differ
@@ -60,10 +61,13 @@ for mesh in "$@"; do
             --samples "$samples" -o "$dir/reference-$level.exr" --mask "$dir/mask-$level.png" \
             -q >/dev/null
         row="$name $level"
-        for bake in default n0; do
+        for variant in default:smooth n0:smooth default:nearest; do
+            bake="${variant%%:*}"
+            rec="${variant##*:}"
             "$hce" render "$dir/baked-$bake.glb" --cpu-reference --level "$level" \
-                --size "$size" -o "$dir/$bake-$level.exr" >/dev/null 2>&1
-            row="$row $("$hce" compare "$dir/$bake-$level.exr" "$dir/reference-$level.exr" \
+                --reconstruction "$rec" --size "$size" -o "$dir/$bake-$rec-$level.exr" \
+                >/dev/null 2>&1
+            row="$row $("$hce" compare "$dir/$bake-$rec-$level.exr" "$dir/reference-$level.exr" \
                 --mask "$dir/mask-$level.png" | awk '
                     /^pixels:/ { p = $2 }
                     /^relative RMS:/ { r = $3 }
@@ -75,11 +79,14 @@ for mesh in "$@"; do
     done
 done
 echo
-printf '%-16s %5s %7s | %-19s | %-19s\n' "" "" "" "default bake" "--max-normals 0"
-printf '%-16s %5s %7s | %9s %9s | %9s %9s\n' mesh level pixels "rel RMS" "bias" "rel RMS" "bias"
+printf '%-16s %5s %7s | %-19s | %-19s | %-19s\n' "" "" "" "default bake, smooth" \
+    "--max-normals 0" "default, nearest"
+printf '%-16s %5s %7s | %9s %9s | %9s %9s | %9s %9s\n' mesh level pixels "rel RMS" "bias" \
+    "rel RMS" "bias" "rel RMS" "bias"
 for row in "${rows[@]}"; do
-    read -r name level px1 rms1 bias1 _px2 rms2 bias2 <<<"$row"
-    printf '%-16s %5s %7s | %9s %9s | %9s %9s\n' "$name" "$level" "$px1" "$rms1" "$bias1" "$rms2" "$bias2"
+    read -r name level px1 rms1 bias1 _px2 rms2 bias2 _px3 rms3 bias3 <<<"$row"
+    printf '%-16s %5s %7s | %9s %9s | %9s %9s | %9s %9s\n' "$name" "$level" "$px1" "$rms1" \
+        "$bias1" "$rms2" "$bias2" "$rms3" "$bias3"
 done
 echo
 echo "($size, $samples paths per pixel, $((SECONDS - start)) s; images in $out)"
