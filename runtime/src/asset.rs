@@ -1021,7 +1021,12 @@ mod tests {
             &OpenOptions::default(),
         )
         .unwrap_err();
-        assert!(e.to_string().starts_with("two.hce: objects[0].mesh"), "{e}");
+        // The validator catches it (SPEC.md Appendix C) before the loader's own hash check.
+        assert!(
+            e.to_string().starts_with("two.hce: ")
+                && e.to_string().contains("objects[0].geometry_hash"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -164,9 +164,9 @@ impl VertexAverage {
     }
 
     fn add(&mut self, i: usize, area: f64, rgb: [f64; 3]) {
-        for k in 0..3 {
-            self.sum[i][k] += area * rgb[k];
-            self.plain[i][k] += rgb[k];
+        for ((s, p), c) in self.sum[i].iter_mut().zip(&mut self.plain[i]).zip(rgb) {
+            *s += area * c;
+            *p += c;
         }
         self.weight[i] += area;
         self.plain_count[i] += 1;
