@@ -278,10 +278,7 @@ pub fn probes(file: &str, bytes: &[u8]) -> Value {
             let nearest =
                 apply_baked_colours_with(o, &refined.mesh, level, Reconstruction::NearestNormal)
                     .expect("valid objects colour");
-            let r = Probed {
-                refined,
-                nearest,
-            };
+            let r = Probed { refined, nearest };
             let vertices: Vec<Value> = probe_vertices(r.refined.mesh.positions.len())
                 .into_iter()
                 .map(|v| {
