@@ -1,7 +1,8 @@
 //! The conformance suite's generator (`conformance/`, described in its README): valid files from
 //! the format's examples and a bundled sample, invalid files made by breaking exactly one rule
 //! of a valid one, and `manifest.json` with each file's expected `hce validate` outcome and
-//! problems, and for valid files refined positions of probe vertices at levels 1 to 3.
+//! problems, and for valid files the refined positions, normals and colours (both
+//! reconstructions) of probe vertices at levels 1 to 3.
 //!
 //! Everything is deterministic: the same sources give the same bytes. Run
 //! `cargo run -p hce-tests --bin gen-conformance` to rewrite the directory.
@@ -10,6 +11,7 @@ use std::path::Path;
 
 use hce_format::gltf::{validate_asset, Asset, EXTENSION_NAME};
 use hce_format::{example, validate_bytes, write, Container, Problem, SPOKE_SHARP};
+use hce_runtime::colour::{apply_baked_colours_with, Reconstruction};
 use hce_runtime::scene_export::{refine_object, RefinedObject};
 use serde_json::{json, Value};
 
@@ -28,16 +30,28 @@ pub struct Case {
     pub baked: bool,
 }
 
-/// A probe column: the name of a field and how to compute it for vertex `v` of a refined
-/// object. Colours at probe vertices are one more entry of [`PROBE_FIELDS`].
-type ProbeField = (&'static str, fn(&RefinedObject, usize) -> Value);
+/// What a probe field reads: one object refined to one level, with its colours under both
+/// reconstructions (SPEC.md Appendix G).
+pub struct Probed {
+    /// The refinement and its smooth colours, as `hce subdivide` computes them.
+    pub refined: RefinedObject,
+    /// The same vertices' colours with [`Reconstruction::NearestNormal`].
+    pub nearest: Vec<[f32; 3]>,
+}
+
+/// A probe column: the name of a field and how to compute it for vertex `v`.
+type ProbeField = (&'static str, fn(&Probed, usize) -> Value);
 
 /// The fields recorded per probe vertex.
-pub const PROBE_FIELDS: &[ProbeField] = &[("position", probe_position)];
+pub const PROBE_FIELDS: &[ProbeField] = &[
+    ("position", |p, v| vector(p.refined.mesh.positions[v])),
+    ("normal", |p, v| vector(p.refined.mesh.normals[v])),
+    ("colour_smooth", |p, v| vector(p.refined.colours[v])),
+    ("colour_nearest", |p, v| vector(p.nearest[v])),
+];
 
 /// `[x, y, z]` as shortest round-trip decimals plus the exact `f32` bits in hex.
-fn probe_position(r: &RefinedObject, v: usize) -> Value {
-    let p = r.mesh.positions[v];
+fn vector(p: [f32; 3]) -> Value {
     json!({
         "xyz": p,
         "bits": p.map(|x| format!("{:08x}", x.to_bits())),
@@ -232,7 +246,7 @@ pub fn expected_problems(file: &str, bytes: &[u8]) -> Vec<Problem> {
 }
 
 /// The containers' objects of a valid file, in container order.
-fn objects(file: &str, bytes: &[u8]) -> Vec<hce_format::Object> {
+pub fn objects(file: &str, bytes: &[u8]) -> Vec<hce_format::Object> {
     let container = if file.ends_with(".hce") {
         bytes.to_vec()
     } else {
@@ -260,8 +274,12 @@ pub fn probes(file: &str, bytes: &[u8]) -> Value {
     let mut out = Vec::new();
     for (k, o) in objects.iter().enumerate() {
         for level in PROBE_LEVELS {
-            let r = refine_object(o, level).expect("valid objects refine");
-            let vertices: Vec<Value> = probe_vertices(r.mesh.positions.len())
+            let refined = refine_object(o, level).expect("valid objects refine");
+            let nearest =
+                apply_baked_colours_with(o, &refined.mesh, level, Reconstruction::NearestNormal)
+                    .expect("valid objects colour");
+            let r = Probed { refined, nearest };
+            let vertices: Vec<Value> = probe_vertices(r.refined.mesh.positions.len())
                 .into_iter()
                 .map(|v| {
                     let mut entry = json!({ "vertex": v });
@@ -275,8 +293,8 @@ pub fn probes(file: &str, bytes: &[u8]) -> Value {
                 "object": k,
                 "name": o.name,
                 "level": level,
-                "vertex_count": r.mesh.positions.len(),
-                "triangle_count": r.mesh.indices.len(),
+                "vertex_count": r.refined.mesh.positions.len(),
+                "triangle_count": r.refined.mesh.indices.len(),
                 "probes": vertices,
             }));
         }

@@ -1,6 +1,8 @@
 //! Runs the real `hce` binary over the conformance suite (`conformance/`, see its README): every
 //! file's `hce validate` exit status and problem lines, and for valid files the refined
-//! positions of the probe vertices at levels 1 to 3 (through `hce subdivide --merge` to OBJ).
+//! positions and normals (bitwise) and smooth colours of the probe vertices at levels 1 to 3
+//! (through `hce subdivide --merge` to OBJ), and both reconstructions' colours through the
+//! library.
 //! Also checks that the suite is what its generator writes today.
 
 use serde_json::Value;
@@ -56,21 +58,55 @@ fn hce_validate_gives_every_expected_outcome() {
     }
 }
 
-/// `v` positions of an OBJ.
-fn obj_positions(path: &Path) -> Vec<[f32; 3]> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .filter_map(|l| l.strip_prefix("v "))
-        .map(|l| {
-            let x: Vec<f32> = l.split(' ').take(3).map(|t| t.parse().unwrap()).collect();
-            [x[0], x[1], x[2]]
-        })
-        .collect()
+/// Per vertex of an OBJ written by `hce subdivide --merge`: position, colour (`v x y z r g b`)
+/// and normal (`vn`, one per vertex, in vertex order).
+struct Obj {
+    positions: Vec<[f32; 3]>,
+    colours: Vec<[f32; 3]>,
+    normals: Vec<[f32; 3]>,
+}
+
+fn read_obj(path: &Path) -> Obj {
+    let text = std::fs::read_to_string(path).unwrap();
+    let floats = |l: &str| -> Vec<f32> { l.split(' ').map(|t| t.parse().unwrap()).collect() };
+    let mut obj = Obj {
+        positions: Vec::new(),
+        colours: Vec::new(),
+        normals: Vec::new(),
+    };
+    for line in text.lines() {
+        if let Some(l) = line.strip_prefix("v ") {
+            let x = floats(l);
+            assert_eq!(x.len(), 6, "{line}: expected x y z r g b");
+            obj.positions.push([x[0], x[1], x[2]]);
+            obj.colours.push([x[3], x[4], x[5]]);
+        } else if let Some(l) = line.strip_prefix("vn ") {
+            let x = floats(l);
+            obj.normals.push([x[0], x[1], x[2]]);
+        }
+    }
+    obj
+}
+
+/// The `f32` bits of a probe field (`{"xyz": …, "bits": [hex, hex, hex]}`).
+fn bits(field: &Value) -> [u32; 3] {
+    let b = field["bits"].as_array().unwrap();
+    std::array::from_fn(|k| u32::from_str_radix(b[k].as_str().unwrap(), 16).unwrap())
+}
+
+fn value(field: &Value) -> [f32; 3] {
+    bits(field).map(f32::from_bits)
+}
+
+/// The colour tolerance of conformance/README.md: every channel within 1e-5 of the largest
+/// channel of the expected colour.
+fn colour_close(got: [f32; 3], expected: [f32; 3]) -> bool {
+    let scale = expected.iter().fold(1e-6f32, |m, &x| m.max(x.abs()));
+    (0..3).all(|k| (got[k] - expected[k]).abs() <= 1e-5 * scale)
 }
 
 #[test]
-fn probe_positions_match_at_levels_1_to_3() {
+fn probes_match_hce_subdivide_at_levels_1_to_3() {
     let m = manifest();
     let dir = tempfile::tempdir().unwrap();
     let mut checked = 0;
@@ -96,34 +132,87 @@ fn probe_positions_match_at_levels_1_to_3() {
                 "{}",
                 String::from_utf8_lossy(&status.stderr)
             );
-            let positions = obj_positions(&out);
+            let obj = read_obj(&out);
+            assert_eq!(obj.normals.len(), obj.positions.len());
             // The merged mesh concatenates the objects in container order.
             let mut offset = 0;
             for r in refined.iter().filter(|r| r["level"] == level) {
                 for p in r["probes"].as_array().unwrap() {
                     let v = offset + p["vertex"].as_u64().unwrap() as usize;
-                    let bits: Vec<u32> = p["position"]["bits"]
-                        .as_array()
-                        .unwrap()
-                        .iter()
-                        .map(|b| u32::from_str_radix(b.as_str().unwrap(), 16).unwrap())
-                        .collect();
-                    assert_eq!(
-                        positions[v].map(f32::to_bits).to_vec(),
-                        bits,
+                    let at = format!(
                         "{} object {} level {level} vertex {}",
-                        c["file"],
-                        r["object"],
-                        p["vertex"]
+                        c["file"], r["object"], p["vertex"]
+                    );
+                    assert_eq!(
+                        obj.positions[v].map(f32::to_bits),
+                        bits(&p["position"]),
+                        "position of {at}"
+                    );
+                    assert_eq!(
+                        obj.normals[v].map(f32::to_bits),
+                        bits(&p["normal"]),
+                        "normal of {at}"
+                    );
+                    // The OBJ's colours are the smooth reconstruction clamped to [0, 1].
+                    let expected = value(&p["colour_smooth"]).map(|x| x.clamp(0.0, 1.0));
+                    assert!(
+                        colour_close(obj.colours[v], expected),
+                        "colour of {at}: {:?}, expected {expected:?}",
+                        obj.colours[v]
                     );
                     checked += 1;
                 }
                 offset += r["vertex_count"].as_u64().unwrap() as usize;
             }
-            assert_eq!(offset, positions.len(), "{} level {level}", c["file"]);
+            assert_eq!(offset, obj.positions.len(), "{} level {level}", c["file"]);
         }
     }
     assert!(checked > 50, "{checked} probes");
+}
+
+/// Both reconstructions, unclamped, from the library `hce` calls (`hce subdivide` writes only
+/// the smooth one, clamped): the file read through `hce_format`, refined by
+/// `hce_runtime::scene_export::refine_object`, coloured by `apply_baked_colours_with`.
+#[test]
+fn probe_colours_match_both_reconstructions() {
+    use hce_runtime::colour::{apply_baked_colours_with, Reconstruction};
+    let m = manifest();
+    let mut checked = 0;
+    for c in m["cases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["valid"] == true)
+    {
+        let name = c["file"].as_str().unwrap();
+        let bytes = std::fs::read(suite().join(name)).unwrap();
+        let objects = hce_tests::conformance::objects(name, &bytes);
+        for r in c["refined"].as_array().unwrap() {
+            let object = &objects[r["object"].as_u64().unwrap() as usize];
+            let level = r["level"].as_u64().unwrap() as u32;
+            let refined = hce_runtime::scene_export::refine_object(object, level).unwrap();
+            for (field, reconstruction) in [
+                ("colour_smooth", Reconstruction::Smooth),
+                ("colour_nearest", Reconstruction::NearestNormal),
+            ] {
+                let colours =
+                    apply_baked_colours_with(object, &refined.mesh, level, reconstruction).unwrap();
+                for p in r["probes"].as_array().unwrap() {
+                    let v = p["vertex"].as_u64().unwrap() as usize;
+                    let expected = value(&p[field]);
+                    assert!(
+                        colour_close(colours[v], expected),
+                        "{field} of {name} object {} level {level} vertex {v}: {:?}, expected \
+                         {expected:?}",
+                        r["object"],
+                        colours[v]
+                    );
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked > 100, "{checked} probe colours");
 }
 
 #[test]
