@@ -49,10 +49,10 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
     use hce_runtime::gpu::bench::{
         bench_flat_with, bench_loop_with, write_bandwidth, BenchRow, Timer,
     };
-    use hce_runtime::lighting::Reconstruction;
     use hce_runtime::gpu::testing::{grid, random_object, RandomTrees};
     use hce_runtime::gpu::PatchScheme;
     use hce_runtime::gpu::{plain_mesh, ContextOptions, GpuContext};
+    use hce_runtime::lighting::Reconstruction;
 
     let levels: Vec<u32> = args
         .levels
@@ -211,14 +211,8 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
         for &(name, scheme) in schemes {
             let mut all = Vec::new();
             for &(rname, reconstruction) in reconstructions {
-                let rows = bench_loop_with(
-                    &ctx,
-                    &object,
-                    &levels,
-                    args.repeats,
-                    scheme,
-                    reconstruction,
-                )?;
+                let rows =
+                    bench_loop_with(&ctx, &object, &levels, args.repeats, scheme, reconstruction)?;
                 print(
                     &format!(
                         "Loop subdivision, {name} patches, {rname} colours (patches: positions + \
