@@ -31,6 +31,48 @@ pub struct CompareArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Also write a picture of the signed difference: per pixel `(a − b) / mean(b)` of the
+    /// summed RGB, red where the image is brighter than the reference, blue where darker, full
+    /// colour at ±`--diff-scale`; pixels outside the mask dark grey.
+    #[arg(long, value_name = "PATH.png")]
+    pub diff: Option<PathBuf>,
+    /// The difference that `--diff` draws at full colour, as a fraction of the mean reference.
+    #[arg(long, default_value_t = 0.2)]
+    pub diff_scale: f32,
+}
+
+/// RGBA8 picture of the signed difference of `a` from `b` (see `--diff`).
+pub fn diff_picture(a: &Rgb, b: &Rgb, mask: Option<&[bool]>, scale: f32) -> Vec<u8> {
+    let inside = |i: usize| mask.is_none_or(|m| m[i]);
+    let sum = |p: [f32; 3]| f64::from(p[0]) + f64::from(p[1]) + f64::from(p[2]);
+    let (mut total, mut count) = (0.0f64, 0u64);
+    for (i, p) in b.pixels.iter().enumerate() {
+        if inside(i) {
+            total += sum(*p);
+            count += 1;
+        }
+    }
+    let mean = if count > 0 && total > 0.0 {
+        total / count as f64
+    } else {
+        1.0
+    };
+    let mut out = Vec::with_capacity(4 * a.pixels.len());
+    for (i, (pa, pb)) in a.pixels.iter().zip(&b.pixels).enumerate() {
+        if !inside(i) {
+            out.extend([40, 40, 40, 255]);
+            continue;
+        }
+        let e = ((sum(*pa) - sum(*pb)) / mean) as f32 / scale.max(1e-6);
+        let t = e.clamp(-1.0, 1.0);
+        let fade = |x: f32| (255.0 * (1.0 - x.abs())).round() as u8;
+        out.extend(if t >= 0.0 {
+            [255, fade(t), fade(t), 255]
+        } else {
+            [fade(t), fade(t), 255, 255]
+        });
+    }
+    out
 }
 
 /// An image the command cannot use: undecodable, or a size that does not match (exit status 3).
@@ -173,6 +215,10 @@ pub fn run(args: CompareArgs) -> Result<()> {
         None => None,
     };
     let c = compare(&a, &b, mask.as_deref())?;
+    if let Some(path) = &args.diff {
+        let rgba = diff_picture(&a, &b, mask.as_deref(), args.diff_scale);
+        super::render::write_png(path, a.width as u32, a.height as u32, &rgba)?;
+    }
     if args.json {
         println!("{}", serde_json::to_string(&c)?);
     } else {
@@ -215,5 +261,27 @@ mod tests {
         assert!((masked.relative_rms - (1.0f64 / 18.0).sqrt()).abs() < 1e-12);
         assert!((masked.relative_bias - 0.1).abs() < 1e-12);
         assert!(compare(&a, &b, Some(&[false; 3])).is_err());
+    }
+
+    #[test]
+    fn diff_picture_is_red_where_brighter_blue_where_darker() {
+        // Mean reference (summed RGB) 3; pixel 0 equal, pixel 1 brighter by 0.6 (0.2 of the
+        // mean: full red at the default scale), pixel 2 darker by 0.45 (three quarters blue), pixel 3
+        // outside the mask.
+        let b = Rgb {
+            width: 4,
+            height: 1,
+            pixels: vec![[1.0; 3]; 4],
+        };
+        let a = Rgb {
+            width: 4,
+            height: 1,
+            pixels: vec![[1.0; 3], [1.2; 3], [0.85; 3], [5.0; 3]],
+        };
+        let rgba = diff_picture(&a, &b, Some(&[true, true, true, false]), 0.2);
+        assert_eq!(&rgba[0..4], &[255, 255, 255, 255]);
+        assert_eq!(&rgba[4..8], &[255, 0, 0, 255]);
+        assert_eq!(&rgba[8..12], &[64, 64, 255, 255]);
+        assert_eq!(&rgba[12..16], &[40, 40, 40, 255]);
     }
 }
