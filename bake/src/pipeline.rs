@@ -99,7 +99,7 @@ pub enum PipelineError {
     },
     #[error("{path}: the output must end in .glb, .gltf or .hce")]
     OutputExtension { path: PathBuf },
-    #[error("--levels {0} is out of range; use 0..=6")]
+    #[error("--max-level {0} is out of range; use 0..=6")]
     Levels(u32),
 }
 

@@ -53,8 +53,8 @@ for mesh in "$@"; do
         *) turn=0 ;;
     esac
     "$gen" room --mesh "$path" --turn "$turn" -o "$dir/room.glb" >&2
-    "$hce" bake "$dir/room.glb" -o "$dir/baked-default.glb" --levels "$levels" -q
-    "$hce" bake "$dir/room.glb" -o "$dir/baked-n0.glb" --levels "$levels" --max-normals 0 -q
+    "$hce" bake "$dir/room.glb" -o "$dir/baked-default.glb" --max-level "$levels" -q
+    "$hce" bake "$dir/room.glb" -o "$dir/baked-n0.glb" --max-level "$levels" --max-normals 0 -q
     for level in $(seq 0 "$levels"); do
         # Both bakes share the geometry, so one reference (and mask) serves both.
         "$hce" reference "$dir/baked-default.glb" --level "$level" --size "$size" \

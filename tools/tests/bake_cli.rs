@@ -17,7 +17,7 @@ fn bake(input: &Path, out: &Path, extra: &[&str]) -> (i32, String, String) {
             "1e-2",
             "--visibility-rays",
             "2",
-            "--levels",
+            "--max-level",
             "1",
         ])
         .args(extra)

@@ -18,7 +18,7 @@ fn baked_hce_subdivides_to_a_glb_with_colours() {
             "subdivide",
             input.to_str().unwrap(),
             "--merge",
-            "--levels",
+            "--level",
             "2",
             "-o",
         ])

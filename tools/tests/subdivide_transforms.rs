@@ -22,7 +22,7 @@ fn gltf_node_transforms_are_applied() {
     std::fs::write(&input, json).unwrap();
     let output = dir.path().join("out.obj");
     let out = Command::new(env!("CARGO_BIN_EXE_hce"))
-        .args(["subdivide", input.to_str().unwrap(), "--levels", "1", "-o"])
+        .args(["subdivide", input.to_str().unwrap(), "--level", "1", "-o"])
         .arg(&output)
         .output()
         .unwrap();

@@ -29,9 +29,13 @@ pub struct BakeArgs {
     /// repeatable; `all` selects every object. Node extras `{"hce": {"multires": true}}` also do.
     #[arg(long, value_name = "PATTERN")]
     pub multires: Vec<String>,
-    /// Deepest Loop subdivision level the normal sets serve (0..=6).
+    /// Deepest Loop subdivision level the normal sets serve (0..=6): the finest level a
+    /// renderer will draw.
     #[arg(long, default_value_t = 3)]
-    pub levels: u32,
+    pub max_level: u32,
+    /// The old spelling of `--max-level`, accepted with a warning.
+    #[arg(long = "levels", hide = true, conflicts_with = "max_level")]
+    pub levels_old: Option<u32>,
     /// Most normals per coarse triangle besides its geometric normal.
     #[arg(long, default_value_t = 7)]
     pub max_normals: usize,
@@ -70,7 +74,8 @@ pub fn run(args: BakeArgs) -> Result<()> {
         import: ImportOptions {
             multires: args.multires.clone(),
         },
-        levels: args.levels,
+        levels: crate::cmd::renamed_flag(args.levels_old, "--levels", "--max-level")
+            .unwrap_or(args.max_level),
         normal_sets: NormalSetParams {
             max_normals: args.max_normals,
             normal_tolerance_deg: args.normal_tolerance,

@@ -35,7 +35,10 @@ pub struct SubdivideArgs {
     pub input: PathBuf,
     /// Subdivision level, 1 to 6 (0 writes the welded, manifold control mesh itself).
     #[arg(long, short = 'l', default_value_t = 1)]
-    pub levels: u32,
+    pub level: u32,
+    /// The old spelling of `--level`, accepted with a warning.
+    #[arg(long = "levels", hide = true, conflicts_with = "level")]
+    pub levels_old: Option<u32>,
     /// Output mesh (.obj, .gltf or .glb), written atomically.
     #[arg(long, short = 'o')]
     pub output: PathBuf,
@@ -58,7 +61,10 @@ pub struct SubdivideArgs {
     pub merge: bool,
 }
 
-pub fn run(args: SubdivideArgs) -> Result<()> {
+pub fn run(mut args: SubdivideArgs) -> Result<()> {
+    if let Some(level) = super::renamed_flag(args.levels_old.take(), "--levels", "--level") {
+        args.level = level;
+    }
     if is_baked(&args.input)? {
         return run_baked(&args);
     }
@@ -88,7 +94,7 @@ pub fn run(args: SubdivideArgs) -> Result<()> {
     )
     .with_context(|| format!("{}: cannot build the control mesh", args.input.display()))?;
     let t3 = Instant::now();
-    let refined = hce_runtime::subdivide::subdivide(&topo.mesh, args.levels)
+    let refined = hce_runtime::subdivide::subdivide(&topo.mesh, args.level)
         .with_context(|| format!("{}: cannot subdivide", args.input.display()))?;
     let t4 = Instant::now();
     hce_runtime::export::write_mesh(
@@ -108,7 +114,7 @@ pub fn run(args: SubdivideArgs) -> Result<()> {
         print!("{}", topo.report);
         println!(
             "level {}: {} vertices, {} triangles",
-            args.levels,
+            args.level,
             refined.positions.len(),
             refined.indices.len()
         );
@@ -159,7 +165,7 @@ fn run_baked(args: &SubdivideArgs) -> Result<()> {
         .objects
         .iter()
         .map(|o| {
-            refine_object(&o.object, args.levels).map_err(|e| {
+            refine_object(&o.object, args.level).map_err(|e| {
                 anyhow!(
                     "{}: object {} '{}': {e}",
                     args.input.display(),
@@ -179,7 +185,7 @@ fn run_baked(args: &SubdivideArgs) -> Result<()> {
                     ObjectKind::Flat => "flat, linear",
                     ObjectKind::Multiresolution => "multiresolution, Loop",
                 },
-                args.levels,
+                args.level,
                 r.mesh.positions.len(),
                 r.mesh.indices.len()
             );
