@@ -53,7 +53,27 @@ enum Command {
     Validate(cmd::validate::ValidateArgs),
 }
 
+/// `hce inspect x.glb | head` closes the pipe early; Rust's `println!` then panics with "failed
+/// printing to stdout: Broken pipe". That is the reader's choice, not a failure of the command:
+/// end quietly, as a Unix tool does on SIGPIPE.
+fn quiet_on_broken_pipe() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let message = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| info.payload().downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if message.starts_with("failed printing to std") && message.contains("Broken pipe") {
+            std::process::exit(0);
+        }
+        default(info);
+    }));
+}
+
 fn main() {
+    quiet_on_broken_pipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Bake(args) => cmd::bake::run(args),

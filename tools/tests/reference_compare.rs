@@ -168,3 +168,25 @@ fn reference_explains_bad_input() {
     assert_eq!(code, 2);
     assert!(!out.exists());
 }
+
+#[test]
+fn a_reader_closing_the_pipe_early_is_not_a_crash() {
+    // `hce compare a.exr b.exr | head -1`: the reader goes away before hce has printed
+    // everything; Rust's `println!` would panic on the broken pipe.
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.exr"), dir.path().join("b.exr"));
+    write_exr(&a, 2, 1, &[[1.0, 2.0, 2.0], [2.0, 2.0, 2.0]]);
+    write_exr(&b, 2, 1, &[[1.0, 2.0, 2.0]; 2]);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_hce"))
+        .args(["compare", s(&a), s(&b)])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+}
