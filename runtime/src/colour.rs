@@ -224,14 +224,13 @@ fn smooth_colours(
     let per = 1usize << (2 * level);
     let mut avg = VertexAverage::new(refined.positions.len());
     for t in 0..object.triangles.len() {
-        let tree = triangle_lighting(object, t)?.tree;
         for (path, cell) in cells.iter().enumerate() {
             let f = t * per + path;
             let (tri, p) = fine_triangle(object, refined, f)?;
             let area = area_of(p);
             for (&v, q) in tri.iter().zip(cell) {
                 let normal = refined.normals.get(v as usize).copied().unwrap_or([0.0; 3]);
-                let rgb = table.evaluate(&tree, t, q[0] << shift, q[1] << shift, normal);
+                let rgb = table.evaluate(t, q[0] << shift, q[1] << shift, normal);
                 avg.add(v as usize, area, rgb.map(f64::from));
             }
         }

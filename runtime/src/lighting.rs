@@ -49,6 +49,9 @@ pub const FLAT_JOIN_DEGREES: f64 = 10.0;
 /// Floats per model: `c` (RGB), then `G` row by row (the red, green and blue gradients).
 pub const MODEL_FLOATS: usize = 12;
 
+/// Marks a leaf in [`LightingTable::nodes`]; the other bits are the leaf's index.
+pub const LEAF: u32 = 1 << 31;
+
 /// How baked colours become vertex colours.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Reconstruction {
@@ -97,9 +100,12 @@ pub enum LightingError {
 /// read. Leaves that meet at a point share its model.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightingTable {
-    /// Per coarse triangle: the index of its first leaf. Leaf `k - rank(k)` of the triangle's
-    /// tree (node `k`, breadth-first; SPEC.md B.2) is leaf `leaf_start[t] + k - rank(k)`.
-    pub leaf_start: Vec<u32>,
+    /// Per coarse triangle: the index in `nodes` of its tree's node 0.
+    pub node_start: Vec<u32>,
+    /// Per tree node (breadth-first, SPEC.md B.2), one word: for a subdivided node the number of
+    /// its first child (`1 + 4 rank`), for a leaf [`LEAF`] plus the leaf's index (the tree walk
+    /// of G.4 without counting bits).
+    pub nodes: Vec<u32>,
     /// Three point indices per leaf, for its corners 0, 1, 2 in the order of SPEC.md 2.2.
     pub leaf_points: Vec<u32>,
     /// [`MODEL_FLOATS`] floats per point: `models[12 * point ..][..12]`.
@@ -440,14 +446,19 @@ impl LightingTable {
         let mut sums: Vec<[f64; MODEL_FLOATS]> = Vec::new();
         let mut weights: Vec<f64> = Vec::new();
         let mut leaves: Vec<Leaf> = Vec::new();
-        let mut leaf_start = Vec::with_capacity(object.triangles.len());
+        let mut node_start = Vec::with_capacity(object.triangles.len());
+        let mut nodes: Vec<u32> = Vec::new();
+        let too_large = |t: usize, what: &str| LightingError::Record {
+            object: object.name.clone(),
+            triangle: t,
+            what: format!("more than 2^31 {what} in one object's lighting table"),
+        };
         for t in 0..object.triangles.len() {
-            leaf_start.push(
-                u32::try_from(leaves.len()).map_err(|_| LightingError::Record {
-                    object: object.name.clone(),
-                    triangle: t,
-                    what: "more than 2^32 leaf elements in one object".into(),
-                })?,
+            node_start.push(
+                u32::try_from(nodes.len())
+                    .ok()
+                    .filter(|&n| n < LEAF)
+                    .ok_or_else(|| too_large(t, "tree nodes"))?,
             );
             let TriangleLighting {
                 normals,
@@ -466,6 +477,7 @@ impl LightingTable {
                 if info.subdivided {
                     let first = 1 + 4 * subdivided_seen;
                     subdivided_seen += 1;
+                    nodes.push(first as u32);
                     // Blocks of children are consecutive, so the vector only ever grows at its end.
                     cells.resize(first + 4, cell);
                     for c in 0..4 {
@@ -489,6 +501,12 @@ impl LightingTable {
                     weights[i] += w;
                     *slot = i;
                 }
+                nodes.push(
+                    LEAF | u32::try_from(leaves.len())
+                        .ok()
+                        .filter(|&n| n < LEAF)
+                        .ok_or_else(|| too_large(t, "leaf elements"))?,
+                );
                 leaves.push(Leaf {
                     triangle: t as u32,
                     depth: info.depth,
@@ -542,7 +560,8 @@ impl LightingTable {
         }
         let models = values.iter().flatten().map(|&x| x as f32).collect();
         Ok(LightingTable {
-            leaf_start,
+            node_start,
+            nodes,
             leaf_points,
             models,
         })
@@ -554,24 +573,61 @@ impl LightingTable {
         &self.models[at..at + MODEL_FLOATS]
     }
 
-    /// The table as the `hce_light` words of `hce_light.wgsl`: the word offset of the models,
-    /// each triangle's first leaf, three point indices per leaf, then the models as f32 bit
-    /// patterns.
-    pub fn to_words(&self) -> Vec<u32> {
-        let models_at = 1 + self.leaf_start.len() + self.leaf_points.len();
-        let mut words = Vec::with_capacity(models_at + self.models.len());
+    /// The table as the `hce_light` words of `hce_light.wgsl`: two header words (where the
+    /// point indices and the models start), then per triangle the word of its node 0, the node
+    /// words, three point indices per leaf, and the models as f32 bit patterns. `None` when the
+    /// table is too large to be addressed by 32-bit word indices.
+    pub fn to_words(&self) -> Option<Vec<u32>> {
+        let nodes_at = 2 + self.node_start.len();
+        let points_at = nodes_at + self.nodes.len();
+        let models_at = points_at + self.leaf_points.len();
+        let total = models_at + self.models.len();
+        u32::try_from(total).ok()?;
+        let mut words = Vec::with_capacity(total);
+        words.push(points_at as u32);
         words.push(models_at as u32);
-        words.extend(&self.leaf_start);
+        words.extend(self.node_start.iter().map(|&n| nodes_at as u32 + n));
+        words.extend(&self.nodes);
         words.extend(&self.leaf_points);
         words.extend(self.models.iter().map(|x| x.to_bits()));
-        words
+        Some(words)
+    }
+
+    /// The leaf holding lattice point `(x, y)` (denominator `2^16`) of coarse triangle `t` and
+    /// the point's barycentric weights of the leaf's corners 0, 1, 2 (SPEC.md G.4). A point on
+    /// the border between children goes to the first of Left (its `u` is at least half the
+    /// side), Right (`v` at least half), Top (`u + v` at most half), Center.
+    pub fn locate(&self, t: usize, x: u32, y: u32) -> (usize, [f32; 3]) {
+        let base = self.node_start[t] as usize;
+        let (mut u, mut v) = (x, y);
+        let mut side = 1u32 << EVAL_LATTICE_BITS;
+        let mut word = self.nodes[base];
+        while word & LEAF == 0 && side > 1 {
+            let h = side / 2;
+            let c = if u >= h {
+                u -= h;
+                1
+            } else if v >= h {
+                v -= h;
+                3
+            } else if u + v <= h {
+                0
+            } else {
+                (u, v) = (h - u, h - v);
+                2
+            };
+            word = self.nodes[base + (word + c) as usize];
+            side = h;
+        }
+        let s = side as f32;
+        let (w1, w2) = (u as f32 / s, v as f32 / s);
+        ((word & !LEAF) as usize, [1.0 - w1 - w2, w1, w2])
     }
 
     /// The reconstructed colour at lattice point `(x, y)` (denominator `2^16`) of coarse triangle
-    /// `t`, whose tree is `tree`, for a surface with unit normal `normal` (SPEC.md G.4).
-    pub fn evaluate(&self, tree: &Tree, t: usize, x: u32, y: u32, normal: [f32; 3]) -> [f32; 3] {
-        let (leaf, w) = locate(tree, x, y);
-        let leaf = self.leaf_start[t] as usize + leaf as usize;
+    /// `t`, for a surface with unit normal `normal` (SPEC.md G.4).
+    pub fn evaluate(&self, t: usize, x: u32, y: u32, normal: [f32; 3]) -> [f32; 3] {
+        let (leaf, w) = self.locate(t, x, y);
         let b: [[f32; 3]; 3] = [0, 1, 2].map(|c| eval_model(self.model(leaf, c), normal));
         [0, 1, 2].map(|ch| (b[0][ch] * w[0] + b[1][ch] * w[1] + b[2][ch] * w[2]).max(0.0))
     }
@@ -583,38 +639,6 @@ fn eval_model(m: &[f32], n: [f32; 3]) -> [f32; 3] {
         let g = &m[3 + 3 * ch..6 + 3 * ch];
         m[ch] + (g[0] * n[0] + g[1] * n[1] + g[2] * n[2])
     })
-}
-
-/// The leaf (counted among the tree's leaves, breadth-first) holding lattice point `(x, y)`
-/// (denominator `2^16`) and the point's barycentric weights of the leaf's corners 0, 1, 2
-/// (SPEC.md G.4). A point on the border between children goes to the first of Left (its `u` is
-/// at least half the side), Right (`v` at least half), Top (`u + v` at most half), Center.
-pub fn locate(tree: &Tree, x: u32, y: u32) -> (u32, [f32; 3]) {
-    let (mut u, mut v) = (x, y);
-    let mut side = 1u32 << EVAL_LATTICE_BITS;
-    let mut k = 0u32;
-    while tree.is_subdivided(k) {
-        let h = side / 2;
-        let c = if u >= h {
-            u -= h;
-            1
-        } else if v >= h {
-            v -= h;
-            3
-        } else if u + v <= h {
-            0
-        } else {
-            (u, v) = (h - u, h - v);
-            2
-        };
-        k = 1 + 4 * tree.rank(k) + c;
-        side = h;
-    }
-    // Leaves numbered before k: the k nodes before it minus the subdivided ones.
-    let leaf = k - tree.rank(k);
-    let s = side as f32;
-    let (w1, w2) = (u as f32 / s, v as f32 / s);
-    (leaf, [1.0 - w1 - w2, w1, w2])
 }
 
 /// Gives the corners of smaller leaves that lie inside the segment from `a` to `b` (a leaf edge

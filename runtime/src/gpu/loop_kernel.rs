@@ -720,8 +720,6 @@ impl LoopKernel {
             &[
                 (0, &uniform),
                 (2, &object.topo),
-                (3, &object.records),
-                (4, &object.bits),
                 (9, &o.normals),
                 (11, &o.faces),
                 (12, &o.colours),

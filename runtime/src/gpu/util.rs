@@ -217,13 +217,9 @@ pub fn lighting_words(
             object: object.name.clone(),
             reason: e.to_string(),
         })?;
-    let words = table.to_words();
-    if u32::try_from(words.len()).is_err() {
-        return Err(GpuError::TooLarge {
-            what: "lighting table",
-            needed: words.len() as u64 * 4,
-            limit: u64::from(u32::MAX) * 4,
-        });
-    }
-    Ok(words)
+    table.to_words().ok_or(GpuError::TooLarge {
+        what: "lighting table",
+        needed: (table.nodes.len() + table.leaf_points.len() + table.models.len()) as u64 * 4,
+        limit: u64::from(u32::MAX) * 4,
+    })
 }
