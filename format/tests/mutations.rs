@@ -4,25 +4,42 @@
 //! counting allocator asserts that no input makes the library allocate more than a small
 //! multiple of its size. Crash inputs found by cargo-fuzz live in `tests/regressions/` and are
 //! replayed here too.
+//!
+//! The allocator counts per thread: the test harness runs tests on parallel threads, and a
+//! shared counter would charge one test's allocations to another's input.
 
 mod common;
 
 use hce_format::{example, read, validate_bytes, write};
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::cell::Cell;
 
 struct Counting;
-static CURRENT: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+thread_local! {
+    // Bytes this thread holds and the most it held since `check` last reset it. Signed and
+    // wrapping: a thread may free memory another thread allocated. `const` initialisers need
+    // no allocation and no destructor, so the allocator may touch them.
+    static CURRENT: Cell<isize> = const { Cell::new(0) };
+    static PEAK: Cell<isize> = const { Cell::new(0) };
+}
+
+fn size(layout: Layout) -> isize {
+    layout.size() as isize
+}
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let now = CURRENT.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
-        PEAK.fetch_max(now, Ordering::Relaxed);
+        // `try_with`: a thread being torn down has no counters left, and is no test's input.
+        let _ = CURRENT.try_with(|c| {
+            let now = c.get().wrapping_add(size(layout));
+            c.set(now);
+            let _ = PEAK.try_with(|p| p.set(p.get().max(now)));
+        });
         unsafe { System.alloc(layout) }
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
+        let _ = CURRENT.try_with(|c| c.set(c.get().wrapping_sub(size(layout))));
         unsafe { System.dealloc(ptr, layout) }
     }
 }
@@ -101,13 +118,13 @@ fn mutate(rng: &mut Rng, seed: &[u8]) -> Vec<u8> {
 
 /// Runs one input and checks the properties every input must have.
 fn check(input: &[u8]) -> (bool, bool) {
-    let base = CURRENT.load(Ordering::Relaxed);
-    PEAK.store(base, Ordering::Relaxed);
+    let base = CURRENT.with(Cell::get);
+    PEAK.with(|p| p.set(base));
     let read_result = read(input);
     let problems = validate_bytes(input);
-    let peak = PEAK.load(Ordering::Relaxed) - base;
+    let peak = PEAK.with(Cell::get).wrapping_sub(base);
     assert!(
-        peak <= 64 * input.len() + (1 << 20),
+        peak <= (64 * input.len() + (1 << 20)) as isize,
         "{} bytes of input made the library hold {peak} bytes",
         input.len()
     );
@@ -159,5 +176,11 @@ fn regression_inputs_are_handled() {
         check(&bytes);
         n += 1;
     }
+    // An empty or misplaced directory must not pass for a replayed corpus.
+    assert!(
+        n > 0,
+        "no regression inputs in {}: the crash inputs of cargo-fuzz belong there",
+        dir.display()
+    );
     println!("{n} regression inputs replayed from {}", dir.display());
 }

@@ -3,116 +3,124 @@
 //! bits) and the indices were taken from the reference as of commit 2516a0f (before it was
 //! restructured for speed); any change to them is a change of the documented arithmetic or
 //! numbering, not an optimisation. Normals are not hashed: only their definition is fixed.
+//!
+//! A hash alone says nothing about what changed, so `tests/data/subdivision_blocks.txt` keeps
+//! the hash of every run of 32 vertices and 32 triangles of each case (written by
+//! `examples/subdivision_blocks.rs`, checked here against the pinned hashes): a failure names
+//! the case, the section and the first block that differs, with the values it holds now.
 
+#[path = "common/bits.rs"]
+mod bits;
 mod common;
 
-use std::path::Path;
+use std::collections::HashMap;
 
-use hce_runtime::topology::{Creases, TopologyConfig};
+use bits::{block_hashes, blocks_file, key, sections, subdivide, whole_hash, BLOCK, PINNED};
 
-const PINNED: &[(&str, Creases, u32, u64)] = &[
-    ("bifan7", Creases::None, 1, 0x306ed235986f577a),
-    ("bifan7", Creases::None, 2, 0xb42c51c790eea629),
-    ("bifan7", Creases::None, 3, 0x65b5ae673c0f64bb),
-    ("bifan7", Creases::None, 4, 0x259008c96af1439f),
-    ("bifan7", Creases::Angle(30.0), 1, 0xcd46918cb2d0684b),
-    ("bifan7", Creases::Angle(30.0), 2, 0x74958f8c8cf6e88f),
-    ("bifan7", Creases::Angle(30.0), 3, 0xfc0e6dfb65859948),
-    ("bifan7", Creases::Angle(30.0), 4, 0x7b978cfa6e165388),
-    ("bipyramid9", Creases::None, 1, 0xc505ea22a25bd15c),
-    ("bipyramid9", Creases::None, 2, 0x01f1098e39d42ede),
-    ("bipyramid9", Creases::None, 3, 0xa0f38b3de263518b),
-    ("bipyramid9", Creases::None, 4, 0x3942f79f44879409),
-    ("bipyramid9", Creases::Angle(30.0), 1, 0xbab1f8e2a2bd18d0),
-    ("bipyramid9", Creases::Angle(30.0), 2, 0x03be61725c1d3f96),
-    ("bipyramid9", Creases::Angle(30.0), 3, 0x992ed77d5f8ad4c4),
-    ("bipyramid9", Creases::Angle(30.0), 4, 0xb7f9ee0ef8e70b00),
-    ("cube_creased", Creases::None, 1, 0x0b470679390958d8),
-    ("cube_creased", Creases::None, 2, 0xc5a58b6242d3ca6c),
-    ("cube_creased", Creases::None, 3, 0x29f2ab5b3af8fe80),
-    ("cube_creased", Creases::None, 4, 0x700ce984af5023f4),
-    ("cube_creased", Creases::Angle(30.0), 1, 0x1957a5b349efec68),
-    ("cube_creased", Creases::Angle(30.0), 2, 0xa4f554256ac79884),
-    ("cube_creased", Creases::Angle(30.0), 3, 0x04ab7c07470c1e08),
-    ("cube_creased", Creases::Angle(30.0), 4, 0x17fb0ce3cd7267a8),
-    ("fan7_open", Creases::None, 1, 0x4d5b3b230344b98d),
-    ("fan7_open", Creases::None, 2, 0x391a273950a92e57),
-    ("fan7_open", Creases::None, 3, 0x9d0d785ce9afe3e8),
-    ("fan7_open", Creases::None, 4, 0xdc7fee5706eaed26),
-    ("fan7_open", Creases::Angle(30.0), 1, 0x4d5b3b230344b98d),
-    ("fan7_open", Creases::Angle(30.0), 2, 0x391a273950a92e57),
-    ("fan7_open", Creases::Angle(30.0), 3, 0x9d0d785ce9afe3e8),
-    ("fan7_open", Creases::Angle(30.0), 4, 0xdc7fee5706eaed26),
-    ("grid_open", Creases::None, 1, 0x5475a22bcf199973),
-    ("grid_open", Creases::None, 2, 0x681d7eeb1fc03140),
-    ("grid_open", Creases::None, 3, 0x62d0620a72c9de2e),
-    ("grid_open", Creases::None, 4, 0x79ef7787f64d6ce8),
-    ("grid_open", Creases::Angle(30.0), 1, 0x3eae6426467d4538),
-    ("grid_open", Creases::Angle(30.0), 2, 0xeb25ade1819b34e9),
-    ("grid_open", Creases::Angle(30.0), 3, 0xd35b84e1d7a361dc),
-    ("grid_open", Creases::Angle(30.0), 4, 0x9007942d5cf672c6),
-    ("icosahedron", Creases::None, 1, 0x512392d2aff61d71),
-    ("icosahedron", Creases::None, 2, 0x4d024fa5ac18f1da),
-    ("icosahedron", Creases::None, 3, 0x8adcaaadc375e89b),
-    ("icosahedron", Creases::None, 4, 0xedeeeec9fa7a2117),
-    ("icosahedron", Creases::Angle(30.0), 1, 0xe01845be7fbca6bd),
-    ("icosahedron", Creases::Angle(30.0), 2, 0xf69b769678f2ea5d),
-    ("icosahedron", Creases::Angle(30.0), 3, 0x68759be900dcb639),
-    ("icosahedron", Creases::Angle(30.0), 4, 0xbbe896960b51e1e1),
-    ("octahedron", Creases::None, 1, 0xda7d410a52336605),
-    ("octahedron", Creases::None, 2, 0x68fe14a001e38239),
-    ("octahedron", Creases::None, 3, 0xe2b89af54dbfb4e1),
-    ("octahedron", Creases::None, 4, 0x2b78cc1a80e77651),
-    ("octahedron", Creases::Angle(30.0), 1, 0x78c851504a0f4245),
-    ("octahedron", Creases::Angle(30.0), 2, 0x509ff70e84da5575),
-    ("octahedron", Creases::Angle(30.0), 3, 0x3becbf897814cae1),
-    ("octahedron", Creases::Angle(30.0), 4, 0xf9ca75a626b04ce5),
-    ("tetrahedron", Creases::None, 1, 0x3be594bc0643b005),
-    ("tetrahedron", Creases::None, 2, 0x4585d7384e7b797b),
-    ("tetrahedron", Creases::None, 3, 0x51de5be23acb3060),
-    ("tetrahedron", Creases::None, 4, 0x7edd150e8cf48283),
-    ("tetrahedron", Creases::Angle(30.0), 1, 0xb7051181e2960425),
-    ("tetrahedron", Creases::Angle(30.0), 2, 0xbb58dba07de08f8b),
-    ("tetrahedron", Creases::Angle(30.0), 3, 0xf43530c3eb49cac8),
-    ("tetrahedron", Creases::Angle(30.0), 4, 0x85c5e5275ab3711d),
-];
+/// The blocks file: key → section → (element count, block hashes).
+fn pinned_blocks() -> HashMap<String, HashMap<String, (usize, Vec<u64>)>> {
+    let text = std::fs::read_to_string(blocks_file()).expect("tests/data/subdivision_blocks.txt");
+    let mut out: HashMap<String, HashMap<String, (usize, Vec<u64>)>> = HashMap::new();
+    let mut case = String::new();
+    for line in text.lines().filter(|l| !l.starts_with('#')) {
+        if let Some(k) = line.strip_prefix("case ") {
+            case = k.to_string();
+            continue;
+        }
+        let mut w = line.split_whitespace();
+        let (Some(section), Some(count)) = (w.next(), w.next()) else {
+            continue;
+        };
+        let hashes = w.map(|h| u64::from_str_radix(h, 16).unwrap()).collect();
+        out.entry(case.clone())
+            .or_default()
+            .insert(section.to_string(), (count.parse().unwrap(), hashes));
+    }
+    out
+}
 
-fn fnv(h: &mut u64, x: u32) {
-    for b in x.to_le_bytes() {
-        *h ^= b as u64;
-        *h = h.wrapping_mul(0x100000001b3);
+/// Where `words` first departs from the pinned blocks of its section, in words.
+fn first_difference(section: &str, words: &[[u32; 3]], pinned: &(usize, Vec<u64>)) -> String {
+    let (count, want) = pinned;
+    let got = block_hashes(words);
+    let unit = if section == "positions" {
+        "vertex"
+    } else {
+        "triangle"
+    };
+    match got.iter().zip(want).position(|(g, w)| g != w) {
+        Some(b) => {
+            let range = b * BLOCK..((b + 1) * BLOCK).min(words.len());
+            let now: Vec<String> = words[range.clone()]
+                .iter()
+                .take(4)
+                .map(|e| {
+                    if section == "positions" {
+                        format!("{:?}", e.map(f32::from_bits))
+                    } else {
+                        format!("{e:?}")
+                    }
+                })
+                .collect();
+            format!(
+                "{section}: first change in {unit}s {range:?} (of {}), which now begin {}",
+                words.len(),
+                now.join(", ")
+            )
+        }
+        None if words.len() != *count => {
+            format!("{section}: {} {unit}s, pinned {count}", words.len())
+        }
+        None => format!("{section}: unchanged"),
     }
 }
 
 #[test]
 fn positions_and_indices_keep_their_pinned_bits() {
-    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let blocks = pinned_blocks();
     let mut wrong = Vec::new();
     for &(name, creases, level, want) in PINNED {
-        let t = common::control_mesh(
-            &data.join(format!("{name}.obj")),
-            &TopologyConfig {
-                creases,
-                ..Default::default()
-            },
-        );
-        let r = hce_runtime::subdivide::subdivide(&t.mesh, level).unwrap();
-        let mut h = 0xcbf29ce484222325u64;
-        for p in &r.positions {
-            for c in p {
-                fnv(&mut h, c.to_bits());
-            }
-        }
-        for tri in &r.indices {
-            for &i in tri {
-                fnv(&mut h, i);
-            }
-        }
+        let r = subdivide(name, creases, level);
+        let h = whole_hash(&r);
         if h != want {
+            let k = key(name, creases, level);
+            let mut why = Vec::new();
+            for (section, words) in sections(&r) {
+                match blocks.get(&k).and_then(|s| s.get(section)) {
+                    Some(p) => why.push(first_difference(section, &words, p)),
+                    None => why.push(format!("{section}: no blocks pinned for {k}")),
+                }
+            }
             wrong.push(format!(
-                "{name} {creases:?} level {level}: {h:016x}, pinned {want:016x}"
+                "{name} {creases:?} level {level}: {h:016x}, pinned {want:016x}\n    {}",
+                why.join("\n    ")
             ));
         }
     }
     assert!(wrong.is_empty(), "changed bits:\n{}", wrong.join("\n"));
+}
+
+/// The blocks file must describe the pinned bits, or it would localise a change against the
+/// wrong reference: every case is there, and its blocks hash the current (pinned) output.
+#[test]
+fn block_hashes_describe_the_pinned_output() {
+    let blocks = pinned_blocks();
+    assert_eq!(
+        blocks.len(),
+        PINNED.len(),
+        "cases in {}",
+        blocks_file().display()
+    );
+    for &(name, creases, level, want) in PINNED {
+        let r = subdivide(name, creases, level);
+        if whole_hash(&r) != want {
+            continue; // reported by the test above
+        }
+        let k = key(name, creases, level);
+        for (section, words) in sections(&r) {
+            let (count, hashes) = &blocks[&k][section];
+            assert_eq!(*count, words.len(), "{k} {section}");
+            assert_eq!(hashes, &block_hashes(&words), "{k} {section}");
+        }
+    }
 }

@@ -17,6 +17,17 @@ pub const TREE_WGSL: &str = include_str!("hce_tree.wgsl");
 /// The smooth reconstruction of baked lighting (`hce_light.wgsl`), prepended after
 /// [`TREE_WGSL`] by the kernels that colour vertices.
 pub const LIGHT_WGSL: &str = include_str!("hce_light.wgsl");
+/// The 1-to-4 lattice and output vertex numbering of a refined triangle (`hce_lattice.wgsl`),
+/// prepended after [`LIGHT_WGSL`] by the refinement kernels (flat and Loop).
+pub const LATTICE_WGSL: &str = include_str!("hce_lattice.wgsl");
+/// The vertex-colour gather of the refinement kernels (`hce_gather.wgsl`), prepended after
+/// [`LATTICE_WGSL`].
+pub const GATHER_WGSL: &str = include_str!("hce_gather.wgsl");
+
+/// The shared modules of a refinement kernel, in dependency order, followed by `kernel`.
+pub fn refinement_source(kernel: &str) -> String {
+    format!("{TREE_WGSL}\n{LIGHT_WGSL}\n{LATTICE_WGSL}\n{GATHER_WGSL}\n{kernel}")
+}
 
 /// One subtriangle to colour. 32 bytes, the layout of `Query` in `decode.wgsl`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]

@@ -11,7 +11,7 @@
 use hce_format::Object;
 
 use super::cpu_reference::{validate_tables, FlatTopology, RefinedMesh, MAX_LEVEL};
-use super::decode::{records_words, LIGHT_WGSL, TREE_WGSL};
+use super::decode::{records_words, refinement_source};
 use super::util::{check_size, dispatch_size, read_back, storage_init, storage_output, PassTimer};
 use super::{GpuContext, GpuError};
 use crate::lighting::Reconstruction;
@@ -113,7 +113,7 @@ pub struct KernelTiming {
 
 impl FlatKernel {
     pub fn new(ctx: &GpuContext) -> Self {
-        let source = format!("{TREE_WGSL}\n{LIGHT_WGSL}\n{}", include_str!("flat.wgsl"));
+        let source = refinement_source(include_str!("flat.wgsl"));
         let module = ctx
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {

@@ -88,18 +88,6 @@ const VERTEX_BOUNDARY: u32 = 1u;
 @group(0) @binding(12) var<storage, read_write> out_colours: array<vec4<f32>>;
 @group(0) @binding(13) var<storage, read> hce_light: array<u32>;
 
-fn linear_id(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
-    return gid.x + gid.y * groups.x * 64u;
-}
-
-fn coarse_position(v: u32) -> vec3<f32> {
-    return vec3<f32>(coarse_positions[3u * v], coarse_positions[3u * v + 1u], coarse_positions[3u * v + 2u]);
-}
-
-fn corner(t: u32, c: u32) -> u32 {
-    return topo[params.tri_off + 3u * t + c];
-}
-
 // ---------------------------------------------------------------------------------------------
 // The Loop rules, in the CPU's order of arithmetic.
 
@@ -197,19 +185,7 @@ fn ring_set(base: u32, c: u32, s: u32, p: vec3<f32>) {
     scratch_set(base + 3u * (c * params.ring_cap + s), p);
 }
 
-// Lattice point of corner c, of point m of edge e (from v_e), and of band point m of edge e.
-fn corner_lattice(n: i32, c: u32) -> vec2<i32> {
-    if (c == 0u) { return vec2<i32>(0, 0); }
-    if (c == 1u) { return vec2<i32>(n, 0); }
-    return vec2<i32>(0, n);
-}
-
-fn edge_lattice(n: i32, e: u32, m: i32) -> vec2<i32> {
-    if (e == 0u) { return vec2<i32>(m, 0); }
-    if (e == 1u) { return vec2<i32>(n - m, m); }
-    return vec2<i32>(0, n - m);
-}
-
+// Lattice point of band point m of edge e (corners and edge points: hce_lattice.wgsl).
 fn band_lattice(n: i32, e: u32, m: i32) -> vec2<i32> {
     if (e == 0u) { return vec2<i32>(m + 1, -1); }
     if (e == 1u) { return vec2<i32>(n - m, m + 1); }
@@ -382,23 +358,38 @@ fn available(flags: u32, n: i32, a: i32, b: i32) -> bool {
         && (a + b <= n || (flags & (INTERIOR << 1u)) != 0u);
 }
 
-// Area-weighted normal at lattice point (i, j), not a corner: the six neighbours in
-// counter-clockwise order, skipping faces across boundary edges (`Patch::grid_normal`).
-fn grid_normal(sq: u32, flags: u32, n: i32, i: i32, j: i32) -> vec3<f32> {
-    var d = array<vec2<i32>, 6>(vec2<i32>(1, 0), vec2<i32>(0, 1), vec2<i32>(-1, 1),
-                                vec2<i32>(-1, 0), vec2<i32>(0, -1), vec2<i32>(1, -1));
-    let v = sq_at(sq, n, i, j);
+// Area-weighted normal at lattice point (i, j), not a corner (`Patch::grid_normal`), from its
+// position v and its six neighbours p in counter-clockwise order, skipping faces across boundary
+// edges. Both patch kernels call it, each reading p from its own memory: points across a
+// boundary may be stale, but they only enter faces that are skipped.
+fn fan_normal(flags: u32, n: i32, i: i32, j: i32, v: vec3<f32>, p: array<vec3<f32>, 6>) -> vec3<f32> {
+    var d = grid_neighbours();
+    var q = p;
     var s = vec3<f32>(0.0);
     for (var k = 0u; k < 6u; k++) {
+        let k1 = (k + 1u) % 6u;
         let d0 = d[k];
-        let d1 = d[(k + 1u) % 6u];
+        let d1 = d[k1];
         if (available(flags, n, i + d0.x, j + d0.y) && available(flags, n, i + d1.x, j + d1.y)) {
-            let a = sq_at(sq, n, i + d0.x, j + d0.y) - v;
-            let b = sq_at(sq, n, i + d1.x, j + d1.y) - v;
-            s = s + cross3(a, b);
+            s = s + cross3(q[k] - v, q[k1] - v);
         }
     }
     return s;
+}
+
+// The six lattice neighbours of a grid point, counter-clockwise from (1, 0).
+fn grid_neighbours() -> array<vec2<i32>, 6> {
+    return array<vec2<i32>, 6>(vec2<i32>(1, 0), vec2<i32>(0, 1), vec2<i32>(-1, 1),
+                               vec2<i32>(-1, 0), vec2<i32>(0, -1), vec2<i32>(1, -1));
+}
+
+fn grid_normal(sq: u32, flags: u32, n: i32, i: i32, j: i32) -> vec3<f32> {
+    var d = grid_neighbours();
+    var p: array<vec3<f32>, 6>;
+    for (var k = 0u; k < 6u; k++) {
+        p[k] = sq_at(sq, n, i + d[k].x, j + d[k].y);
+    }
+    return fan_normal(flags, n, i, j, sq_at(sq, n, i, j), p);
 }
 
 fn corner_normal(sq: u32, rg: u32, cr: Corner, n: i32, c: u32) -> vec3<f32> {
@@ -504,92 +495,28 @@ fn patch_main(@builtin(global_invocation_id) gid: vec3<u32>,
 }
 
 // ---------------------------------------------------------------------------------------------
-// Fine triangles. Their lattice corners come from the recursive 1-to-4 split (the same as
-// flat.wgsl and subdivide.rs `subtriangle_cells`): a triangle is (C0, sigma, s) with corners
-// C0, C0 + sigma s e_i, C0 + sigma s e_j; the Center child flips sigma.
+// Fine triangles, on the lattice of hce_lattice.wgsl (the recursive 1-to-4 split of subdivide.rs
+// `subtriangle_cells`). An edge's points are counted from the vertex of its owner, the
+// triangle whose OWNS_EDGE flag is set.
 
-fn fine_corners(path: u32) -> array<vec2<i32>, 3> {
-    var c0 = vec2<i32>(0, 0);
-    var sigma = 1;
-    var s = i32(params.m);
-    for (var k = 0u; k < params.level; k++) {
-        let h = s / 2;
-        let child = (path >> (2u * (params.level - 1u - k))) & 3u;
-        if (child == 1u) {
-            c0.x += sigma * h;
-        } else if (child == 2u) {
-            c0 += vec2<i32>(sigma * h, sigma * h);
-            sigma = -sigma;
-        } else if (child == 3u) {
-            c0.y += sigma * h;
-        }
-        s = h;
-    }
-    return array<vec2<i32>, 3>(c0, c0 + vec2<i32>(sigma, 0), c0 + vec2<i32>(0, sigma));
+fn lattice_level() -> u32 {
+    return params.level;
 }
 
-// The path of the fine triangle whose centroid, times 3, is q.
-fn locate(q: vec2<i32>) -> u32 {
-    var c0 = vec2<i32>(0, 0);
-    var sigma = 1;
-    var s = i32(params.m);
-    var path = 0u;
-    for (var k = 0u; k < params.level; k++) {
-        let h = s / 2;
-        let l1 = sigma * (q.x - 3 * c0.x);
-        let l2 = sigma * (q.y - 3 * c0.y);
-        let l0 = 3 * s - l1 - l2;
-        var child = 2u;
-        if (l0 > 3 * h) {
-            child = 0u;
-        } else if (l1 > 3 * h) {
-            child = 1u;
-            c0.x += sigma * h;
-        } else if (l2 > 3 * h) {
-            child = 3u;
-            c0.y += sigma * h;
-        } else {
-            c0 += vec2<i32>(sigma * h, sigma * h);
-            sigma = -sigma;
-        }
-        path = path * 4u + child;
-        s = h;
-    }
-    return path;
+fn lattice_n() -> u32 {
+    return params.m;
 }
 
-// Output index of lattice point (i, j) of triangle t (subdivide.rs numbering): a corner is its
-// coarse vertex, an edge point is counted from the edge owner's v_e, an interior point lies in
-// rows of increasing j, each in increasing i.
-fn vertex_index(t: u32, i: i32, j: i32) -> u32 {
-    let mm = i32(params.m);
-    if (i == 0 && j == 0) { return corner(t, 0u); }
-    if (i == mm && j == 0) { return corner(t, 1u); }
-    if (i == 0 && j == mm) { return corner(t, 2u); }
-    var e = 3u;
-    var k = 0;
-    if (j == 0) {
-        e = 0u; k = i;
-    } else if (i + j == mm) {
-        e = 1u; k = j;
-    } else if (i == 0) {
-        e = 2u; k = mm - j;
-    }
-    if (e == 3u) {
-        let jm = u32(j - 1);
-        let row = jm * (params.m - 1u) - jm * (jm + 1u) / 2u;
-        return params.coarse_vertices + params.edge_count * params.per_edge + t * params.per_tri
-            + row + u32(i - 1);
-    }
-    let ebase = params.coarse_vertices + topo[params.edges_off + 3u * t + e] * params.per_edge;
-    if ((topo[params.tri_flags_off + t] & (OWNS_EDGE << e)) != 0u) {
-        return ebase + u32(k - 1);
-    }
-    return ebase + u32(mm - 1 - k);
+fn edge_from_owner(t: u32, e: u32) -> bool {
+    return (topo[params.tri_flags_off + t] & (OWNS_EDGE << e)) != 0u;
 }
 
-fn out_position(v: u32) -> vec3<f32> {
-    return vec3<f32>(out_positions[3u * v], out_positions[3u * v + 1u], out_positions[3u * v + 2u]);
+fn lattice_edge_base(t: u32, e: u32) -> u32 {
+    return params.coarse_vertices + topo[params.edges_off + 3u * t + e] * params.per_edge;
+}
+
+fn lattice_interior_base(t: u32) -> u32 {
+    return params.coarse_vertices + params.edge_count * params.per_edge + t * params.per_tri;
 }
 
 // Step 2 (one invocation per fine triangle): its indices, then its area and, for the paper's
@@ -627,59 +554,8 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
     out_faces[g] = vec4<f32>(rgb, 0.5 * len);
 }
 
-// Area-weighted sums with a plain-mean fallback for zero-area neighbourhoods.
-struct Acc {
-    weighted: vec3<f32>,
-    area: f32,
-    plain: vec3<f32>,
-    count: f32,
-    // The vertex's unit normal (the smooth reconstruction evaluates the field for it).
-    normal: vec3<f32>,
-}
-
-fn acc_add(acc: ptr<function, Acc>, g: u32) {
-    let f = out_faces[g];
-    (*acc).weighted = (*acc).weighted + f.xyz * f.w;
-    (*acc).plain += f.xyz;
-    (*acc).area += f.w;
-    (*acc).count += 1.0;
-}
-
-// Adds the fine triangles of coarse triangle t around lattice point (i, j) in a fixed order: up
-// triangles anchored at (i, j), (i - 1, j), (i, j - 1), then down triangles at (i, j),
-// (i + 1, j), (i, j + 1).
-fn gather(acc: ptr<function, Acc>, t: u32, i: i32, j: i32) {
-    let area_before = (*acc).area;
-    let count_before = (*acc).count;
-    let mm = i32(params.m);
-    let base = t << (2u * params.level);
-    var ups = array<vec2<i32>, 3>(vec2<i32>(i, j), vec2<i32>(i - 1, j), vec2<i32>(i, j - 1));
-    for (var k = 0; k < 3; k++) {
-        let u = ups[k];
-        if (u.x >= 0 && u.y >= 0 && u.x + u.y < mm) {
-            acc_add(acc, base + locate(vec2<i32>(3 * u.x + 1, 3 * u.y + 1)));
-        }
-    }
-    var downs = array<vec2<i32>, 3>(vec2<i32>(i, j), vec2<i32>(i + 1, j), vec2<i32>(i, j + 1));
-    for (var k = 0; k < 3; k++) {
-        let d = downs[k];
-        if (d.x >= 1 && d.y >= 1 && d.x + d.y <= mm) {
-            acc_add(acc, base + locate(vec2<i32>(3 * d.x - 1, 3 * d.y - 1)));
-        }
-    }
-    // Smooth reconstruction: the field of coarse triangle t at this lattice point, weighted by
-    // the area of t's fine triangles around it (their own colours are zero in this mode).
-    if (params.smooth_light == 1u) {
-        let shift = HCE_EVAL_BITS - params.level;
-        let rgb = hce_light_eval(t, u32(i) << shift, u32(j) << shift, (*acc).normal);
-        (*acc).weighted += rgb * ((*acc).area - area_before);
-        (*acc).plain += rgb * ((*acc).count - count_before);
-    }
-}
-
-// Step 3 (one invocation per output vertex): gather every incident fine triangle, from each
-// coarse triangle at a coarse vertex, from both sides of a coarse edge, or from the one
-// triangle of an interior point, and write the area-weighted mean colour.
+// Step 3 (one invocation per output vertex): the area-weighted mean colour of the incident fine
+// triangles (hce_gather.wgsl), the smooth field evaluated for the vertex's normal.
 @compute @workgroup_size(64)
 fn colours_main(@builtin(global_invocation_id) gid: vec3<u32>,
                 @builtin(num_workgroups) groups: vec3<u32>) {
@@ -687,52 +563,9 @@ fn colours_main(@builtin(global_invocation_id) gid: vec3<u32>,
     if (v >= params.vertex_total) {
         return;
     }
-    let mm = i32(params.m);
-    let edge_base = params.coarse_vertices;
-    let interior_base = edge_base + params.edge_count * params.per_edge;
-    var acc = Acc(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, vec3<f32>(0.0));
+    var normal = vec3<f32>(0.0);
     if (params.smooth_light == 1u) {
-        acc.normal = vec3<f32>(out_normals[3u * v], out_normals[3u * v + 1u], out_normals[3u * v + 2u]);
+        normal = vec3<f32>(out_normals[3u * v], out_normals[3u * v + 1u], out_normals[3u * v + 2u]);
     }
-    if (v < edge_base) {
-        let s = topo[params.vertex_corner_offsets_off + v];
-        let e = topo[params.vertex_corner_offsets_off + v + 1u];
-        for (var k = s; k < e; k++) {
-            let cr = topo[params.vertex_corners_off + k];
-            let l = corner_lattice(mm, cr % 3u);
-            gather(&acc, cr / 3u, l.x, l.y);
-        }
-    } else if (v < interior_base) {
-        let id = (v - edge_base) / params.per_edge;
-        let kk = i32((v - edge_base) % params.per_edge) + 1;
-        let s = topo[params.edge_side_offsets_off + id];
-        let e = topo[params.edge_side_offsets_off + id + 1u];
-        for (var q = s; q < e; q++) {
-            let side = topo[params.edge_sides_off + q];
-            let t = side / 3u;
-            let ed = side % 3u;
-            var k = kk;
-            if ((topo[params.tri_flags_off + t] & (OWNS_EDGE << ed)) == 0u) {
-                k = mm - kk;
-            }
-            let l = edge_lattice(mm, ed, k);
-            gather(&acc, t, l.x, l.y);
-        }
-    } else {
-        let t = (v - interior_base) / params.per_tri;
-        var q = (v - interior_base) % params.per_tri;
-        var j = 1u;
-        while (q >= params.m - 1u - j) {
-            q -= params.m - 1u - j;
-            j++;
-        }
-        gather(&acc, t, i32(q) + 1, i32(j));
-    }
-    var colour = vec3<f32>(0.0);
-    if (acc.area > 0.0) {
-        colour = acc.weighted / acc.area;
-    } else if (acc.count > 0.0) {
-        colour = acc.plain / acc.count;
-    }
-    out_colours[v] = vec4<f32>(colour, 1.0);
+    out_colours[v] = vec4<f32>(vertex_colour(v, normal), 1.0);
 }

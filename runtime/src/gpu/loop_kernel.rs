@@ -41,7 +41,7 @@
 use hce_format::Object;
 
 use super::cpu_reference::{validate_tables, FlatTopology, RefinedMesh};
-use super::decode::{records_words, LIGHT_WGSL, TREE_WGSL};
+use super::decode::{records_words, refinement_source};
 use super::flat::KernelTiming;
 use super::util::{
     check_size, dispatch_size, read_back, storage_init, storage_output, PassTimer, WORKGROUP,
@@ -279,7 +279,7 @@ impl LoopKernel {
     }
 
     pub fn with_scheme(ctx: &GpuContext, scheme: PatchScheme) -> Self {
-        let source = format!("{TREE_WGSL}\n{LIGHT_WGSL}\n{}", include_str!("loop.wgsl"));
+        let source = refinement_source(include_str!("loop.wgsl"));
         let module = ctx
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -370,12 +370,12 @@ impl LoopKernel {
         cache
             .entry(shape)
             .or_insert_with(|| {
-                let source = format!(
-                    "{TREE_WGSL}\n{LIGHT_WGSL}\n{}\n{}\n{}",
+                let source = refinement_source(&format!(
+                    "{}\n{}\n{}",
                     include_str!("loop.wgsl"),
                     shape.header(),
                     include_str!("loop_workgroup.wgsl")
-                );
+                ));
                 let module = ctx
                     .device
                     .create_shader_module(wgpu::ShaderModuleDescriptor {

@@ -299,23 +299,15 @@ fn wg_step(sq: u32, nsq: u32, rg: u32, nrg: u32, tri: WgTri, n: i32, lane: u32) 
     }
 }
 
-// Area-weighted normal at lattice point (i, j) of the final level, not a corner (grid_normal
-// in loop.wgsl, reading workgroup memory).
+// Area-weighted normal at lattice point (i, j) of the final level, not a corner: `fan_normal`
+// of loop.wgsl over the neighbours in workgroup memory.
 fn wg_grid_normal(sq: u32, flags: u32, n: i32, i: i32, j: i32) -> vec3<f32> {
-    var d = array<vec2<i32>, 6>(vec2<i32>(1, 0), vec2<i32>(0, 1), vec2<i32>(-1, 1),
-                                vec2<i32>(-1, 0), vec2<i32>(0, -1), vec2<i32>(1, -1));
-    let v = wsq_at(sq, n, i, j);
-    var s = vec3<f32>(0.0);
+    var d = grid_neighbours();
+    var p: array<vec3<f32>, 6>;
     for (var k = 0u; k < 6u; k++) {
-        let d0 = d[k];
-        let d1 = d[(k + 1u) % 6u];
-        if (available(flags, n, i + d0.x, j + d0.y) && available(flags, n, i + d1.x, j + d1.y)) {
-            let a = wsq_at(sq, n, i + d0.x, j + d0.y) - v;
-            let b = wsq_at(sq, n, i + d1.x, j + d1.y) - v;
-            s = s + cross3(a, b);
-        }
+        p[k] = wsq_at(sq, n, i + d[k].x, j + d[k].y);
     }
-    return s;
+    return fan_normal(flags, n, i, j, wsq_at(sq, n, i, j), p);
 }
 
 fn wg_corner_normal(sq: u32, rg: u32, tri: WgTri, n: i32, c: u32) -> vec3<f32> {
