@@ -7,8 +7,9 @@
 
 use glam::Vec3;
 
-/// Deepest element level a key can name (paths take two bits per level in 28 bits).
-pub const MAX_LEVEL: u32 = 14;
+// Elements are nodes of the HCE tree, so no element is deeper than the format's
+// `hce_format::MAX_DEPTH`; [`ElemKey::id`] packs paths of two bits per level into 28 bits.
+const _: () = assert!(2 * hce_format::MAX_DEPTH <= 28);
 
 /// Splits a triangle 1-to-4 in the model's child order.
 pub fn split(t: [Vec3; 3]) -> [[Vec3; 3]; 4] {

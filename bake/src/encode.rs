@@ -6,8 +6,11 @@
 //! is subdivided. That is exactly the sequence of every node's "subdivided" flag in
 //! breadth-first order, so a tree of `N` nodes takes `N` bits. Bits are packed least
 //! significant first into 32-bit words; colours are node-major then normal, in RGB9E5.
+//!
+//! The bits are written by the format's tree codec ([`hce_format::BitWriter`]), which refuses a
+//! tree the validator would reject (incomplete, or deeper than [`hce_format::MAX_DEPTH`]).
 
-use hce_format::{rgb9e5, Object, TriangleRecord};
+use hce_format::{rgb9e5, BitWriter, Object, TriangleRecord};
 
 use crate::hierarchical::TriangleSolution;
 use crate::BakeError;
@@ -15,6 +18,18 @@ use crate::BakeError;
 /// Appends the trees, colours and normals of `triangles` to `object` (whose mesh and other
 /// fields the caller fills), one [`TriangleRecord`] per triangle.
 pub fn encode_object(object: &mut Object, triangles: &[TriangleSolution]) -> Result<(), BakeError> {
+    let mut bits = BitWriter::resume(std::mem::take(&mut object.bits), object.bit_len);
+    let result = encode_triangles(object, &mut bits, triangles);
+    (object.bits, object.bit_len) = bits.finish();
+    result
+}
+
+/// [`encode_object`] with the object's bitstream held by `bits` meanwhile.
+fn encode_triangles(
+    object: &mut Object,
+    bits: &mut BitWriter,
+    triangles: &[TriangleSolution],
+) -> Result<(), BakeError> {
     for (t, tri) in triangles.iter().enumerate() {
         let err = |reason: String| BakeError::Encode {
             object: object.name.clone(),
@@ -34,19 +49,22 @@ pub fn encode_object(object: &mut Object, triangles: &[TriangleSolution]) -> Res
                 tri.colours.len()
             )));
         }
-        check_tree_shape(&tri.subdivided).map_err(err)?;
         let to_u32 = |v: usize, what: &str| {
             u32::try_from(v).map_err(|_| err(format!("{what} exceeds the 32-bit index range")))
         };
         let record = TriangleRecord {
-            bits_start: to_u32(object.bit_len as usize, "bit offset")?,
+            bits_start: u32::try_from(bits.bit_len())
+                .map_err(|_| err("bit offset exceeds the 32-bit index range".into()))?,
             colour_start: to_u32(object.colours.len(), "colour offset")?,
             normal_start: to_u32(object.normals.len(), "normal offset")?,
             normal_count: to_u32(nn, "normal count")?,
         };
-        for &s in &tri.subdivided {
-            push_bit(&mut object.bits, &mut object.bit_len, s);
-        }
+        bits.push_tree(&tri.subdivided)
+            .map_err(|source| BakeError::Tree {
+                object: object.name.clone(),
+                triangle: t,
+                source,
+            })?;
         object
             .colours
             .extend(tri.colours.iter().map(|&c| rgb9e5::encode(c)));
@@ -89,58 +107,15 @@ pub fn vertex_colours(
         .collect()
 }
 
-fn push_bit(bits: &mut Vec<u32>, len: &mut u64, bit: bool) {
-    let i = *len as usize;
-    if i / 32 >= bits.len() {
-        bits.push(0);
-    }
-    if bit {
-        bits[i / 32] |= 1 << (i % 32);
-    }
-    *len += 1;
-}
-
-/// A breadth-first flag sequence is a complete 4-ary tree iff after the root every split
-/// node contributes exactly four further nodes.
-fn check_tree_shape(subdivided: &[bool]) -> Result<(), String> {
-    let splits = subdivided.iter().filter(|&&s| s).count();
-    if subdivided.len() != 1 + 4 * splits {
-        return Err(format!(
-            "{} nodes with {splits} subdivided ones is not a complete 1-to-4 tree",
-            subdivided.len()
-        ));
-    }
-    Ok(())
-}
-
-/// A decoded tree (for tests and tools): subdivided flags in breadth-first order.
-pub fn decode_tree(bits: &[u32], bit_len: u64, start: u64) -> Result<Vec<bool>, String> {
-    let read = |i: u64| -> Result<bool, String> {
-        let word = usize::try_from(i / 32).ok().and_then(|w| bits.get(w));
-        match word {
-            Some(w) if i < bit_len => Ok((w >> (i % 32)) & 1 == 1),
-            _ => Err(format!("tree runs past the end of the bitstream (bit {i})")),
-        }
-    };
-    let mut flags = vec![read(start)?];
-    // Nodes still to be read: four per split node seen so far.
-    let mut pending: u64 = if flags[0] { 4 } else { 0 };
-    let mut i = start + 1;
-    while pending > 0 {
-        let f = read(i)?;
-        flags.push(f);
-        i += 1;
-        pending -= 1;
-        if f {
-            pending += 4;
-        }
-    }
-    Ok(flags)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use hce_format::Tree;
+
+    fn flags(bits: &[u32], bit_len: u64, start: u64) -> Vec<bool> {
+        let tree = Tree::new(bits, bit_len, start).unwrap();
+        tree.nodes().map(|n| n.subdivided).collect()
+    }
 
     fn tri(subdivided: Vec<bool>, nn: usize) -> TriangleSolution {
         let n = subdivided.len();
@@ -175,8 +150,8 @@ mod tests {
         assert_eq!(o.triangles[1].colour_start, 18);
         assert_eq!(o.triangles[2].normal_start, 3);
         for (t, rec) in o.triangles.iter().enumerate() {
-            let flags = decode_tree(&o.bits, o.bit_len, u64::from(rec.bits_start)).unwrap();
-            assert_eq!(flags, many[t].subdivided);
+            let got = flags(&o.bits, o.bit_len, u64::from(rec.bits_start));
+            assert_eq!(got, many[t].subdivided);
             let last = many[t].colours.len() - 1;
             let c = rgb9e5::decode(o.colours[rec.colour_start as usize + last]);
             assert_eq!(c, [last as f32, 0.5, 0.25]);
@@ -214,8 +189,22 @@ mod tests {
         let bad = tri(vec![true, false, false], 1);
         let e = encode_object(&mut o, &[bad]).unwrap_err().to_string();
         assert!(e.contains("box") && e.contains("triangle 0"), "{e}");
-        assert!(decode_tree(&[0b1], 3, 0).is_err());
-        // A bit length larger than the words hold is an error, not a panic.
-        assert!(decode_tree(&[u32::MAX], 1000, 0).is_err());
+        assert!(o.bits.is_empty() && o.bit_len == 0 && o.triangles.is_empty());
+        // A tree deeper than the format allows is refused before it reaches the file.
+        let mut deep = vec![true];
+        for d in 1..=hce_format::MAX_DEPTH + 1 {
+            deep.extend([d <= hce_format::MAX_DEPTH, false, false, false]);
+        }
+        let e = encode_object(&mut o, &[tri(deep, 1)]).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                BakeError::Tree {
+                    source: hce_format::TreeError::TooDeep { .. },
+                    ..
+                }
+            ),
+            "{e}"
+        );
     }
 }

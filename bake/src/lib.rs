@@ -49,4 +49,11 @@ pub enum BakeError {
         triangle: usize,
         reason: String,
     },
+    /// The HCE tree codec refused a triangle's element tree.
+    #[error("object '{object}' triangle {triangle}: {source}")]
+    Tree {
+        object: String,
+        triangle: usize,
+        source: hce_format::TreeError,
+    },
 }

@@ -510,6 +510,23 @@ fn bad_parameters_are_errors() {
 }
 
 #[test]
+fn max_level_is_bounded_by_the_format_tree_depth() {
+    let scene = Scene {
+        objects: vec![object("box", &closed_box(), [0.5; 3]).with_emission([1.0; 3])],
+        lights: Vec::new(),
+    };
+    let p = BakeParams {
+        max_level: hce_format::MAX_DEPTH + 1,
+        ..Default::default()
+    };
+    let e = bake(&scene, &p).unwrap_err().to_string();
+    assert!(
+        e.contains("max_level 13") && e.contains(&format!("exceeds {}", hce_format::MAX_DEPTH)),
+        "{e}"
+    );
+}
+
+#[test]
 fn point_and_spot_lights_follow_gltf_units() {
     // A 0.1 m floor patch 2 m under a light of 8 cd: irradiance 8 / 4 = 2 lux, radiance
     // ρ · 2 / π. A spot aimed away contributes nothing; one aimed at it, the same as a point.

@@ -21,8 +21,6 @@ pub const SECTION_ALIGNMENT: u64 = 256;
 pub const FILE_LEVEL: u32 = u32::MAX;
 /// Object record size written by version 1.0; readers accept larger records (SPEC.md A.7).
 pub const OBJECT_RECORD_LEN: u32 = 64;
-/// A node of this depth is always a leaf (SPEC.md B.2).
-pub const MAX_DEPTH: u32 = 12;
 
 /// A section type: four ASCII bytes (SPEC.md A.5).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]

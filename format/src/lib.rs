@@ -21,11 +21,9 @@ pub mod validate;
 pub mod write;
 
 pub use error::{ReadError, WriteError};
-pub use layout::{
-    read_layout, Layout, SectionEntry, SectionType, MAJOR_VERSION, MAX_DEPTH, MINOR_VERSION,
-};
+pub use layout::{read_layout, Layout, SectionEntry, SectionType, MAJOR_VERSION, MINOR_VERSION};
 pub use model::*;
 pub use read::{read, read_with, ReadOptions};
-pub use tree::{triangle_trees, BitWriter, Tree, TreeError, TreeShape};
+pub use tree::{triangle_trees, BitWriter, Tree, TreeError, TreeShape, MAX_DEPTH};
 pub use validate::{validate, validate_bytes, Problem};
 pub use write::{write, write_atomically, write_file};

@@ -2,9 +2,15 @@
 //! scenes with global illumination on a GPU", GRAPP 2012): breadth-first subdivided flags, one
 //! bit per node, where the children of subdivided node `k` are nodes `1 + 4·rank(k) + c`.
 //!
-//! Shared by the baker (encoding), the runtime (path lookup) and the validator (decoding).
+//! The one codec of the tree: the baker writes with [`BitWriter`] (which refuses any tree the
+//! validator would reject), the validator and every reader decode with [`decode_shape`] and walk
+//! with [`Tree`] (the runtime's lighting and the CPU reference of the GPU kernels). Only the GPU
+//! walk in `runtime/src/gpu/hce_tree.wgsl` is a second implementation, and the GPU tests compare
+//! it with this one.
 
-use crate::layout::MAX_DEPTH;
+/// A node of this depth is always a leaf (SPEC.md B.2): the deepest tree a file may hold, so the
+/// deepest element level a baker may write.
+pub const MAX_DEPTH: u32 = 12;
 
 /// Largest node count of a tree of depth at most [`MAX_DEPTH`]: `(4^13 - 1) / 3`.
 pub const MAX_NODES: u32 = ((1u64 << (2 * (MAX_DEPTH + 1))) / 3) as u32;
@@ -14,7 +20,7 @@ pub const MAX_NODES: u32 = ((1u64 << (2 * (MAX_DEPTH + 1))) / 3) as u32;
 pub enum TreeError {
     #[error("bitstream ends inside node {node} (bit {bit} of {bit_len}) (SPEC.md B.2)")]
     Truncated { node: u32, bit: u64, bit_len: u64 },
-    #[error("node {node} at depth {depth} is subdivided; the maximum depth is 12 (SPEC.md B.2)")]
+    #[error("node {node} at depth {depth} is subdivided; the maximum depth is {max} (SPEC.md B.2)", max = MAX_DEPTH)]
     TooDeep { node: u32, depth: u32 },
     #[error("tree overlaps the tree starting at bit {limit}; trees of different triangles must not overlap (SPEC.md A.9)")]
     Overlap { limit: u64 },
@@ -38,9 +44,10 @@ fn bit(bits: &[u32], i: u64) -> bool {
 }
 
 /// Decodes the shape of the tree starting at bit `start`, reading no bit at or after `limit`
-/// (the end of the stream, or where the next tree starts). Bounded by `limit - start` and by
-/// [`MAX_NODES`] steps.
+/// (the end of the stream, or where the next tree starts) nor past the words stored. Bounded by
+/// `limit - start` and by [`MAX_NODES`] steps.
 pub fn decode_shape(bits: &[u32], limit: u64, start: u64) -> Result<TreeShape, TreeError> {
+    let limit = limit.min(bits.len() as u64 * 32);
     let mut nodes: u64 = 1;
     let mut subdivided: u32 = 0;
     let mut depth: u32 = 0;
@@ -235,11 +242,12 @@ impl<'a> Tree<'a> {
     }
 }
 
-/// Appends bits to an object's bitstream, least significant bit first (SPEC.md B.1).
+/// Appends trees to an object's bitstream, least significant bit first (SPEC.md B.1). Whole
+/// trees only, each checked first, so a stream it writes always decodes.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct BitWriter {
-    pub words: Vec<u32>,
-    pub bit_len: u64,
+    words: Vec<u32>,
+    bit_len: u64,
 }
 
 impl BitWriter {
@@ -247,7 +255,26 @@ impl BitWriter {
         Self::default()
     }
 
-    pub fn push(&mut self, b: bool) {
+    /// Continues the stream `words[..bit_len]` (an object's `bits` and `bit_len`). Words past
+    /// `bit_len` and bits past it in the last word are dropped, so appended trees start at
+    /// `bit_len` and read back as written.
+    pub fn resume(mut words: Vec<u32>, bit_len: u64) -> Self {
+        let bit_len = bit_len.min(words.len() as u64 * 32);
+        words.truncate(bit_len.div_ceil(32) as usize);
+        if bit_len % 32 != 0 {
+            if let Some(last) = words.last_mut() {
+                *last &= (1u32 << (bit_len % 32)) - 1;
+            }
+        }
+        Self { words, bit_len }
+    }
+
+    /// Bits written so far: where the next tree will start.
+    pub fn bit_len(&self) -> u64 {
+        self.bit_len
+    }
+
+    fn push(&mut self, b: bool) {
         let word = (self.bit_len >> 5) as usize;
         if word == self.words.len() {
             self.words.push(0);
@@ -259,7 +286,8 @@ impl BitWriter {
     }
 
     /// Appends one triangle's tree given its breadth-first subdivided flags and returns its
-    /// `bits_start`. The flags must form a complete tree of depth at most [`MAX_DEPTH`].
+    /// `bits_start`. Flags that are not one complete tree of depth at most [`MAX_DEPTH`] are
+    /// refused ([`TreeError::Incomplete`], [`TreeError::TooDeep`]) and nothing is written.
     pub fn push_tree(&mut self, subdivided: &[bool]) -> Result<u64, TreeError> {
         check_flags(subdivided)?;
         let start = self.bit_len;
@@ -353,6 +381,65 @@ mod tests {
                 depth: 12
             }
         );
+    }
+
+    /// A chain of first children: every node's first child subdivided, `depth` levels deep.
+    fn chain(depth: u32) -> Vec<bool> {
+        let mut flags = vec![depth > 0];
+        for d in 1..=depth {
+            flags.extend([d < depth, false, false, false]);
+        }
+        flags
+    }
+
+    #[test]
+    fn the_writer_refuses_what_the_validator_rejects() {
+        let mut w = BitWriter::new();
+        assert_eq!(w.push_tree(&chain(MAX_DEPTH)), Ok(0));
+        let len = w.bit_len();
+        assert_eq!(len, 1 + 4 * u64::from(MAX_DEPTH));
+        assert_eq!(
+            w.push_tree(&chain(MAX_DEPTH + 1)),
+            Err(TreeError::TooDeep {
+                node: 1 + 4 * (MAX_DEPTH - 1),
+                depth: MAX_DEPTH
+            })
+        );
+        assert_eq!(
+            w.push_tree(&[true, false, false]),
+            Err(TreeError::Incomplete {
+                flags: 3,
+                subdivided: 1
+            })
+        );
+        // A refused tree writes nothing.
+        assert_eq!(w.bit_len(), len);
+        let (words, bit_len) = w.finish();
+        assert_eq!(Tree::new(&words, bit_len, 0).unwrap().depth(), MAX_DEPTH);
+    }
+
+    #[test]
+    fn resumed_streams_append_after_bit_len() {
+        // Garbage past bit_len (3 bits) in the last word and a spare word are dropped.
+        let mut w = BitWriter::resume(vec![0xffff_fff5, 7], 3);
+        assert_eq!(w.push_tree(&[true, false, false, false, false]), Ok(3));
+        let (words, bit_len) = w.finish();
+        assert_eq!((words, bit_len), (vec![0b1_101], 8));
+        // A bit length beyond the words stored is clamped to them.
+        assert_eq!(BitWriter::resume(vec![1], 40).bit_len(), 32);
+    }
+
+    #[test]
+    fn reading_stops_at_the_words_stored() {
+        // A bit length larger than the words hold is a truncated tree, not zeros.
+        assert!(matches!(
+            Tree::new(&[u32::MAX], 1000, 0),
+            Err(TreeError::Truncated {
+                bit: 32,
+                bit_len: 32,
+                ..
+            })
+        ));
     }
 
     #[test]

@@ -24,51 +24,27 @@
 //! numbering of [`crate::subdivide`], so flat and Loop refinements number vertices alike).
 //! Fine triangle `t · 4^L + path`.
 
-use hce_format::{rgb9e5, ControlMesh, Object, TriangleRecord};
+use hce_format::tree::decode_shape;
+use hce_format::{rgb9e5, ControlMesh, Object, Tree, TreeError, TriangleRecord};
 
 use super::GpuError;
 
-/// Deepest tree level and refinement level the kernels accept: paths must fit in 32 bits
+/// Deepest refinement level the kernels accept (and so the deepest level a colour query may
+/// walk to; trees themselves stop at [`hce_format::MAX_DEPTH`]): paths must fit in 32 bits
 /// (`4^15 < 2^32`), and fine-triangle numbers `t · 4^L` in the output must too.
-pub const MAX_LEVEL: u32 = 15;
-
-/// Bit `i` of a packed HCE bitstream.
-pub fn bit(bits: &[u32], i: u64) -> bool {
-    (bits[(i / 32) as usize] >> (i % 32)) & 1 == 1
-}
-
-/// Number of set bits in `bits[start .. start + len)`.
-pub fn popcount_range(bits: &[u32], start: u32, len: u32) -> u32 {
-    let mut count = 0;
-    let mut i = start;
-    let end = start + len;
-    while i < end {
-        let lo = i & 31;
-        let take = (32 - lo).min(end - i);
-        let mask = if take < 32 {
-            (1u32 << take) - 1
-        } else {
-            u32::MAX
-        };
-        count += ((bits[(i >> 5) as usize] >> lo) & mask).count_ones();
-        i += take;
-    }
-    count
-}
+pub const MAX_RENDER_LEVEL: u32 = 15;
 
 /// The breadth-first node reached from the root along `path` (`depth` child indices, first
-/// most significant), stopping early at a leaf.
-pub fn tree_node(bits: &[u32], record: &TriangleRecord, depth: u32, path: u32) -> u32 {
-    let mut node = 0u32;
-    for k in 0..depth {
-        if !bit(bits, u64::from(record.bits_start + node)) {
-            break;
-        }
-        let rank = popcount_range(bits, record.bits_start, node);
-        let child = (path >> (2 * (depth - 1 - k))) & 3;
-        node = 1 + 4 * rank + child;
-    }
-    node
+/// most significant), stopping early at a leaf: the twin of `tree_node` in `hce_tree.wgsl`,
+/// walked by the format's codec ([`Tree::find_path`]).
+pub fn tree_node(tree: &Tree<'_>, depth: u32, path: u32) -> u32 {
+    tree.find_path(depth, u64::from(path)).0
+}
+
+/// The tree of triangle `record` of an object that passed [`validate_tables`].
+fn triangle_tree<'a>(object: &'a Object, record: &TriangleRecord) -> Tree<'a> {
+    Tree::new(&object.bits, object.bit_len, u64::from(record.bits_start))
+        .expect("validate_tables decoded every tree of this object")
 }
 
 /// Index (within the triangle's normal set) of the representative normal with the largest dot
@@ -109,7 +85,26 @@ pub struct DecodedColour {
 /// normal is `n` (need not be unit length). The object must have passed [`validate_tables`].
 pub fn decode_colour(object: &Object, t: u32, depth: u32, path: u32, n: [f32; 3]) -> DecodedColour {
     let record = &object.triangles[t as usize];
-    let node = tree_node(&object.bits, record, depth, path);
+    decode_colour_in(
+        object,
+        record,
+        &triangle_tree(object, record),
+        depth,
+        path,
+        n,
+    )
+}
+
+/// [`decode_colour`] with the triangle's tree already decoded.
+fn decode_colour_in(
+    object: &Object,
+    record: &TriangleRecord,
+    tree: &Tree<'_>,
+    depth: u32,
+    path: u32,
+    n: [f32; 3],
+) -> DecodedColour {
+    let node = tree_node(tree, depth, path);
     let normal_index = choose_normal(&object.normals, record, n);
     let packed =
         object.colours[(record.colour_start + node * record.normal_count + normal_index) as usize];
@@ -133,8 +128,9 @@ pub struct TreeSummary {
 
 /// Checks everything the colour kernels index, so that a malformed table is an error here and
 /// never an out-of-bounds read on the GPU: record ranges into normals and colours, every tree's
-/// bits inside `bit_len`, tree depths within [`MAX_LEVEL`], word counts consistent. Work is
-/// bounded by `bit_len` (trees together may not claim more nodes than there are bits).
+/// bits inside `bit_len`, trees decodable by the format's codec (so no deeper than
+/// [`hce_format::MAX_DEPTH`]), word counts consistent. Work is bounded by `bit_len` (trees
+/// together may not claim more nodes than there are bits).
 pub fn validate_tables(object: &Object) -> Result<TreeSummary, GpuError> {
     let err = |reason: String| GpuError::InvalidObject {
         object: object.name.clone(),
@@ -173,36 +169,21 @@ pub fn validate_tables(object: &Object) -> Result<TreeSummary, GpuError> {
                 object.normals.len()
             )));
         }
-        // Breadth-first scan: node k's bit is bits_start + k; the tree has 1 + 4·(ones) nodes.
-        let mut total = 1u64;
-        let mut k = 0u64;
-        let mut level_end = 1u64;
-        let mut depth = 0u32;
-        while k < total {
-            let i = u64::from(r.bits_start) + k;
-            if i >= object.bit_len {
-                return Err(ctx(format!(
-                    "tree runs past the end of the bitstream (bit {i} of {})",
-                    object.bit_len
-                )));
-            }
-            if bit(&object.bits, i) {
-                total += 4;
-            }
-            k += 1;
-            if k == level_end && k < total {
-                depth += 1;
-                level_end = total;
-                if depth > MAX_LEVEL {
-                    return Err(ctx(format!("tree deeper than {MAX_LEVEL} levels")));
-                }
-            }
-            if summary.nodes + total > object.bit_len {
-                return Err(err(format!(
-                    "trees claim more nodes than the {} bits of the bitstream",
-                    object.bit_len
-                )));
-            }
+        let shape = decode_shape(&object.bits, object.bit_len, u64::from(r.bits_start)).map_err(
+            |e| match e {
+                TreeError::Truncated { bit, bit_len, .. } => ctx(format!(
+                    "tree runs past the end of the bitstream (bit {bit} of {bit_len})"
+                )),
+                e => ctx(e.to_string()),
+            },
+        )?;
+        let total = u64::from(shape.node_count);
+        let depth = shape.depth;
+        if summary.nodes + total > object.bit_len {
+            return Err(err(format!(
+                "trees claim more nodes than the {} bits of the bitstream",
+                object.bit_len
+            )));
         }
         summary.nodes += total;
         summary.max_depth = summary.max_depth.max(depth);
@@ -560,6 +541,8 @@ pub fn refine_flat_cpu(object: &Object, topo: &FlatTopology, level: u32) -> Refi
     let mut indices = vec![0u32; 3 * f * per];
     let mut face_colours = vec![0f32; 4 * f * per];
     for t in 0..f {
+        let record = &object.triangles[t];
+        let tree = triangle_tree(object, record);
         for path in 0..per as u32 {
             let g = t * per + path as usize;
             let corners = fine_corners(level, path);
@@ -570,7 +553,7 @@ pub fn refine_flat_cpu(object: &Object, topo: &FlatTopology, level: u32) -> Refi
                 [positions[i], positions[i + 1], positions[i + 2]]
             });
             let (normal, area) = normal_and_area(p);
-            let d = decode_colour(object, t as u32, level, path, normal);
+            let d = decode_colour_in(object, record, &tree, level, path, normal);
             face_colours[4 * g..4 * g + 4].copy_from_slice(&[d.rgb[0], d.rgb[1], d.rgb[2], area]);
         }
     }
@@ -762,14 +745,5 @@ mod tests {
         for path in incident_paths(level, 3, 2) {
             assert!(fine_corners(level, path).contains(&[3, 2]));
         }
-    }
-
-    #[test]
-    fn popcount_counts_across_words() {
-        let bits = [0xffff_ffffu32, 0x0000_000f, 0x8000_0000];
-        assert_eq!(popcount_range(&bits, 0, 32), 32);
-        assert_eq!(popcount_range(&bits, 30, 8), 6);
-        assert_eq!(popcount_range(&bits, 36, 60), 1);
-        assert_eq!(popcount_range(&bits, 5, 0), 0);
     }
 }

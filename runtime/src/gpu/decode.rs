@@ -6,7 +6,7 @@
 
 use hce_format::Object;
 
-use super::cpu_reference::{validate_tables, MAX_LEVEL};
+use super::cpu_reference::{validate_tables, MAX_RENDER_LEVEL};
 use super::util::{check_size, dispatch_size, read_back, storage_init, storage_output};
 use super::{GpuContext, GpuError};
 
@@ -43,8 +43,8 @@ pub struct ColourQuery {
 }
 
 /// Decodes `queries` against `object`'s tables on the GPU. The tables are validated first
-/// ([`validate_tables`]) and every query is checked (triangle in range, `level <= 15`,
-/// `path < 4^level`), so nothing out of bounds reaches the kernel.
+/// ([`validate_tables`]) and every query is checked (triangle in range,
+/// `level <= MAX_RENDER_LEVEL`, `path < 4^level`), so nothing out of bounds reaches the kernel.
 pub fn decode_colours(
     ctx: &GpuContext,
     object: &Object,
@@ -59,10 +59,10 @@ pub fn decode_colours(
         if q.triangle as usize >= object.triangles.len() {
             return Err(bad(format!("triangle {} out of range", q.triangle)));
         }
-        if q.level > MAX_LEVEL {
+        if q.level > MAX_RENDER_LEVEL {
             return Err(GpuError::LevelTooHigh {
                 level: q.level,
-                max: MAX_LEVEL,
+                max: MAX_RENDER_LEVEL,
             });
         }
         if u64::from(q.path) >= 1u64 << (2 * q.level) {

@@ -10,7 +10,7 @@
 
 use hce_format::Object;
 
-use super::cpu_reference::{validate_tables, FlatTopology, RefinedMesh, MAX_LEVEL};
+use super::cpu_reference::{validate_tables, FlatTopology, RefinedMesh, MAX_RENDER_LEVEL};
 use super::decode::{records_words, refinement_source};
 use super::util::{check_size, dispatch_size, read_back, storage_init, storage_output, PassTimer};
 use super::{GpuContext, GpuError};
@@ -379,10 +379,10 @@ impl FlatKernel {
 
 /// Output vertex and triangle counts at `level`, checked to fit 32-bit indices.
 fn counts(object: &FlatObject, level: u32) -> Result<(u32, u32), GpuError> {
-    if level > MAX_LEVEL {
+    if level > MAX_RENDER_LEVEL {
         return Err(GpuError::LevelTooHigh {
             level,
-            max: MAX_LEVEL,
+            max: MAX_RENDER_LEVEL,
         });
     }
     let v = object.topology.refined_vertex_count(level);
