@@ -63,14 +63,24 @@ pub struct RefinedObject {
 }
 
 /// Refines `object` to `level` the way the runtime draws it: Loop subdivision for
-/// multiresolution objects, the linear 1-to-4 split for flat ones; then its baked colours.
+/// multiresolution objects, the linear 1-to-4 split for flat ones; then its baked colours, with
+/// the default (smooth) reconstruction.
 pub fn refine_object(object: &Object, level: u32) -> Result<RefinedObject, String> {
+    refine_object_with(object, level, crate::lighting::Reconstruction::default())
+}
+
+/// [`refine_object`] with the colour reconstruction chosen.
+pub fn refine_object_with(
+    object: &Object,
+    level: u32,
+    reconstruction: crate::lighting::Reconstruction,
+) -> Result<RefinedObject, String> {
     let mesh = match object.kind {
         ObjectKind::Multiresolution => subdivide(&object.mesh, level).map_err(|e| e.to_string())?,
         ObjectKind::Flat => refine_linear(object, level)?,
     };
-    let colours =
-        crate::colour::apply_baked_colours(object, &mesh, level).map_err(|e| e.to_string())?;
+    let colours = crate::colour::apply_baked_colours_with(object, &mesh, level, reconstruction)
+        .map_err(|e| e.to_string())?;
     Ok(RefinedObject { mesh, colours })
 }
 

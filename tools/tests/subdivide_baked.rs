@@ -47,3 +47,51 @@ fn baked_hce_subdivides_to_a_glb_with_colours() {
     // Grid colours are (k * 0.01, t, 0.5) clamped to [0, 1]: blue is 0.5 everywhere.
     assert!(colours[..81].iter().all(|c| (c[2] - 0.5).abs() < 1e-6));
 }
+
+#[test]
+fn reconstruction_flag_chooses_the_colour_rule() {
+    // The Appendix D tree (leaves of different depths, one normal): the smooth field and the
+    // paper's per-subtriangle rule give different vertex colours at level 2; same geometry.
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("triangle.hce");
+    std::fs::write(&input, write(&example::single_triangle()).unwrap()).unwrap();
+    let run = |rule: &str| {
+        let output = dir.path().join(format!("{rule}.glb"));
+        let out = Command::new(env!("CARGO_BIN_EXE_hce"))
+            .args([
+                "subdivide",
+                input.to_str().unwrap(),
+                "--merge",
+                "--level",
+                "2",
+            ])
+            .args(["--reconstruction", rule, "-o"])
+            .arg(&output)
+            .output()
+            .unwrap();
+        (
+            out.status.code(),
+            output,
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let read = |path: &std::path::Path| {
+        let (doc, buffers, _) = gltf::import(path).unwrap();
+        let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
+        let reader = prim.reader(|b| Some(&buffers[b.index()]));
+        let positions: Vec<_> = reader.read_positions().unwrap().collect();
+        let colours: Vec<[f32; 3]> = reader.read_colors(0).unwrap().into_rgb_f32().collect();
+        (positions, colours)
+    };
+    let (code, smooth, err) = run("smooth");
+    assert_eq!(code, Some(0), "{err}");
+    let (code, nearest, err) = run("nearest");
+    assert_eq!(code, Some(0), "{err}");
+    let (ps, cs) = read(&smooth);
+    let (pn, cn) = read(&nearest);
+    assert_eq!(ps, pn);
+    assert_ne!(cs, cn);
+    let (code, _, err) = run("bilinear");
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("expected 'smooth' or 'nearest'"), "{err}");
+}

@@ -69,7 +69,7 @@ pub struct RenderArgs {
     pub reconstruction: hce_runtime::lighting::Reconstruction,
 }
 
-fn parse_reconstruction(s: &str) -> Result<hce_runtime::lighting::Reconstruction, String> {
+pub fn parse_reconstruction(s: &str) -> Result<hce_runtime::lighting::Reconstruction, String> {
     s.parse()
 }
 

@@ -15,7 +15,7 @@ use anyhow::{anyhow, Context, Result};
 use clap::Args;
 use hce_format::ObjectKind;
 use hce_runtime::asset::{Asset, AssetFormat};
-use hce_runtime::scene_export::{refine_object, write_refined_scene, RefinedObject};
+use hce_runtime::scene_export::{refine_object_with, write_refined_scene, RefinedObject};
 use hce_runtime::topology::{Creases, NonManifold, TopologyConfig};
 
 #[derive(Args)]
@@ -39,6 +39,10 @@ pub struct SubdivideArgs {
     /// The old spelling of `--level`, accepted with a warning.
     #[arg(long = "levels", hide = true, conflicts_with = "level")]
     pub levels_old: Option<u32>,
+    /// On a baked file, how baked colours become vertex colours: `smooth` (the default,
+    /// SPEC.md Appendix G) or `nearest` (the paper's nearest-normal rule), as `hce render`.
+    #[arg(long, default_value = "smooth", value_parser = super::render::parse_reconstruction)]
+    pub reconstruction: hce_runtime::lighting::Reconstruction,
     /// Output mesh (.obj, .gltf or .glb), written atomically.
     #[arg(long, short = 'o')]
     pub output: PathBuf,
@@ -165,7 +169,7 @@ fn run_baked(args: &SubdivideArgs) -> Result<()> {
         .objects
         .iter()
         .map(|o| {
-            refine_object(&o.object, args.level).map_err(|e| {
+            refine_object_with(&o.object, args.level, args.reconstruction).map_err(|e| {
                 anyhow!(
                     "{}: object {} '{}': {e}",
                     args.input.display(),
