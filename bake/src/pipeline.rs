@@ -581,16 +581,7 @@ fn fallback_colours(scene: &ImportedScene, light: &[Vec<[f32; 3]>]) -> (Vec<Vec<
         );
         raw.push(colours);
     }
-    maxima.sort_unstable_by(f32::total_cmp);
-    let p90 = maxima
-        .get((maxima.len() * 9 / 10).min(maxima.len().saturating_sub(1)))
-        .copied()
-        .unwrap_or(1.0);
-    let exposure = if p90 > 0.0 && p90.is_finite() {
-        1.0 / p90
-    } else {
-        1.0
-    };
+    let exposure = hce_runtime::scene_export::colour_exposure(&mut maxima);
     let out = raw
         .into_iter()
         .map(|cs| {

@@ -79,3 +79,13 @@ fn hce_rgb9e5(v: u32) -> vec3<f32> {
     let m = vec3<f32>(f32(v & 511u), f32((v >> 9u) & 511u), f32((v >> 18u) & 511u));
     return m * ldexp(1.0, e);
 }
+
+// Step 6: the paper's colour of a fine triangle (SPEC.md G.5): the node along its path (at most
+// `depth` levels) and, of that node's colours, the one of the representative normal closest to
+// `n` (the kernel passes the fine triangle's normal, unit or not: the choice is the same).
+fn hce_nearest_colour(t: u32, depth: u32, path: u32, n: vec3<f32>) -> vec3<f32> {
+    let rec = hce_records[t];
+    let node = hce_tree_node(rec, depth, path);
+    let j = hce_choose_normal(rec, n);
+    return hce_rgb9e5(hce_colours[rec.colour_start + node * rec.normal_count + j]);
+}

@@ -546,10 +546,7 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
     let len = sqrt(x.x * x.x + x.y * x.y + x.z * x.z);
     var rgb = vec3<f32>(0.0);
     if (params.smooth_light == 0u) {
-        let rec = hce_records[t];
-        let node = hce_tree_node(rec, params.level, path);
-        let jn = hce_choose_normal(rec, x);
-        rgb = hce_rgb9e5(hce_colours[rec.colour_start + node * rec.normal_count + jn]);
+        rgb = hce_nearest_colour(t, params.level, path, x);
     }
     out_faces[g] = vec4<f32>(rgb, 0.5 * len);
 }

@@ -201,18 +201,11 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
             p.triangles
         );
     }
-    let c = camera;
     println!(
-        "wrote {} ({width}x{height}, {} paths per pixel, camera {},{},{}:{},{},{}:{}); setup {setup_s:.2}s, tracing {trace_s:.2}s",
+        "wrote {} ({width}x{height}, {} paths per pixel, camera {}); setup {setup_s:.2}s, tracing {trace_s:.2}s",
         args.output.display(),
         args.samples,
-        c.eye[0],
-        c.eye[1],
-        c.eye[2],
-        c.target[0],
-        c.target[1],
-        c.target[2],
-        c.fov_y_degrees
+        super::render::camera_text(&camera)
     );
     if let Some(path) = &args.mask {
         let ids: Vec<Option<usize>> = pixels

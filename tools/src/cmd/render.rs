@@ -251,19 +251,21 @@ fn write_image(args: &RenderArgs, image: &hce_runtime::gpu::RenderedImage) -> Re
         Format::Png => write_png(&args.output, w, h, &image.to_srgb8(args.exposure))?,
         Format::Exr => write_exr(&args.output, w, h, &image.pixels)?,
     }
-    let c = image.camera;
     println!(
-        "wrote {} ({w}x{h}, camera {},{},{}:{},{},{}:{})",
+        "wrote {} ({w}x{h}, camera {})",
         args.output.display(),
-        c.eye[0],
-        c.eye[1],
-        c.eye[2],
-        c.target[0],
-        c.target[1],
-        c.target[2],
-        c.fov_y_degrees
+        camera_text(&image.camera)
     );
     Ok(())
+}
+
+/// A camera as `--camera` reads it back: `EYE:TARGET:FOV`.
+#[cfg(feature = "gpu")]
+pub fn camera_text(c: &hce_runtime::gpu::Camera) -> String {
+    format!(
+        "{},{},{}:{},{},{}:{}",
+        c.eye[0], c.eye[1], c.eye[2], c.target[0], c.target[1], c.target[2], c.fov_y_degrees
+    )
 }
 
 #[cfg(feature = "gpu")]
