@@ -47,7 +47,7 @@ use std::time::Instant;
 
 use glam::{Mat3, Vec3};
 use hce_format::{Container, ControlMesh, Metadata, Object, ObjectKind};
-use hce_runtime::{build_control_mesh, subdivide, weld, Creases, TopologyConfig};
+use hce_geometry::{build_control_mesh, subdivide, weld, Creases, TopologyConfig};
 
 use crate::hierarchical::{BakeParams, Progress, TriangleSolution};
 use crate::import::{import_scene, ImportOptions, ImportedScene};
@@ -581,7 +581,7 @@ fn fallback_colours(scene: &ImportedScene, light: &[Vec<[f32; 3]>]) -> (Vec<Vec<
         );
         raw.push(colours);
     }
-    let exposure = hce_runtime::scene_export::colour_exposure(&mut maxima);
+    let exposure = crate::output::refined_scene::colour_exposure(&mut maxima);
     let out = raw
         .into_iter()
         .map(|cs| {

@@ -8,7 +8,7 @@
 //!
 //! * (a) in the file, the colours of representative normals facing the light are brighter than
 //!   those of normals facing away;
-//! * (b) the colours that `hce_runtime::colour::apply_baked_colours` puts on the vertices of the
+//! * (b) the colours that `hce_geometry::colour::apply_baked_colours` puts on the vertices of the
 //!   level-`levels` Loop subdivision are closer (RMS) to a reference, a flat bake of that
 //!   already-subdivided mesh, than the same bake with `max_normals 0` gets.
 //!
@@ -23,8 +23,8 @@ use hce_bake::normal_sets::NormalSetParams;
 use hce_bake::pipeline::{bake_file, PipelineOptions};
 use hce_bake::{bake, BakeParams, SceneObject};
 use hce_format::{rgb9e5, Object, ObjectKind};
-use hce_runtime::colour::apply_baked_colours;
-use hce_runtime::{subdivide, Creases, Refined};
+use hce_geometry::colour::apply_baked_colours;
+use hce_geometry::{subdivide, Creases, Refined};
 use serde_json::json;
 
 /// The direction the sunlight travels.

@@ -12,8 +12,8 @@ use hce_bake::normal_sets::NormalSetParams;
 use hce_bake::pipeline::{bake_file, PipelineOptions};
 use hce_bake::BakeParams;
 use hce_format::{Object, ObjectKind};
-use hce_runtime::colour::{apply_baked_colours_with, Reconstruction};
-use hce_runtime::{subdivide, Creases};
+use hce_geometry::colour::{apply_baked_colours_with, Reconstruction};
+use hce_geometry::{subdivide, Creases};
 use serde_json::json;
 
 const EMISSION: f32 = 0.4;

@@ -8,7 +8,7 @@
 //! panic either.
 
 use hce_bake::import::{import_scene_bytes, ImportOptions, ImportedScene, SceneBytes};
-use hce_runtime::{build_control_mesh, subdivide, weld, TopologyConfig};
+use hce_geometry::{build_control_mesh, subdivide, weld, TopologyConfig};
 
 /// Meshes larger than this are not subdivided (the subdivision's cost, not its safety, grows).
 const SUBDIVIDE_LIMIT: usize = 4096;
@@ -97,7 +97,7 @@ fn topology(positions: &[[f32; 3]], triangles: &[[u32; 3]], corner_normals: Opti
     }
 }
 
-/// Any bytes through `hce_runtime::load_mesh` (what `hce subdivide` reads), as an `.obj`,
+/// Any bytes through `hce_meshio::load_mesh` (what `hce subdivide` reads), as an `.obj`,
 /// `.gltf` or `.glb` chosen by the first byte, then on through welding and the control mesh.
 /// The loader reads paths only, so the input goes through a temporary file: this exercises
 /// exactly the code the command runs.
@@ -116,7 +116,7 @@ pub fn load_mesh(data: &[u8]) {
     if std::fs::write(&path, body).is_err() {
         return;
     }
-    let loaded = hce_runtime::load_mesh(&path);
+    let loaded = hce_meshio::load_mesh(&path);
     let _ = std::fs::remove_file(&path);
     let Ok(mesh) = loaded else {
         return;

@@ -5,14 +5,15 @@
 //! unless `HCE_REQUIRE_GPU=1`, which makes them fail.
 #![cfg(feature = "gpu")]
 
-use hce_runtime::colour::apply_baked_colours;
-use hce_runtime::gpu::cpu_reference::{self, FlatTopology};
+use hce_geometry::colour::apply_baked_colours;
+use hce_geometry::flat::{self, FlatTopology};
+use hce_geometry::lighting::Reconstruction;
+use hce_geometry::Refined;
+use hce_geometry::{decode, tables};
 use hce_runtime::gpu::testing::{
     context_or_skip, grid, octahedron, random_object, RandomTrees, SplitMix,
 };
 use hce_runtime::gpu::{decode_colours, refine_flat, refine_flat_with, ColourQuery};
-use hce_runtime::lighting::Reconstruction;
-use hce_runtime::Refined;
 
 fn test_objects() -> Vec<hce_format::Object> {
     let (p, t) = octahedron();
@@ -50,7 +51,7 @@ fn gpu_decoding_matches_cpu_on_random_trees() {
         return;
     };
     for object in test_objects() {
-        let summary = cpu_reference::validate_tables(&object).unwrap();
+        let summary = tables::validate_tables(&object).unwrap();
         assert!(
             summary.max_depth >= 2,
             "random trees should be deep enough to test walking"
@@ -74,7 +75,7 @@ fn gpu_decoding_matches_cpu_on_random_trees() {
         let mut deep = 0;
         for (q, g) in queries.iter().zip(&gpu) {
             let n = [q.normal[0], q.normal[1], q.normal[2]];
-            let c = cpu_reference::decode_colour(&object, q.triangle, q.level, q.path, n);
+            let c = decode::decode_colour(&object, q.triangle, q.level, q.path, n);
             assert_eq!(g.node, c.node, "{}: query {q:?}", object.name);
             if g.normal_index != c.normal_index {
                 assert!(
@@ -121,7 +122,7 @@ fn gpu_flat_refinement_matches_cpu() {
             ((0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f32>()).sqrt()
         };
         for level in 0..=4 {
-            let cpu = cpu_reference::refine_flat_cpu(&object, &topo, level);
+            let cpu = flat::refine_flat_cpu(&object, &topo, level);
             let gpu =
                 refine_flat_with(&ctx, &object, level, Reconstruction::NearestNormal).unwrap();
             let what = format!("{} level {level}", object.name);
@@ -219,7 +220,7 @@ fn refined_closed_mesh_is_watertight_and_single_colours_stay_exact() {
     object.colours.iter_mut().for_each(|c| *c = colour);
     let topo = FlatTopology::new("octahedron", &object.mesh).unwrap();
     let level = 3;
-    let cpu = cpu_reference::refine_flat_cpu(&object, &topo, level);
+    let cpu = flat::refine_flat_cpu(&object, &topo, level);
     // Every fine edge is shared by exactly two fine triangles, in opposite directions.
     let mut directed = std::collections::HashMap::new();
     for tri in cpu.indices.chunks_exact(3) {
@@ -261,22 +262,18 @@ fn malformed_tables_are_rejected_before_upload() {
     let good = random_object("octahedron", p, t, RandomTrees::default(), 4);
     let mut bad = good.clone();
     bad.triangles[3].bits_start = bad.bit_len as u32;
-    let e = cpu_reference::validate_tables(&bad)
-        .unwrap_err()
-        .to_string();
+    let e = tables::validate_tables(&bad).unwrap_err().to_string();
     assert!(
         e.contains("triangle 3") && e.contains("past the end"),
         "{e}"
     );
     let mut bad = good.clone();
     bad.colours.truncate(bad.colours.len() - 1);
-    let e = cpu_reference::validate_tables(&bad)
-        .unwrap_err()
-        .to_string();
+    let e = tables::validate_tables(&bad).unwrap_err().to_string();
     assert!(e.contains("colours"), "{e}");
     let mut bad = good.clone();
     bad.triangles[0].normal_count = 0;
-    assert!(cpu_reference::validate_tables(&bad).is_err());
+    assert!(tables::validate_tables(&bad).is_err());
     let mut bad = good;
     bad.mesh.edges[5] = 1000;
     let e = FlatTopology::new("octahedron", &bad.mesh)
@@ -297,7 +294,7 @@ fn gpu_flat_refinement_matches_cpu_on_real_meshes() {
     let Some(ctx) = context_or_skip("gpu_flat_refinement_matches_cpu_on_real_meshes") else {
         return;
     };
-    use hce_runtime::gpu::plain_mesh::{load_plain_mesh, to_flat_object};
+    use hce_meshio::plain::{load_plain_mesh, to_flat_object};
     for name in ["teapot.obj", "suzanne.obj"] {
         let path = std::path::Path::new(&dir).join(name);
         let plain = load_plain_mesh(&path).unwrap();
@@ -311,7 +308,7 @@ fn gpu_flat_refinement_matches_cpu_on_real_meshes() {
         );
         let topo = FlatTopology::new(name, &object.mesh).unwrap();
         for level in 1..=2 {
-            let cpu = cpu_reference::refine_flat_cpu(&object, &topo, level);
+            let cpu = flat::refine_flat_cpu(&object, &topo, level);
             let gpu =
                 refine_flat_with(&ctx, &object, level, Reconstruction::NearestNormal).unwrap();
             assert_eq!(gpu.indices, cpu.indices, "{name} level {level}");

@@ -1,5 +1,5 @@
 //! The Loop subdivision kernel (`hce_runtime::gpu::loop_kernel`) against its CPU reference,
-//! `hce_runtime::subdivide` followed by `hce_runtime::colour::apply_baked_colours`: indices
+//! `hce_geometry::subdivide` followed by `hce_geometry::colour::apply_baked_colours`: indices
 //! identical, positions within 1e-5 of the bounding-box diagonal, normals close, vertex colours
 //! within 1e-3 relative, on built-in meshes (valences 3 to 9, boundaries, creases) and on the
 //! shared real meshes when `HCE_EXTRA_MESHES` names their folder. Colours come from random but
@@ -10,21 +10,23 @@
 #![cfg(feature = "gpu")]
 #![allow(clippy::needless_range_loop)]
 
+// The meshes and helpers of hce-geometry's tests, shared rather than copied.
+#[path = "../../geometry/tests/common/mod.rs"]
 mod common;
 
 use std::path::Path;
 
 use hce_format::{ControlMesh, Object, ObjectKind};
-use hce_runtime::colour::apply_baked_colours_with;
+use hce_geometry::colour::apply_baked_colours_with;
+use hce_geometry::lighting::Reconstruction;
+use hce_geometry::subdivide::subdivide;
+use hce_geometry::topology::{build_control_mesh, Creases, Topology, TopologyConfig};
 use hce_runtime::gpu::testing::{context_or_skip, random_object, RandomTrees};
 use hce_runtime::gpu::{AdapterKind, GpuContext, LoopKernel, PatchScheme};
-use hce_runtime::lighting::Reconstruction;
-use hce_runtime::subdivide::subdivide;
-use hce_runtime::topology::{build_control_mesh, Creases, Topology, TopologyConfig};
 
 fn data_mesh(name: &str, creases: Creases) -> Topology {
     common::control_mesh(
-        &Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/data/{name}.obj")),
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../geometry/tests/data/{name}.obj")),
         &TopologyConfig {
             creases,
             ..Default::default()
@@ -52,9 +54,10 @@ fn bipyramid(n: u32) -> Topology {
 /// The 2x2-per-face cube with flat-shading normals (each corner takes its triangle's normal),
 /// so `Creases::Auto` makes exactly the cube's 12 edges hard: 24 crease edges.
 fn flat_shaded_cube() -> Topology {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cube_creased.obj");
-    let input = hce_runtime::import::load_mesh(&path).unwrap();
-    let w = hce_runtime::import::weld(&input.positions, 0.0);
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../geometry/tests/data/cube_creased.obj");
+    let input = hce_meshio::load_mesh(&path).unwrap();
+    let w = hce_geometry::weld(&input.positions, 0.0);
     let tris: Vec<[u32; 3]> = input
         .triangles
         .iter()
@@ -546,7 +549,7 @@ fn malformed_tables_are_upload_errors() {
 
 #[test]
 fn flat_and_loop_refinements_number_vertices_alike() {
-    use hce_runtime::gpu::cpu_reference::{refine_flat_cpu, FlatTopology};
+    use hce_geometry::flat::{refine_flat_cpu, FlatTopology};
     // CPU twins only: the GPU kernels are compared with them elsewhere (gpu_kernels.rs here).
     for name in ["octahedron", "grid_open", "fan7_open"] {
         let object = baked(name, &data_mesh(name, Creases::None).mesh, 3);

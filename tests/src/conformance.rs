@@ -11,8 +11,8 @@ use std::path::Path;
 
 use hce_format::gltf::{validate_asset, Asset, EXTENSION_NAME};
 use hce_format::{example, validate_bytes, write, Container, Problem, SPOKE_SHARP};
-use hce_runtime::colour::{apply_baked_colours_with, Reconstruction};
-use hce_runtime::scene_export::{refine_object, RefinedObject};
+use hce_geometry::colour::{apply_baked_colours_with, Reconstruction};
+use hce_geometry::refine::{refine_object, RefinedObject};
 use serde_json::{json, Value};
 
 /// Levels whose probes the manifest records.

@@ -10,7 +10,7 @@ use hce_bake::pipeline::{bake_file, BakeOutcome, PipelineOptions};
 use hce_bake::BakeParams;
 use hce_format::gltf::{container_bytes, linked_geometries, primitive_links, Asset};
 use hce_format::ObjectKind;
-use hce_runtime::Creases;
+use hce_geometry::Creases;
 
 fn sample(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

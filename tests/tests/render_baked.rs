@@ -21,8 +21,8 @@ use hce_bake::import::ImportOptions;
 use hce_bake::pipeline::{bake_file, PipelineOptions};
 use hce_bake::BakeParams;
 use hce_format::ObjectKind;
+use hce_geometry::Creases;
 use hce_runtime::asset::{Asset, AssetFormat, OpenOptions};
-use hce_runtime::Creases;
 
 /// Largest accepted mean absolute difference from the golden image, in 8-bit steps.
 const GOLDEN_MAD_LIMIT: f64 = 1.5;
@@ -163,9 +163,9 @@ mod gpu {
         let object = &asset.objects[i].object;
         let check = |scene: &GpuScene, level: u32| {
             let got = scene.read_back(ctx, i).unwrap();
-            let refined = hce_runtime::subdivide(&object.mesh, level).unwrap();
+            let refined = hce_geometry::subdivide(&object.mesh, level).unwrap();
             let colours =
-                hce_runtime::colour::apply_baked_colours(object, &refined, level).unwrap();
+                hce_geometry::colour::apply_baked_colours(object, &refined, level).unwrap();
             assert_eq!(got.level, level);
             assert_eq!(got.positions, refined.positions.as_flattened());
             assert_eq!(got.indices, refined.indices.as_flattened());

@@ -106,9 +106,9 @@ fn exit_status(e: &anyhow::Error) -> i32 {
         return 4;
     }
     let invalid_input = e.chain().any(|c| {
-        c.is::<hce_runtime::ImportError>()
-            || c.is::<hce_runtime::TopologyError>()
-            || c.is::<hce_runtime::SubdivError>()
+        c.is::<hce_meshio::ImportError>()
+            || c.is::<hce_geometry::TopologyError>()
+            || c.is::<hce_geometry::SubdivError>()
             || c.is::<hce_format::ReadError>()
             || c.is::<hce_format::gltf::GltfError>()
             || c.is::<hce_runtime::AssetError>()

@@ -172,10 +172,10 @@ fn probes_match_hce_subdivide_at_levels_1_to_3() {
 
 /// Both reconstructions, unclamped, from the library `hce` calls (`hce subdivide` writes only
 /// the smooth one, clamped): the file read through `hce_format`, refined by
-/// `hce_runtime::scene_export::refine_object`, coloured by `apply_baked_colours_with`.
+/// `hce_geometry::refine::refine_object`, coloured by `apply_baked_colours_with`.
 #[test]
 fn probe_colours_match_both_reconstructions() {
-    use hce_runtime::colour::{apply_baked_colours_with, Reconstruction};
+    use hce_geometry::colour::{apply_baked_colours_with, Reconstruction};
     let m = manifest();
     let mut checked = 0;
     for c in m["cases"]
@@ -190,7 +190,7 @@ fn probe_colours_match_both_reconstructions() {
         for r in c["refined"].as_array().unwrap() {
             let object = &objects[r["object"].as_u64().unwrap() as usize];
             let level = r["level"].as_u64().unwrap() as u32;
-            let refined = hce_runtime::scene_export::refine_object(object, level).unwrap();
+            let refined = hce_geometry::refine::refine_object(object, level).unwrap();
             for (field, reconstruction) in [
                 ("colour_smooth", Reconstruction::Smooth),
                 ("colour_nearest", Reconstruction::NearestNormal),

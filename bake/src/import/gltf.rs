@@ -17,8 +17,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
-pub(crate) use hce_runtime::gltf_guard::read_uri;
-use hce_runtime::gltf_guard::{
+pub(crate) use hce_meshio::gltf_guard::read_uri;
+use hce_meshio::gltf_guard::{
     check_accessor, load_buffers, precheck, read_uri_from, AccessorUse as Use,
 };
 

@@ -10,7 +10,7 @@ use super::flat::{FlatKernel, KernelTiming};
 use super::loop_kernel::{LoopKernel, PatchScheme};
 use super::util::{check_size, dispatch_size, read_back, storage_output, uniform_init, PassTimer};
 use super::{GpuContext, GpuError};
-use crate::lighting::Reconstruction;
+use hce_geometry::lighting::Reconstruction;
 
 /// Where a time came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

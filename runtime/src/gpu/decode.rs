@@ -2,15 +2,16 @@
 //! triangle, level, path, subtriangle normal) the tree node, chosen normal and linear colour.
 //!
 //! The flat and Loop kernels decode inline; this entry point lets the decoding be checked against
-//! [`cpu_reference::decode_colour`](super::cpu_reference::decode_colour) in isolation.
+//! [`decode::decode_colour`](super::decode::decode_colour) in isolation.
 
 use hce_format::Object;
 
-use super::cpu_reference::{validate_tables, MAX_RENDER_LEVEL};
 use super::util::{check_size, dispatch_size, read_back, storage_init, storage_output};
 use super::{GpuContext, GpuError};
+use hce_geometry::decode::MAX_RENDER_LEVEL;
+use hce_geometry::tables::validate_tables;
 
-pub use super::cpu_reference::DecodedColour;
+pub use hce_geometry::decode::DecodedColour;
 
 /// WGSL of the shared tree-walking functions, prepended to kernels that colour subtriangles.
 pub const TREE_WGSL: &str = include_str!("hce_tree.wgsl");

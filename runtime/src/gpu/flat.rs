@@ -10,11 +10,13 @@
 
 use hce_format::Object;
 
-use super::cpu_reference::{validate_tables, FlatTopology, RefinedMesh, MAX_RENDER_LEVEL};
 use super::decode::{records_words, refinement_source};
 use super::util::{check_size, dispatch_size, read_back, storage_init, storage_output, PassTimer};
 use super::{GpuContext, GpuError};
-use crate::lighting::Reconstruction;
+use hce_geometry::decode::MAX_RENDER_LEVEL;
+use hce_geometry::flat::{FlatTopology, RefinedMesh};
+use hce_geometry::lighting::Reconstruction;
+use hce_geometry::tables::validate_tables;
 
 /// The kernel's uniform block (`Params` in `flat.wgsl`).
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]

@@ -1,8 +1,8 @@
 //! Loop subdivision with HCE colours on the GPU (`loop.wgsl`): how
 //! [`ObjectKind::Multiresolution`](hce_format::ObjectKind::Multiresolution) objects are drawn
 //! (Concheiro et al., "Synthesis of multiresolution scenes with global illumination on a GPU",
-//! GRAPP 2012). The kernel is a port of the CPU reference, [`crate::subdivide`] followed by
-//! [`crate::colour::apply_baked_colours`], reading the same adjacency tables:
+//! GRAPP 2012). The kernel is a port of the CPU reference, [`hce_geometry::subdivide`] followed by
+//! [`hce_geometry::colour::apply_baked_colours`], reading the same adjacency tables:
 //!
 //! 1. The patches: each coarse triangle's local patch (grid, bands, corner rings) refined level
 //!    by level in the CPU's order of arithmetic, then the positions and normals of the output
@@ -30,7 +30,7 @@
 //! scheduling, and both patch kernels compute every point with the same function of the
 //! previous level, so they agree bit for bit with each other and with the CPU.
 //!
-//! Output numbering is exactly that of [`crate::subdivide`]:
+//! Output numbering is exactly that of [`hce_geometry::subdivide`]:
 //! `[V coarse][E edges × (M − 1)][F × interior]`, fine triangle `t · 4^L + path`.
 //!
 //! Use: [`LoopKernel::new`] once per device, [`LoopKernel::upload`] once per object, then
@@ -40,15 +40,16 @@
 
 use hce_format::Object;
 
-use super::cpu_reference::{validate_tables, FlatTopology, RefinedMesh};
 use super::decode::{records_words, refinement_source};
 use super::flat::KernelTiming;
 use super::util::{
     check_size, dispatch_size, read_back, storage_init, storage_output, PassTimer, WORKGROUP,
 };
 use super::{AdapterKind, GpuContext, GpuError};
-use crate::lighting::Reconstruction;
-use crate::subdivide::{prepare, MAX_LEVEL};
+use hce_geometry::flat::{FlatTopology, RefinedMesh};
+use hce_geometry::lighting::Reconstruction;
+use hce_geometry::subdivide::{prepare, MAX_LEVEL};
+use hce_geometry::tables::validate_tables;
 
 /// Upper bound of the scratch buffer (bytes): the number of coarse triangles refined at once is
 /// this divided by one triangle's patch size (or the device's storage-binding limit, if lower).
@@ -211,14 +212,14 @@ pub struct LoopObject {
 }
 
 /// Output buffers of a refinement: drawable as they are (`positions`, `normals` and `colours` as
-/// vertex buffers, `indices` as an index buffer), in the numbering of [`crate::subdivide`].
+/// vertex buffers, `indices` as an index buffer), in the numbering of [`hce_geometry::subdivide`].
 pub struct LoopOutput {
     pub level: u32,
     pub vertex_count: u32,
     pub triangle_count: u32,
     /// `x, y, z` f32 per vertex (stride 12).
     pub positions: wgpu::Buffer,
-    /// Unit `x, y, z` f32 per vertex (stride 12), as [`crate::subdivide::Refined::normals`].
+    /// Unit `x, y, z` f32 per vertex (stride 12), as [`hce_geometry::subdivide::Refined::normals`].
     pub normals: wgpu::Buffer,
     /// Linear `r, g, b, 1` f32 per vertex (stride 16).
     pub colours: wgpu::Buffer,
@@ -402,7 +403,7 @@ impl LoopKernel {
             .clone()
     }
 
-    /// Validates `object` (adjacency tables as [`crate::subdivide`] reads them, edge and
+    /// Validates `object` (adjacency tables as [`hce_geometry::subdivide`] reads them, edge and
     /// vertex incidence, HCE records, trees, normals and colours) and uploads it. A malformed
     /// table is an error here, never an out-of-bounds read on the GPU.
     pub fn upload(&self, ctx: &GpuContext, object: &Object) -> Result<LoopObject, GpuError> {
@@ -792,7 +793,7 @@ fn scratch_shape(
 }
 
 /// Output vertex and triangle counts at `level`, checked to fit 32-bit indices as
-/// [`crate::subdivide`] checks them.
+/// [`hce_geometry::subdivide`] checks them.
 fn counts(object: &LoopObject, level: u32) -> Result<(u32, u32), GpuError> {
     if level > MAX_LEVEL {
         return Err(GpuError::LevelTooHigh {

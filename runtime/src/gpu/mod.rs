@@ -6,7 +6,7 @@
 //!
 //! Every kernel has a plain-Rust twin that follows the same steps in the same order, so that
 //! tests can compare GPU output with it value by value: [`cpu_reference`] for decoding and flat
-//! refinement, [`crate::subdivide`] and [`crate::colour`] for the Loop kernel.
+//! refinement, [`hce_geometry::subdivide`] and [`hce_geometry::colour`] for the Loop kernel.
 //!
 //! The method is Concheiro et al., "Synthesis of multiresolution scenes with global illumination
 //! on a GPU" (GRAPP 2012): colours are chosen per subtriangle by walking the coarse triangle's
@@ -14,22 +14,20 @@
 
 pub mod bench;
 pub mod context;
-pub mod cpu_reference;
 pub mod decode;
 pub mod flat;
 pub mod framing;
 pub mod lod;
 pub mod loop_kernel;
-pub mod plain_mesh;
 pub mod render;
 pub mod scene;
 pub mod testing;
 mod util;
 
 pub use context::{AdapterDescription, AdapterKind, ContextOptions, GpuContext};
-pub use cpu_reference::RefinedMesh;
 pub use decode::{decode_colours, ColourQuery, DecodedColour};
 pub use flat::{refine_flat, refine_flat_with, FlatKernel, FlatObject, FlatOutput, KernelTiming};
+pub use hce_geometry::flat::RefinedMesh;
 pub use lod::{choose_level, Camera, LodParams};
 pub use loop_kernel::{refine_loop, LoopKernel, LoopMesh, LoopObject, LoopOutput, PatchScheme};
 pub use render::{
@@ -67,4 +65,13 @@ pub enum GpuError {
     InvalidParams(String),
     #[error("reading results back from the GPU failed: {0}")]
     Readback(String),
+}
+
+impl From<hce_geometry::tables::InvalidObject> for GpuError {
+    fn from(e: hce_geometry::tables::InvalidObject) -> Self {
+        GpuError::InvalidObject {
+            object: e.object,
+            reason: e.reason,
+        }
+    }
 }

@@ -13,8 +13,8 @@
 //! * **Multiresolution** objects by the [`LoopKernel`] ([`MultiresPath::Gpu`], the default):
 //!   Loop subdivision of every coarse triangle's patch, subtriangle colours decoded from the HCE
 //!   tree by normal, area-weighted vertex colours, all in compute shaders.
-//!   [`MultiresPath::CpuReference`] does the same on the CPU ([`crate::subdivide`] and
-//!   [`crate::colour`]) and uploads the result: it is the reference the kernel is checked
+//!   [`MultiresPath::CpuReference`] does the same on the CPU ([`hce_geometry::subdivide`] and
+//!   [`hce_geometry::colour`]) and uploads the result: it is the reference the kernel is checked
 //!   against, kept as an explicit option (never a silent fallback).
 //!
 //! # A viewer loop
@@ -62,17 +62,17 @@ use super::{
     LoopOutput,
 };
 use crate::asset::{Asset, Bounds};
-use crate::lighting::Reconstruction;
-use crate::subdivide::{subdivide_into, Refined};
+use hce_geometry::lighting::Reconstruction;
+use hce_geometry::subdivide::{subdivide_into, Refined};
 
 /// How multiresolution objects are refined.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum MultiresPath {
-    /// The GPU Loop kernel ([`LoopKernel`], levels up to [`crate::subdivide::MAX_LEVEL`]).
+    /// The GPU Loop kernel ([`LoopKernel`], levels up to [`hce_geometry::subdivide::MAX_LEVEL`]).
     #[default]
     Gpu,
     /// CPU Loop subdivision and CPU colour application, uploaded as buffers (levels up to
-    /// [`crate::subdivide::MAX_LEVEL`]). The reference for checking the GPU kernel.
+    /// [`hce_geometry::subdivide::MAX_LEVEL`]). The reference for checking the GPU kernel.
     CpuReference,
 }
 
@@ -414,14 +414,14 @@ impl GpuScene {
                 if out.as_ref().is_some_and(|b| b.level == level) {
                     return Ok(());
                 }
-                if level > crate::subdivide::MAX_LEVEL {
+                if level > hce_geometry::subdivide::MAX_LEVEL {
                     return Err(GpuError::LevelTooHigh {
                         level,
-                        max: crate::subdivide::MAX_LEVEL,
+                        max: hce_geometry::subdivide::MAX_LEVEL,
                     });
                 }
                 subdivide_into(&object.mesh, level, scratch).map_err(|e| invalid(&name, e))?;
-                let colours = crate::colour::apply_baked_colours_with(
+                let colours = hce_geometry::colour::apply_baked_colours_with(
                     object,
                     scratch,
                     level,

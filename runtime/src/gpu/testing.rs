@@ -148,7 +148,7 @@ pub fn random_object(
 ) -> hce_format::Object {
     use hce_format::{rgb9e5, ControlMesh, Object, ObjectKind, TriangleRecord};
     let mut rng = SplitMix(seed);
-    let edges = super::cpu_reference::edge_ids(&triangles);
+    let edges = hce_geometry::flat::edge_ids(&triangles);
     let mesh = ControlMesh {
         positions,
         triangles,
@@ -161,7 +161,7 @@ pub fn random_object(
     let mut colours = Vec::new();
     for t in 0..mesh.triangle_count() {
         let p = mesh.triangle(t).map(|v| mesh.position(v));
-        let (geometric, _) = super::cpu_reference::normal_and_area(p);
+        let (geometric, _) = hce_geometry::flat::normal_and_area(p);
         let normal_count = 1 + rng.below(shape.max_extra_normals + 1);
         let record = TriangleRecord {
             bits_start: bit_list.len() as u32,

@@ -203,20 +203,21 @@ impl PassTimer {
     }
 }
 
-/// The `hce_light` buffer of `hce_light.wgsl` ([`crate::lighting::LightingTable::to_words`]).
+/// The `hce_light` buffer of `hce_light.wgsl` ([`hce_geometry::lighting::LightingTable::to_words`]).
 /// One unused word for the nearest-normal rule (wgpu rejects empty buffers).
 pub fn lighting_words(
     object: &hce_format::Object,
-    reconstruction: crate::lighting::Reconstruction,
+    reconstruction: hce_geometry::lighting::Reconstruction,
 ) -> Result<Vec<u32>, GpuError> {
-    if reconstruction != crate::lighting::Reconstruction::Smooth {
+    if reconstruction != hce_geometry::lighting::Reconstruction::Smooth {
         return Ok(vec![0]);
     }
-    let table =
-        crate::lighting::LightingTable::build(object).map_err(|e| GpuError::InvalidObject {
+    let table = hce_geometry::lighting::LightingTable::build(object).map_err(|e| {
+        GpuError::InvalidObject {
             object: object.name.clone(),
             reason: e.to_string(),
-        })?;
+        }
+    })?;
     table.to_words().ok_or(GpuError::TooLarge {
         what: "lighting table",
         needed: (table.nodes.len() + table.leaf_points.len() + table.models.len()) as u64 * 4,

@@ -14,7 +14,7 @@ use hce_bake::normal_sets::NormalSetParams;
 use hce_bake::pipeline::{bake_file, BakeOutcome, PipelineError, PipelineOptions};
 use hce_bake::BakeParams;
 use hce_format::ObjectKind;
-use hce_runtime::Creases;
+use hce_geometry::Creases;
 use indicatif::{ProgressBar, ProgressStyle};
 
 #[derive(Args)]

@@ -46,13 +46,14 @@ pub fn run(_args: BenchGpuArgs) -> Result<()> {
 #[cfg(feature = "gpu")]
 pub fn run(args: BenchGpuArgs) -> Result<()> {
     use anyhow::Context;
+    use hce_geometry::lighting::Reconstruction;
+    use hce_meshio::plain as plain_mesh;
     use hce_runtime::gpu::bench::{
         bench_flat_with, bench_loop_with, write_bandwidth, BenchRow, Timer,
     };
     use hce_runtime::gpu::testing::{grid, random_object, RandomTrees};
     use hce_runtime::gpu::PatchScheme;
-    use hce_runtime::gpu::{plain_mesh, ContextOptions, GpuContext};
-    use hce_runtime::lighting::Reconstruction;
+    use hce_runtime::gpu::{ContextOptions, GpuContext};
 
     let levels: Vec<u32> = args
         .levels
@@ -165,8 +166,8 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
     if args.kernel != "flat" {
         let (positions, triangles, normals) = match &args.mesh {
             Some(path) => {
-                let input = hce_runtime::import::load_mesh(path)?;
-                let welded = hce_runtime::import::weld(&input.positions, 0.0);
+                let input = hce_meshio::load_mesh(path)?;
+                let welded = hce_geometry::weld(&input.positions, 0.0);
                 let tris: Vec<[u32; 3]> = input
                     .triangles
                     .iter()
@@ -183,7 +184,7 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
                 )
             }
         };
-        let topo = hce_runtime::topology::build_control_mesh(
+        let topo = hce_geometry::topology::build_control_mesh(
             &positions,
             &triangles,
             normals.as_deref(),

@@ -20,7 +20,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use hce_bake::import::ImportOptions;
 use hce_bake::pipeline::{bake_file, PipelineOptions};
-use hce_runtime::Creases;
+use hce_geometry::Creases;
 
 use super::render::{parse_size, write_exr, write_png};
 use super::validate::{problems, ValidateArgs};

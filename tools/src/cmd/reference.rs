@@ -3,7 +3,7 @@
 //!
 //! Geometry is what the renderer draws: the baked asset opened with
 //! [`hce_runtime::asset::Asset`], every multiresolution object Loop-subdivided to `--level` on
-//! the CPU ([`hce_runtime::subdivide`], from the file's control mesh, as `hce render
+//! the CPU ([`hce_geometry::subdivide`], from the file's control mesh, as `hce render
 //! --cpu-reference` does), flat objects as they are (their refinement is linear), each instance
 //! placed by its node's world transform. Materials and lights are the baker's: the same file read
 //! by [`hce_bake::import::import_scene`] (reflectance and emission per coarse triangle, which
@@ -96,11 +96,11 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
         }
     }
     let (width, height) = parse_size(&args.size)?;
-    if args.level > hce_runtime::subdivide::MAX_LEVEL {
+    if args.level > hce_geometry::subdivide::MAX_LEVEL {
         bail!(
             "--level {} is out of range; use 0..={}",
             args.level,
-            hce_runtime::subdivide::MAX_LEVEL
+            hce_geometry::subdivide::MAX_LEVEL
         );
     }
     if args.samples == 0 {
@@ -290,7 +290,7 @@ fn build_scene(
         let multires = object.kind == ObjectKind::Multiresolution;
         let refined = if multires {
             Some(
-                hce_runtime::subdivide(&object.mesh, level)
+                hce_geometry::subdivide(&object.mesh, level)
                     .with_context(|| format!("object '{}': subdividing", object.name))?,
             )
         } else {
@@ -334,7 +334,7 @@ fn build_scene(
                             .map(|&n| (normal_m * Vec3::from(n)).normalize_or_zero().to_array())
                             .collect::<Vec<_>>(),
                     ),
-                    Some(hce_runtime::subtriangle_cells(level)),
+                    Some(hce_geometry::subtriangle_cells(level)),
                 ),
                 None => (
                     object

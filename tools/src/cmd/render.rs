@@ -66,10 +66,10 @@ pub struct RenderArgs {
     /// linear in the normal, SPEC.md Appendix G) or `nearest` (the paper's rule: each
     /// subtriangle takes the colour of its closest representative normal, averaged at vertices).
     #[arg(long, default_value = "smooth", value_parser = parse_reconstruction)]
-    pub reconstruction: hce_runtime::lighting::Reconstruction,
+    pub reconstruction: hce_geometry::lighting::Reconstruction,
 }
 
-pub fn parse_reconstruction(s: &str) -> Result<hce_runtime::lighting::Reconstruction, String> {
+pub fn parse_reconstruction(s: &str) -> Result<hce_geometry::lighting::Reconstruction, String> {
     s.parse()
 }
 
@@ -365,9 +365,11 @@ fn run_baked(
 #[cfg(feature = "gpu")]
 fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Result<()> {
     use hce_runtime::gpu::{
-        choose_level, framing::auto_scene_camera, plain_mesh, render::bounds, render_gpu_mesh,
-        CameraChoice, FlatKernel, Framing, GpuMesh, LodParams, RenderParams,
+        choose_level, framing::auto_scene_camera, render::bounds, render_gpu_mesh, CameraChoice,
+        FlatKernel, Framing, GpuMesh, LodParams, RenderParams,
     };
+
+    use hce_meshio::plain as plain_mesh;
 
     let (width, height) = parse_size(&args.size)?;
     let mesh = plain_mesh::load_plain_mesh(&args.file)?;

@@ -3,9 +3,9 @@
 //!
 //! A baked input (`.hce`, or `.glb`/`.gltf` carrying `EXT_hce_baked_lighting`) is loaded with
 //! [`hce_runtime::asset::Asset::open`] and each object refined as the runtime refines it
-//! ([`hce_runtime::scene_export::refine_object`]: Loop for multiresolution objects, linear
-//! 1-to-4 for flat ones, colours from [`hce_runtime::colour::apply_baked_colours`]); the scene
-//! is written back whole ([`hce_runtime::scene_export::write_refined_scene`]), or with
+//! ([`hce_geometry::refine::refine_object`]: Loop for multiresolution objects, linear
+//! 1-to-4 for flat ones, colours from [`hce_geometry::colour::apply_baked_colours`]); the scene
+//! is written back whole ([`hce_bake::output::refined_scene::write_refined_scene`]), or with
 //! `--merge` as one mesh in object space.
 
 use std::path::{Path, PathBuf};
@@ -13,10 +13,11 @@ use std::time::Instant;
 
 use anyhow::{anyhow, Context, Result};
 use clap::Args;
+use hce_bake::output::refined_scene::write_refined_scene;
 use hce_format::ObjectKind;
+use hce_geometry::refine::{refine_object_with, RefinedObject};
+use hce_geometry::topology::{Creases, NonManifold, TopologyConfig};
 use hce_runtime::asset::{Asset, AssetFormat};
-use hce_runtime::scene_export::{refine_object_with, write_refined_scene, RefinedObject};
-use hce_runtime::topology::{Creases, NonManifold, TopologyConfig};
 
 #[derive(Args)]
 #[command(
@@ -42,7 +43,7 @@ pub struct SubdivideArgs {
     /// On a baked file, how baked colours become vertex colours: `smooth` (the default,
     /// SPEC.md Appendix G) or `nearest` (the paper's nearest-normal rule), as `hce render`.
     #[arg(long, default_value = "smooth", value_parser = super::render::parse_reconstruction)]
-    pub reconstruction: hce_runtime::lighting::Reconstruction,
+    pub reconstruction: hce_geometry::lighting::Reconstruction,
     /// Output mesh (.obj, .gltf or .glb), written atomically.
     #[arg(long, short = 'o')]
     pub output: PathBuf,
@@ -73,9 +74,9 @@ pub fn run(mut args: SubdivideArgs) -> Result<()> {
         return run_baked(&args);
     }
     let t0 = Instant::now();
-    let input = hce_runtime::import::load_mesh(&args.input)?;
+    let input = hce_meshio::load_mesh(&args.input)?;
     let t1 = Instant::now();
-    let welded = hce_runtime::import::weld(&input.positions, args.weld_tolerance);
+    let welded = hce_geometry::weld(&input.positions, args.weld_tolerance);
     let tris: Vec<[u32; 3]> = input
         .triangles
         .iter()
@@ -90,7 +91,7 @@ pub fn run(mut args: SubdivideArgs) -> Result<()> {
             NonManifold::Split
         },
     };
-    let topo = hce_runtime::topology::build_control_mesh(
+    let topo = hce_geometry::topology::build_control_mesh(
         &welded.positions,
         &tris,
         input.corner_normals.as_deref(),
@@ -98,10 +99,10 @@ pub fn run(mut args: SubdivideArgs) -> Result<()> {
     )
     .with_context(|| format!("{}: cannot build the control mesh", args.input.display()))?;
     let t3 = Instant::now();
-    let refined = hce_runtime::subdivide::subdivide(&topo.mesh, args.level)
+    let refined = hce_geometry::subdivide::subdivide(&topo.mesh, args.level)
         .with_context(|| format!("{}: cannot subdivide", args.input.display()))?;
     let t4 = Instant::now();
-    hce_runtime::export::write_mesh(
+    hce_meshio::export::write_mesh(
         &args.output,
         &refined.positions,
         &refined.normals,
@@ -258,7 +259,7 @@ fn write_merged(args: &SubdivideArgs, refined: &[RefinedObject]) -> Result<()> {
         normals.extend_from_slice(&r.mesh.normals);
         colours.extend_from_slice(&r.colours);
     }
-    hce_runtime::export::write_mesh_with_colours(
+    hce_meshio::export::write_mesh_with_colours(
         &args.output,
         &positions,
         &normals,

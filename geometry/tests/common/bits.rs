@@ -4,8 +4,8 @@
 
 use std::path::{Path, PathBuf};
 
-use hce_runtime::subdivide::Refined;
-use hce_runtime::topology::{Creases, TopologyConfig};
+use hce_geometry::subdivide::Refined;
+use hce_geometry::topology::{Creases, TopologyConfig};
 
 use crate::common;
 
@@ -97,7 +97,7 @@ pub fn subdivide(name: &str, creases: Creases, level: u32) -> Refined {
             ..Default::default()
         },
     );
-    hce_runtime::subdivide::subdivide(&t.mesh, level).unwrap()
+    hce_geometry::subdivide::subdivide(&t.mesh, level).unwrap()
 }
 
 pub const FNV_START: u64 = 0xcbf29ce484222325;

@@ -36,15 +36,15 @@ fn bench(c: &mut Criterion) {
         return;
     };
     let path = Path::new(&dir).join("stanford-bunny.obj");
-    let input = hce_runtime::import::load_mesh(&path).unwrap();
-    let w = hce_runtime::import::weld(&input.positions, 0.0);
+    let input = hce_meshio::load_mesh(&path).unwrap();
+    let w = hce_geometry::weld(&input.positions, 0.0);
     let tris: Vec<[u32; 3]> = input
         .triangles
         .iter()
         .map(|t| t.map(|i| w.input_to_welded[i as usize]))
         .collect();
     let build = || {
-        hce_runtime::topology::build_control_mesh(&w.positions, &tris, None, &Default::default())
+        hce_geometry::topology::build_control_mesh(&w.positions, &tris, None, &Default::default())
             .unwrap()
     };
     let topo = build();
@@ -53,15 +53,15 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("bunny_level3");
     g.sample_size(10);
     g.bench_function("subdivide_from_tables", |b| {
-        b.iter(|| hce_runtime::subdivide::subdivide(&topo.mesh, level).unwrap())
+        b.iter(|| hce_geometry::subdivide::subdivide(&topo.mesh, level).unwrap())
     });
-    let mut reused = hce_runtime::subdivide::Refined::default();
+    let mut reused = hce_geometry::subdivide::Refined::default();
     g.bench_function("subdivide_into_reused_buffers", |b| {
-        b.iter(|| hce_runtime::subdivide::subdivide_into(&topo.mesh, level, &mut reused).unwrap())
+        b.iter(|| hce_geometry::subdivide::subdivide_into(&topo.mesh, level, &mut reused).unwrap())
     });
     g.bench_function("tables", |b| b.iter(build));
     g.bench_function("tables_plus_subdivide", |b| {
-        b.iter(|| hce_runtime::subdivide::subdivide(&build().mesh, level).unwrap())
+        b.iter(|| hce_geometry::subdivide::subdivide(&build().mesh, level).unwrap())
     });
     g.finish();
 
@@ -90,25 +90,25 @@ fn bench(c: &mut Criterion) {
                 .fold(f64::INFINITY, f64::min)
         };
         let sub = ours(&|| {
-            std::hint::black_box(hce_runtime::subdivide::subdivide(&topo.mesh, level).unwrap());
+            std::hint::black_box(hce_geometry::subdivide::subdivide(&topo.mesh, level).unwrap());
         });
-        let mut buf = hce_runtime::subdivide::Refined::default();
-        hce_runtime::subdivide::subdivide_into(&topo.mesh, level, &mut buf).unwrap();
+        let mut buf = hce_geometry::subdivide::Refined::default();
+        hce_geometry::subdivide::subdivide_into(&topo.mesh, level, &mut buf).unwrap();
         let buf = std::cell::RefCell::new(buf);
         let reuse = ours(&|| {
-            hce_runtime::subdivide::subdivide_into(&topo.mesh, level, &mut buf.borrow_mut())
+            hce_geometry::subdivide::subdivide_into(&topo.mesh, level, &mut buf.borrow_mut())
                 .unwrap();
         });
         let tables = ours(&|| {
             std::hint::black_box(build());
         });
         let all = ours(&|| {
-            std::hint::black_box(hce_runtime::subdivide::subdivide(&build().mesh, level).unwrap());
+            std::hint::black_box(hce_geometry::subdivide::subdivide(&build().mesh, level).unwrap());
         });
         // The memory-bandwidth floor: writing the output's bytes once, on both cores, into
         // memory already mapped (as `subdivide_into` does) and into fresh memory (as
         // `subdivide` does, page faults included).
-        let out = hce_runtime::subdivide::subdivide(&topo.mesh, level).unwrap();
+        let out = hce_geometry::subdivide::subdivide(&topo.mesh, level).unwrap();
         let bytes = out.positions.len() * 24 + out.indices.len() * 12;
         drop(out);
         let fill = |buf: &mut [u8]| {

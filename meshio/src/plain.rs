@@ -1,14 +1,15 @@
 //! A minimal loader for plain (not yet baked) meshes, so `hce render` can preview any OBJ or
 //! glTF: positions, triangle indices and `COLOR_0` when present, welded on exactly equal
 //! positions and turned into a flat object whose single-node trees carry one colour per
-//! triangle. Meant to be replaced by the baked-asset loader once the format reader lands.
+//! triangle, which the runtime's flat kernel draws.
 
 use std::path::Path;
 
 use hce_format::{rgb9e5, ControlMesh, Object, ObjectKind, TriangleRecord};
 
-use super::cpu_reference::{edge_ids, normal_and_area};
-use super::GpuError;
+use hce_geometry::flat::{edge_ids, normal_and_area};
+
+use crate::import::ImportError;
 
 /// Triangles with optional linear per-vertex colours.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -19,15 +20,15 @@ pub struct PlainMesh {
     pub colours: Option<Vec<f32>>,
 }
 
-fn load_err(path: &Path, reason: impl std::fmt::Display) -> GpuError {
-    GpuError::Load {
-        path: path.display().to_string(),
-        reason: reason.to_string(),
+fn load_err(path: &Path, reason: impl std::fmt::Display) -> ImportError {
+    ImportError::Invalid {
+        path: path.to_path_buf(),
+        what: reason.to_string(),
     }
 }
 
 /// Loads every triangle primitive of an OBJ, glTF or GLB file into one mesh.
-pub fn load_plain_mesh(path: &Path) -> Result<PlainMesh, GpuError> {
+pub fn load_plain_mesh(path: &Path) -> Result<PlainMesh, ImportError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())

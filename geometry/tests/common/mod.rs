@@ -7,18 +7,18 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use hce_runtime::topology::{Topology, TopologyConfig};
+use hce_geometry::topology::{Topology, TopologyConfig};
 
 /// Loads, welds (bitwise) and builds the control mesh, as `hce subdivide` does.
 pub fn control_mesh(path: &Path, config: &TopologyConfig) -> Topology {
-    let input = hce_runtime::import::load_mesh(path).unwrap();
-    let w = hce_runtime::import::weld(&input.positions, 0.0);
+    let input = hce_meshio::load_mesh(path).unwrap();
+    let w = hce_geometry::weld(&input.positions, 0.0);
     let tris: Vec<[u32; 3]> = input
         .triangles
         .iter()
         .map(|t| t.map(|i| w.input_to_welded[i as usize]))
         .collect();
-    hce_runtime::topology::build_control_mesh(
+    hce_geometry::topology::build_control_mesh(
         &w.positions,
         &tris,
         input.corner_normals.as_deref(),

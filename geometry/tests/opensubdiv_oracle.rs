@@ -59,7 +59,7 @@ fn matches_opensubdiv_on_extra_meshes() {
                 path.display()
             );
             let theirs = common::obj_points(&std::fs::read_to_string(&out).unwrap());
-            let ours = hce_runtime::subdivide::subdivide(&topo.mesh, level).unwrap();
+            let ours = hce_geometry::subdivide::subdivide(&topo.mesh, level).unwrap();
             assert_eq!(
                 ours.positions.len(),
                 theirs.len(),

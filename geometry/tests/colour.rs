@@ -1,11 +1,11 @@
-//! Applying baked colours on the CPU (`hce_runtime::colour`) to the example containers of
+//! Applying baked colours on the CPU (`hce_geometry::colour`) to the example containers of
 //! hce-format, against colours worked out by hand from their trees: the paper's nearest-normal
 //! rule and the smooth reconstruction (SPEC.md, Appendix G).
 
 use hce_format::{example, rgb9e5, tree::encode_tree, Object};
-use hce_runtime::colour::{apply_baked_colours, apply_baked_colours_with, ColourError};
-use hce_runtime::lighting::Reconstruction;
-use hce_runtime::subdivide::{subdivide, Refined};
+use hce_geometry::colour::{apply_baked_colours, apply_baked_colours_with, ColourError};
+use hce_geometry::lighting::Reconstruction;
+use hce_geometry::subdivide::{subdivide, Refined};
 
 fn area(r: &Refined, f: usize) -> f64 {
     let p = r.indices[f].map(|i| r.positions[i as usize].map(f64::from));

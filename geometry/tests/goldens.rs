@@ -11,7 +11,7 @@ mod osd;
 
 use std::path::Path;
 
-use hce_runtime::topology::Creases;
+use hce_geometry::topology::Creases;
 use osd::{data, topology, CASES, LEVELS};
 
 #[test]
@@ -21,7 +21,7 @@ fn small_meshes_match_opensubdiv_goldens() {
         for level in 1..=LEVELS {
             let path = data().join(format!("golden/{name}.L{level}.obj"));
             let theirs = common::obj_points(&std::fs::read_to_string(&path).unwrap());
-            let ours = hce_runtime::subdivide::subdivide(&t.mesh, level).unwrap();
+            let ours = hce_geometry::subdivide::subdivide(&t.mesh, level).unwrap();
             assert_eq!(ours.positions.len(), theirs.len(), "{name} level {level}");
             let d = common::relative_hausdorff(&ours.positions, &theirs);
             assert!(d < 1e-5, "{name} level {level}: relative distance {d:e}");
@@ -86,7 +86,7 @@ fn extra_meshes_match_sampled_opensubdiv_goldens() {
             &Path::new(&dir).join(format!("{name}.obj")),
             &Default::default(),
         );
-        let ours = hce_runtime::subdivide::subdivide(&t.mesh, level).unwrap();
+        let ours = hce_geometry::subdivide::subdivide(&t.mesh, level).unwrap();
         assert_eq!(ours.positions.len(), count, "{name} level {level}");
         let d = common::relative_directed(&sample, &ours.positions);
         assert!(d < 1e-5, "{name} level {level}: relative distance {d:e}");

@@ -572,23 +572,23 @@ fn normalize(s: P) -> Out {
 }
 
 /// Everything the per-triangle tasks share, derived from the tables once (O(V + F)). The GPU
-/// kernel (`gpu::loop_kernel`) uploads the same derived tables, so both sides agree on owners,
-/// crease spokes and correction factors.
-pub(crate) struct Prepared {
+/// kernel (`hce_runtime::gpu::loop_kernel`) uploads the same derived tables, so both sides agree
+/// on owners, crease spokes and correction factors.
+pub struct Prepared {
     /// `vertex_owner[v]`: the corner `3 t + c` that writes coarse vertex `v`.
-    pub(crate) vertex_owner: Vec<u32>,
+    pub vertex_owner: Vec<u32>,
     /// `edge_start[t]`: the first edge id owned by triangle `t` (ids are in first-appearance
     /// order, so triangle `t` owns `edge_start[t] .. edge_start[t + 1]`).
-    pub(crate) edge_start: Vec<u32>,
+    pub edge_start: Vec<u32>,
     /// Whether `(t, e)` owns its edge.
-    pub(crate) owns_edge: Vec<bool>,
-    pub(crate) crease_spokes: Vec<[u32; 2]>,
-    pub(crate) cf: Vec<f32>,
-    pub(crate) edge_count: usize,
+    pub owns_edge: Vec<bool>,
+    pub crease_spokes: Vec<[u32; 2]>,
+    pub cf: Vec<f32>,
+    pub edge_count: usize,
 }
 
 /// Validates every table index the subdivision reads and derives [`Prepared`].
-pub(crate) fn prepare(mesh: &ControlMesh) -> Result<Prepared, SubdivError> {
+pub fn prepare(mesh: &ControlMesh) -> Result<Prepared, SubdivError> {
     let bad = |s: String| Err(SubdivError::Tables(s));
     let nv = mesh.vertex_count();
     let nf = mesh.triangle_count();

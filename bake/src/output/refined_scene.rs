@@ -7,10 +7,9 @@
 //!
 //! # Refinement
 //!
-//! Each object is refined as the runtime refines it ([`refine_object`]): multiresolution
-//! objects by Loop subdivision ([`crate::subdivide`]), flat objects by the linear 1-to-4 split
-//! of the flat kernel (SPEC.md A.7; its CPU twin `gpu::cpu_reference::refine_flat_cpu`), both
-//! coloured by [`crate::colour::apply_baked_colours`]. Flat objects get their vertices split at
+//! Each object is refined as the runtime refines it ([`hce_geometry::refine::refine_object`]):
+//! multiresolution objects by Loop subdivision, flat objects by the linear 1-to-4 split of the
+//! flat kernel (SPEC.md A.7), both coloured by the reconstruction of SPEC.md Appendix G. Flat objects get their vertices split at
 //! coarse-triangle borders so that `NORMAL` can be the face normal (they are drawn faceted);
 //! positions and colours are the runtime's.
 //!
@@ -29,9 +28,9 @@ use hce_format::gltf::{hash_hex, write_glb, PrimitiveLink};
 use hce_format::{Object, ObjectKind};
 use serde_json::{json, Map, Value};
 
-use crate::asset::Asset;
-use crate::export::{write_atomic, ExportError};
-use crate::subdivide::{subdivide, Refined};
+use hce_geometry::refine::{face_normal, unit_or_up, RefinedObject};
+use hce_meshio::export::{base64, write_atomic, ExportError};
+use hce_runtime::asset::{Asset, AssetFormat};
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -51,109 +50,6 @@ pub enum SceneExportError {
     Gltf { location: String, message: String },
     #[error(transparent)]
     Export(#[from] ExportError),
-}
-
-/// One object refined to a level: what the runtime draws, plus normals.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct RefinedObject {
-    /// The Loop or linear refinement (fine triangle `t · 4^level + path`).
-    pub mesh: Refined,
-    /// Linear radiosity per vertex of `mesh`, from [`crate::colour::apply_baked_colours`].
-    pub colours: Vec<[f32; 3]>,
-}
-
-/// Refines `object` to `level` the way the runtime draws it: Loop subdivision for
-/// multiresolution objects, the linear 1-to-4 split for flat ones; then its baked colours, with
-/// the default (smooth) reconstruction.
-pub fn refine_object(object: &Object, level: u32) -> Result<RefinedObject, String> {
-    refine_object_with(object, level, crate::lighting::Reconstruction::default())
-}
-
-/// [`refine_object`] with the colour reconstruction chosen.
-pub fn refine_object_with(
-    object: &Object,
-    level: u32,
-    reconstruction: crate::lighting::Reconstruction,
-) -> Result<RefinedObject, String> {
-    let mesh = match object.kind {
-        ObjectKind::Multiresolution => subdivide(&object.mesh, level).map_err(|e| e.to_string())?,
-        ObjectKind::Flat => refine_linear(object, level)?,
-    };
-    let colours = crate::colour::apply_baked_colours_with(object, &mesh, level, reconstruction)
-        .map_err(|e| e.to_string())?;
-    Ok(RefinedObject { mesh, colours })
-}
-
-/// The flat kernel's CPU twin, as a [`Refined`] (normals: per vertex, area-weighted).
-#[cfg(feature = "gpu")]
-fn refine_linear(object: &Object, level: u32) -> Result<Refined, String> {
-    use crate::gpu::cpu_reference::{refine_flat_cpu, FlatTopology};
-    if level > crate::subdivide::MAX_LEVEL {
-        return Err(format!(
-            "level {level} is out of range; use 0..={}",
-            crate::subdivide::MAX_LEVEL
-        ));
-    }
-    let topo = FlatTopology::new(&object.name, &object.mesh).map_err(|e| e.to_string())?;
-    let flat = refine_flat_cpu(object, &topo, level);
-    let positions: Vec<[f32; 3]> = flat
-        .positions
-        .chunks_exact(3)
-        .map(|p| [p[0], p[1], p[2]])
-        .collect();
-    let indices: Vec<[u32; 3]> = flat
-        .indices
-        .chunks_exact(3)
-        .map(|t| [t[0], t[1], t[2]])
-        .collect();
-    let mut normals = vec![[0f32; 3]; positions.len()];
-    for t in &indices {
-        let n = face_normal(t.map(|i| positions[i as usize]));
-        for &i in t {
-            for k in 0..3 {
-                normals[i as usize][k] += n[k];
-            }
-        }
-    }
-    Ok(Refined {
-        level,
-        positions,
-        normals: normals.into_iter().map(unit_or_up).collect(),
-        indices,
-        coarse_vertices: topo.vertex_count as usize,
-        coarse_edges: topo.edge_count as usize,
-        coarse_triangles: topo.triangle_count as usize,
-    })
-}
-
-#[cfg(not(feature = "gpu"))]
-fn refine_linear(_: &Object, _: u32) -> Result<Refined, String> {
-    Err(
-        "flat objects are refined by hce-runtime's flat-kernel reference, which needs the \
-         `gpu` feature; build with it"
-            .into(),
-    )
-}
-
-/// Area-weighted (unnormalised) normal of a triangle.
-fn face_normal(p: [[f32; 3]; 3]) -> [f32; 3] {
-    let u = [0, 1, 2].map(|k| p[1][k] - p[0][k]);
-    let w = [0, 1, 2].map(|k| p[2][k] - p[0][k]);
-    [
-        u[1] * w[2] - u[2] * w[1],
-        u[2] * w[0] - u[0] * w[2],
-        u[0] * w[1] - u[1] * w[0],
-    ]
-}
-
-/// `n` normalised, or +Y when it has no direction (glTF requires unit normals).
-fn unit_or_up(n: [f32; 3]) -> [f32; 3] {
-    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-    if len > 0.0 && len.is_finite() {
-        n.map(|x| x / len)
-    } else {
-        [0.0, 1.0, 0.0]
-    }
 }
 
 /// Vertex data of one object as written: positions, normals and radiosity per output vertex,
@@ -391,7 +287,7 @@ pub fn write_refined_scene(
             (&synthetic, &[][..])
         }
     };
-    let links: Vec<PrimitiveLink> = if asset.format == crate::asset::AssetFormat::Hce {
+    let links: Vec<PrimitiveLink> = if asset.format == AssetFormat::Hce {
         (0..asset.objects.len())
             .map(|k| PrimitiveLink {
                 mesh: k,
@@ -659,7 +555,7 @@ pub fn write_refined_scene(
     if gltf_text {
         buffer["uri"] = json!(format!(
             "data:application/octet-stream;base64,{}",
-            crate::export::base64(&w.bin)
+            base64(&w.bin)
         ));
     }
     if bin_len > 0 {

@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use hce_format::{NO_NEIGHBOUR, SPOKE_SHARP};
-use hce_runtime::topology::{Creases, Topology, TopologyConfig};
+use hce_geometry::topology::{Creases, Topology, TopologyConfig};
 
 use crate::common;
 

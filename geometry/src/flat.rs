@@ -1,0 +1,396 @@
+//! Flat refinement on the CPU: the linear 1-to-4 split of every coarse triangle to a level, one
+//! colour per fine triangle from its HCE tree node (the paper's nearest-normal rule), and
+//! area-weighted vertex colours shared across coarse edges. This is how flat objects are drawn
+//! (SPEC.md A.7, Appendix F), and the step-for-step twin of the GPU flat kernel (`flat.wgsl`),
+//! which tests compare with value by value. Vertices are numbered as in [`crate::lattice`].
+
+use hce_format::{ControlMesh, Object};
+
+use crate::decode::{decode_colour_in, triangle_tree};
+use crate::lattice::{
+    edge_point, fine_corners, incident_paths, interior_coords, interior_per_triangle,
+};
+use crate::tables::InvalidObject;
+
+/// The refined-mesh connectivity a flat refinement needs beyond the control mesh: edge end
+/// points in the owner's direction, and for each vertex and edge the triangles that touch it.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct FlatTopology {
+    pub vertex_count: u32,
+    pub triangle_count: u32,
+    pub edge_count: u32,
+    /// `[v_e, v_{e+1}]` of each edge as its owner (first appearance) sees it.
+    pub edge_verts: Vec<u32>,
+    /// CSR: sides `3 t + e` of edge `id` are `edge_sides[edge_side_offsets[id]..[id + 1]]`,
+    /// owner first.
+    pub edge_side_offsets: Vec<u32>,
+    pub edge_sides: Vec<u32>,
+    /// CSR: corners `3 t + c` at vertex `v`, in increasing `t`.
+    pub vertex_corner_offsets: Vec<u32>,
+    pub vertex_corners: Vec<u32>,
+}
+
+impl FlatTopology {
+    /// Builds the tables from a control mesh, checking indices, edge ids (dense, numbered in
+    /// order of first appearance) and that every appearance of an edge joins the same two
+    /// vertices.
+    pub fn new(name: &str, mesh: &ControlMesh) -> Result<Self, InvalidObject> {
+        let err = |reason: String| InvalidObject {
+            object: name.to_string(),
+            reason,
+        };
+        if mesh.positions.len() % 3 != 0 || mesh.triangles.len() % 3 != 0 {
+            return Err(err("positions or triangles not a multiple of 3 long".into()));
+        }
+        let v = mesh.vertex_count();
+        let f = mesh.triangle_count();
+        if v > u32::MAX as usize / 2 || f > u32::MAX as usize / 4 {
+            return Err(err("mesh too large for 32-bit indices".into()));
+        }
+        if mesh.edges.len() != mesh.triangles.len() {
+            return Err(err(format!(
+                "{} edge ids for {} triangle edges",
+                mesh.edges.len(),
+                mesh.triangles.len()
+            )));
+        }
+        let mut edge_verts: Vec<u32> = Vec::new();
+        let mut side_count: Vec<u32> = Vec::new();
+        for t in 0..f {
+            let tri = mesh.triangle(t);
+            for (c, &x) in tri.iter().enumerate() {
+                if x as usize >= v {
+                    return Err(err(format!("triangle {t} corner {c}: vertex {x} >= {v}")));
+                }
+            }
+            if tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0] {
+                return Err(err(format!("triangle {t} is degenerate: {tri:?}")));
+            }
+            for e in 0..3 {
+                let id = mesh.edges[3 * t + e];
+                let (a, b) = (tri[e], tri[(e + 1) % 3]);
+                let count = side_count.len() as u32;
+                if id == count {
+                    edge_verts.extend([a, b]);
+                    side_count.push(1);
+                } else if id < count {
+                    let (oa, ob) = (edge_verts[2 * id as usize], edge_verts[2 * id as usize + 1]);
+                    if !((oa == a && ob == b) || (oa == b && ob == a)) {
+                        return Err(err(format!(
+                            "triangle {t} edge {e}: edge id {id} joins ({oa}, {ob}) elsewhere \
+                             but ({a}, {b}) here"
+                        )));
+                    }
+                    side_count[id as usize] += 1;
+                } else {
+                    return Err(err(format!(
+                        "triangle {t} edge {e}: edge id {id} skips ids (next new id is {count}); \
+                         ids must be numbered in order of first appearance"
+                    )));
+                }
+            }
+        }
+        let edge_side_offsets = prefix(&side_count);
+        let mut fill = edge_side_offsets.clone();
+        let mut edge_sides = vec![0u32; 3 * f];
+        for (s, &id) in mesh.edges.iter().enumerate() {
+            edge_sides[fill[id as usize] as usize] = s as u32;
+            fill[id as usize] += 1;
+        }
+        let mut corner_count = vec![0u32; v];
+        for &x in &mesh.triangles {
+            corner_count[x as usize] += 1;
+        }
+        let vertex_corner_offsets = prefix(&corner_count);
+        let mut fill = vertex_corner_offsets.clone();
+        let mut vertex_corners = vec![0u32; 3 * f];
+        for (s, &x) in mesh.triangles.iter().enumerate() {
+            vertex_corners[fill[x as usize] as usize] = s as u32;
+            fill[x as usize] += 1;
+        }
+        Ok(Self {
+            vertex_count: v as u32,
+            triangle_count: f as u32,
+            edge_count: side_count.len() as u32,
+            edge_verts,
+            edge_side_offsets,
+            edge_sides,
+            vertex_corner_offsets,
+            vertex_corners,
+        })
+    }
+
+    /// Output vertex count at `level`.
+    pub fn refined_vertex_count(&self, level: u32) -> u64 {
+        let n = 1u64 << level;
+        u64::from(self.vertex_count)
+            + u64::from(self.edge_count) * (n - 1)
+            + u64::from(self.triangle_count) * interior_per_triangle(n)
+    }
+
+    pub fn refined_triangle_count(&self, level: u32) -> u64 {
+        u64::from(self.triangle_count) << (2 * level)
+    }
+}
+
+fn prefix(counts: &[u32]) -> Vec<u32> {
+    let mut out = Vec::with_capacity(counts.len() + 1);
+    let mut s = 0;
+    out.push(0);
+    for &c in counts {
+        s += c;
+        out.push(s);
+    }
+    out
+}
+
+/// Edge ids for a plain triangle list: dense, in order of first appearance of `(t, e)`, as
+/// [`ControlMesh::edges`] specifies. Non-manifold edges (three or more triangles) get one id.
+pub fn edge_ids(triangles: &[u32]) -> Vec<u32> {
+    let mut map = std::collections::HashMap::new();
+    let mut out = Vec::with_capacity(triangles.len());
+    for tri in triangles.chunks_exact(3) {
+        for e in 0..3 {
+            let (a, b) = (tri[e], tri[(e + 1) % 3]);
+            let key = (a.min(b), a.max(b));
+            let next = map.len() as u32;
+            out.push(*map.entry(key).or_insert(next));
+        }
+    }
+    out
+}
+
+/// Lattice point `(b, c)` of triangle `t` → output vertex index (see the module docs).
+pub fn vertex_index(
+    topo: &FlatTopology,
+    mesh: &ControlMesh,
+    level: u32,
+    t: u32,
+    b: i32,
+    c: i32,
+) -> u32 {
+    let n = 1i32 << level;
+    let a = n - b - c;
+    let tri = mesh.triangle(t as usize);
+    let (e, k) = match (a, b, c) {
+        (_, 0, 0) => return tri[0],
+        (0, _, 0) => return tri[1],
+        (0, 0, _) => return tri[2],
+        (_, _, 0) => (0, b),
+        (0, _, _) => (1, c),
+        (_, 0, _) => (2, a),
+        _ => {
+            let j = (n - 1 - c) as u32;
+            let ip = interior_per_triangle(n as u64) as u32;
+            return topo.vertex_count
+                + topo.edge_count * (n as u32 - 1)
+                + t * ip
+                + (ip - j * (j + 1) / 2)
+                + (b as u32 - 1);
+        }
+    };
+    let id = mesh.edges[3 * t as usize + e];
+    let forward = topo.edge_verts[2 * id as usize] == tri[e];
+    let kk = if forward { k } else { n - k };
+    topo.vertex_count + id * (n as u32 - 1) + (kk as u32 - 1)
+}
+
+/// A refined, coloured triangle mesh, ready to draw.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RefinedMesh {
+    pub level: u32,
+    /// `x, y, z` per vertex.
+    pub positions: Vec<f32>,
+    /// Linear `r, g, b, 1` per vertex: the area-weighted mean of the incident fine triangles.
+    pub colours: Vec<f32>,
+    /// Three per fine triangle, counter-clockwise.
+    pub indices: Vec<u32>,
+    /// Linear `r, g, b` and area per fine triangle (the colour decoded from its tree node).
+    pub face_colours: Vec<f32>,
+}
+
+impl RefinedMesh {
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len() / 3
+    }
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+}
+
+/// Position of lattice point `(b, c)` of triangle `(p0, p1, p2)`, as the kernel computes it.
+fn lattice_position(p: [[f32; 3]; 3], n: i32, b: i32, c: i32) -> [f32; 3] {
+    let inv = 1.0 / n as f32;
+    let (wa, wb, wc) = ((n - b - c) as f32, b as f32, c as f32);
+    std::array::from_fn(|i| (p[0][i] * wa + p[1][i] * wb + p[2][i] * wc) * inv)
+}
+
+/// The CPU reference of the GPU flat kernel (`hce_runtime::gpu::refine_flat`): linear 1-to-4 split of every coarse
+/// triangle to `level`, one colour per fine triangle from its tree node (normal chosen by the
+/// fine triangle's normal), vertex colours as area-weighted means over every incident fine
+/// triangle, across coarse edges and vertices. `object` must have passed
+/// [`validate_tables`](crate::tables::validate_tables).
+pub fn refine_flat_cpu(object: &Object, topo: &FlatTopology, level: u32) -> RefinedMesh {
+    let mesh = &object.mesh;
+    let n = 1i32 << level;
+    let nv = topo.refined_vertex_count(level) as usize;
+    let f = topo.triangle_count as usize;
+    let per = 1usize << (2 * level);
+
+    // Step 1: vertex positions, one writer per vertex.
+    let mut positions = vec![0f32; 3 * nv];
+    let v = topo.vertex_count as usize;
+    positions[..3 * v].copy_from_slice(&mesh.positions[..3 * v]);
+    let ep = (n - 1) as usize;
+    for id in 0..topo.edge_count as usize {
+        let pa = mesh.position(topo.edge_verts[2 * id]);
+        let pb = mesh.position(topo.edge_verts[2 * id + 1]);
+        for k in 1..n {
+            let p = lattice_position([pa, pb, pb], n, k, 0);
+            let i = v + id * ep + (k as usize - 1);
+            positions[3 * i..3 * i + 3].copy_from_slice(&p);
+        }
+    }
+    let base = v + topo.edge_count as usize * ep;
+    let ip = interior_per_triangle(n as u64) as usize;
+    for t in 0..f {
+        let tri = mesh.triangle(t).map(|x| mesh.position(x));
+        for local in 0..ip {
+            let (b, c) = interior_coords(n, local as u32);
+            let p = lattice_position(tri, n, b, c);
+            let i = base + t * ip + local;
+            positions[3 * i..3 * i + 3].copy_from_slice(&p);
+        }
+    }
+
+    // Step 2: fine triangles: indices, area, decoded colour.
+    let mut indices = vec![0u32; 3 * f * per];
+    let mut face_colours = vec![0f32; 4 * f * per];
+    for t in 0..f {
+        let record = &object.triangles[t];
+        let tree = triangle_tree(object, record);
+        for path in 0..per as u32 {
+            let g = t * per + path as usize;
+            let corners = fine_corners(level, path);
+            let idx = corners.map(|[b, c]| vertex_index(topo, mesh, level, t as u32, b, c));
+            indices[3 * g..3 * g + 3].copy_from_slice(&idx);
+            let p = idx.map(|i| {
+                let i = i as usize * 3;
+                [positions[i], positions[i + 1], positions[i + 2]]
+            });
+            let (normal, area) = normal_and_area(p);
+            let d = decode_colour_in(object, record, &tree, level, path, normal);
+            face_colours[4 * g..4 * g + 4].copy_from_slice(&[d.rgb[0], d.rgb[1], d.rgb[2], area]);
+        }
+    }
+
+    // Step 3: vertex colours, gathering incident fine triangles in a fixed order.
+    let mut colours = vec![0f32; 4 * nv];
+    for (i, out) in colours.chunks_exact_mut(4).enumerate() {
+        let mut acc = Accumulator::default();
+        let mut add = |t: u32, b: i32, c: i32| {
+            for path in incident_paths(level, b, c) {
+                let g = t as usize * per + path as usize;
+                acc.add(&face_colours[4 * g..4 * g + 4]);
+            }
+        };
+        if i < v {
+            let (s, e) = (
+                topo.vertex_corner_offsets[i] as usize,
+                topo.vertex_corner_offsets[i + 1] as usize,
+            );
+            for &corner in &topo.vertex_corners[s..e] {
+                let [b, c] = match corner % 3 {
+                    0 => [0, 0],
+                    1 => [n, 0],
+                    _ => [0, n],
+                };
+                add(corner / 3, b, c);
+            }
+        } else if i < base {
+            let id = (i - v) / ep;
+            let kk = ((i - v) % ep) as i32 + 1;
+            let (s, e) = (
+                topo.edge_side_offsets[id] as usize,
+                topo.edge_side_offsets[id + 1] as usize,
+            );
+            for &side in &topo.edge_sides[s..e] {
+                let (t, ed) = (side / 3, side % 3);
+                let forward = mesh.triangles[side as usize] == topo.edge_verts[2 * id];
+                let k = if forward { kk } else { n - kk };
+                let [b, c] = edge_point(n, ed, k);
+                add(t, b, c);
+            }
+        } else {
+            let t = (i - base) / ip;
+            let (b, c) = interior_coords(n, ((i - base) % ip) as u32);
+            add(t as u32, b, c);
+        }
+        out.copy_from_slice(&acc.mean());
+    }
+
+    RefinedMesh {
+        level,
+        positions,
+        colours,
+        indices,
+        face_colours,
+    }
+}
+
+/// Unit normal (zero for a degenerate triangle) and area of a triangle.
+pub fn normal_and_area(p: [[f32; 3]; 3]) -> ([f32; 3], f32) {
+    let u = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
+    let w = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
+    let x = [
+        u[1] * w[2] - u[2] * w[1],
+        u[2] * w[0] - u[0] * w[2],
+        u[0] * w[1] - u[1] * w[0],
+    ];
+    let len = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
+    if len > 0.0 {
+        ([x[0] / len, x[1] / len, x[2] / len], 0.5 * len)
+    } else {
+        ([0.0; 3], 0.0)
+    }
+}
+
+/// Area-weighted colour sum with a plain-mean fallback when every incident area is zero.
+#[derive(Default)]
+struct Accumulator {
+    weighted: [f32; 3],
+    area: f32,
+    plain: [f32; 3],
+    count: f32,
+}
+
+impl Accumulator {
+    fn add(&mut self, face: &[f32]) {
+        for k in 0..3 {
+            self.weighted[k] += face[3] * face[k];
+            self.plain[k] += face[k];
+        }
+        self.area += face[3];
+        self.count += 1.0;
+    }
+
+    fn mean(&self) -> [f32; 4] {
+        if self.area > 0.0 {
+            [
+                self.weighted[0] / self.area,
+                self.weighted[1] / self.area,
+                self.weighted[2] / self.area,
+                1.0,
+            ]
+        } else if self.count > 0.0 {
+            [
+                self.plain[0] / self.count,
+                self.plain[1] / self.count,
+                self.plain[2] / self.count,
+                1.0,
+            ]
+        } else {
+            [0.0, 0.0, 0.0, 1.0]
+        }
+    }
+}

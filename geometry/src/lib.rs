@@ -1,0 +1,35 @@
+//! # hce-geometry
+//!
+//! The geometry of hce, without I/O and without a GPU: everything the baker and the runtime
+//! compute on meshes, in one place each.
+//!
+//! * [`weld`]: joining equal positions.
+//! * [`topology`]: a welded triangle soup to the control-mesh adjacency tables
+//!   ([`hce_format::ControlMesh`]) that Loop subdivision reads, on the CPU and on the GPU.
+//! * [`tables`]: the one validation of what refinement and colouring index in an object.
+//! * [`lattice`]: the 1-to-4 lattice of a refined triangle and its vertex numbering.
+//! * [`subdivide`]: Loop subdivision, the CPU reference of the GPU Loop kernel.
+//! * [`flat`]: flat (linear) refinement, the CPU reference of the GPU flat kernel.
+//! * [`decode`]: the paper's per-subtriangle colour (tree walk, nearest representative normal).
+//! * [`lighting`], [`colour`]: the reconstruction of baked lighting on a refined mesh
+//!   (SPEC.md, Appendix G).
+//! * [`refine`]: one object refined as the runtime draws it (Loop or flat, coloured).
+
+pub mod colour;
+pub mod decode;
+pub mod flat;
+pub mod lattice;
+pub mod lighting;
+pub mod refine;
+pub mod subdivide;
+pub mod tables;
+pub mod topology;
+pub mod weld;
+
+pub use lighting::Reconstruction;
+pub use subdivide::{subdivide, subdivide_into, subtriangle_cells, Refined, SubdivError};
+pub use topology::{
+    build_control_mesh, Creases, NonManifold, Topology, TopologyConfig, TopologyError,
+    TopologyReport,
+};
+pub use weld::{weld, Weld};

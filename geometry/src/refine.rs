@@ -1,0 +1,101 @@
+//! One object refined to a level as the runtime draws it: Loop subdivision for
+//! multiresolution objects ([`crate::subdivide`]), the linear 1-to-4 split for flat ones
+//! ([`crate::flat`], SPEC.md A.7), then its baked colours ([`crate::colour`]). This is what
+//! `hce subdivide BAKED` writes and what `hce render --cpu-reference` draws.
+
+use hce_format::{Object, ObjectKind};
+
+use crate::flat::{refine_flat_cpu, FlatTopology};
+use crate::subdivide::{subdivide, Refined};
+
+/// One object refined to a level: what the runtime draws, plus normals.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RefinedObject {
+    /// The Loop or linear refinement (fine triangle `t · 4^level + path`).
+    pub mesh: Refined,
+    /// Linear radiosity per vertex of `mesh`, from [`crate::colour::apply_baked_colours`].
+    pub colours: Vec<[f32; 3]>,
+}
+
+/// Refines `object` to `level` the way the runtime draws it: Loop subdivision for
+/// multiresolution objects, the linear 1-to-4 split for flat ones; then its baked colours, with
+/// the default (smooth) reconstruction.
+pub fn refine_object(object: &Object, level: u32) -> Result<RefinedObject, String> {
+    refine_object_with(object, level, crate::lighting::Reconstruction::default())
+}
+
+/// [`refine_object`] with the colour reconstruction chosen.
+pub fn refine_object_with(
+    object: &Object,
+    level: u32,
+    reconstruction: crate::lighting::Reconstruction,
+) -> Result<RefinedObject, String> {
+    let mesh = match object.kind {
+        ObjectKind::Multiresolution => subdivide(&object.mesh, level).map_err(|e| e.to_string())?,
+        ObjectKind::Flat => refine_linear(object, level)?,
+    };
+    let colours = crate::colour::apply_baked_colours_with(object, &mesh, level, reconstruction)
+        .map_err(|e| e.to_string())?;
+    Ok(RefinedObject { mesh, colours })
+}
+
+/// The flat kernel's CPU twin, as a [`Refined`] (normals: per vertex, area-weighted).
+fn refine_linear(object: &Object, level: u32) -> Result<Refined, String> {
+    if level > crate::subdivide::MAX_LEVEL {
+        return Err(format!(
+            "level {level} is out of range; use 0..={}",
+            crate::subdivide::MAX_LEVEL
+        ));
+    }
+    let topo = FlatTopology::new(&object.name, &object.mesh).map_err(|e| e.to_string())?;
+    let flat = refine_flat_cpu(object, &topo, level);
+    let positions: Vec<[f32; 3]> = flat
+        .positions
+        .chunks_exact(3)
+        .map(|p| [p[0], p[1], p[2]])
+        .collect();
+    let indices: Vec<[u32; 3]> = flat
+        .indices
+        .chunks_exact(3)
+        .map(|t| [t[0], t[1], t[2]])
+        .collect();
+    let mut normals = vec![[0f32; 3]; positions.len()];
+    for t in &indices {
+        let n = face_normal(t.map(|i| positions[i as usize]));
+        for &i in t {
+            for k in 0..3 {
+                normals[i as usize][k] += n[k];
+            }
+        }
+    }
+    Ok(Refined {
+        level,
+        positions,
+        normals: normals.into_iter().map(unit_or_up).collect(),
+        indices,
+        coarse_vertices: topo.vertex_count as usize,
+        coarse_edges: topo.edge_count as usize,
+        coarse_triangles: topo.triangle_count as usize,
+    })
+}
+
+/// Area-weighted (unnormalised) normal of a triangle.
+pub fn face_normal(p: [[f32; 3]; 3]) -> [f32; 3] {
+    let u = [0, 1, 2].map(|k| p[1][k] - p[0][k]);
+    let w = [0, 1, 2].map(|k| p[2][k] - p[0][k]);
+    [
+        u[1] * w[2] - u[2] * w[1],
+        u[2] * w[0] - u[0] * w[2],
+        u[0] * w[1] - u[1] * w[0],
+    ]
+}
+
+/// `n` normalised, or +Y when it has no direction (glTF requires unit normals).
+pub fn unit_or_up(n: [f32; 3]) -> [f32; 3] {
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if len > 0.0 && len.is_finite() {
+        n.map(|x| x / len)
+    } else {
+        [0.0, 1.0, 0.0]
+    }
+}
