@@ -18,11 +18,12 @@
 
 use hce_format::{rgb9e5, Object, TreeError};
 
+use crate::lattice::subtriangle_cells;
 pub use crate::lighting::Reconstruction;
 use crate::lighting::{
     triangle_lighting, LightingError, LightingTable, TriangleLighting, EVAL_LATTICE_BITS,
 };
-use crate::subdivide::{subtriangle_cells, Refined};
+use crate::subdivide::Refined;
 
 /// Errors of colour application: the object and the refined mesh do not belong together, or the
 /// object's tables are inconsistent.

@@ -26,8 +26,9 @@ pub mod tables;
 pub mod topology;
 pub mod weld;
 
+pub use lattice::subtriangle_cells;
 pub use lighting::Reconstruction;
-pub use subdivide::{subdivide, subdivide_into, subtriangle_cells, Refined, SubdivError};
+pub use subdivide::{subdivide, subdivide_into, Refined, SubdivError};
 pub use topology::{
     build_control_mesh, Creases, NonManifold, Topology, TopologyConfig, TopologyError,
     TopologyReport,

@@ -17,8 +17,9 @@
 //! Triangle `t = (v0, v1, v2)` at level `l` (`N = 2^l` segments per edge) holds:
 //!
 //! * `grid`: the `(N+1)(N+2)/2` points of the triangle, lattice point `(i, j)` (barycentric
-//!   `v0 + i/N (v1 - v0) + j/N (v2 - v0)`, `i, j >= 0`, `i + j <= N`) at index
-//!   `j (N+1) - j (j-1)/2 + i` (rows of constant `j`).
+//!   `v0 + i/N (v1 - v0) + j/N (v2 - v0)`, `i, j >= 0`, `i + j <= N`; the `(b, c)` of
+//!   [`crate::lattice`]) at index `j (N+1) - j (j-1)/2 + i` (rows of constant `j`,
+//!   [`crate::lattice::grid_index`]).
 //! * `band[e]` for each interior edge `e` (from `v_e` to `v_{e+1}`, points `p_0 = v_e .. p_N`):
 //!   the `N` vertices of the neighbouring triangle one row away from the edge; `band[e][m]` is
 //!   adjacent to `p_m` and `p_{m+1}`. As lattice points outside the grid: edge 0 `(m+1, -1)`,
@@ -59,14 +60,16 @@
 //!
 //! # Output numbering
 //!
-//! With `M = 2^L`, `V` control vertices, `E` edges and `F` triangles:
+//! The numbering of [`crate::lattice`] ([`crate::lattice::Numbering`]), shared with flat
+//! refinement. With `M = 2^L`, `V` control vertices, `E` edges and `F` triangles:
 //! `[V coarse vertices][E edges × (M − 1) points, from the owning triangle's v_e to v_{e+1}]
 //! [F triangles × (M−1)(M−2)/2 interior points]`, interior points in rows of increasing `j`,
 //! each row in increasing `i` (`1 <= i, j`, `i + j <= M - 1`). Fine triangle `t · 4^L + path`
 //! has the corners the recursive 1-to-4 split gives (child order Top, Left, Center, Right of
-//! `hce_format::model`). Every output vertex is written by exactly one owner (a coarse vertex
-//! by the first triangle corner that uses it in scan order, an edge point by the owner of its
-//! edge, an interior point by its triangle), so shared vertices cannot disagree.
+//! `hce_format::model`; [`crate::lattice::subtriangle_cells`]). Every output vertex is written
+//! by exactly one owner (a coarse vertex by the first triangle corner that uses it in scan
+//! order, an edge point by the owner of its edge, an interior point by its triangle), so shared
+//! vertices cannot disagree.
 //!
 //! # Normals
 //!
@@ -93,6 +96,8 @@ use hce_format::{
     ControlMesh, NO_NEIGHBOUR, RULE_CORNER, RULE_CREASE, SPOKE_SHARP, VERTEX_BOUNDARY,
 };
 use rayon::prelude::*;
+
+use crate::lattice::{subtriangle_cells, Numbering};
 
 /// Highest supported subdivision level.
 pub const MAX_LEVEL: u32 = 6;
@@ -193,34 +198,6 @@ impl Refined {
     pub fn path(&self, f: usize) -> u32 {
         (f & ((1usize << (2 * self.level)) - 1)) as u32
     }
-}
-
-/// Lattice corners `(i, j)` of each level-`level` subtriangle of a coarse triangle, indexed by
-/// path: the recursive split of `(0,0), (2^L,0), (0,2^L)` into Top, Left, Center, Right.
-pub fn subtriangle_cells(level: u32) -> Vec<[[u32; 2]; 3]> {
-    let m = 1u32 << level;
-    let mut out = Vec::with_capacity(1 << (2 * level));
-    fn rec(t: [[u32; 2]; 3], d: u32, out: &mut Vec<[[u32; 2]; 3]>) {
-        if d == 0 {
-            out.push(t);
-            return;
-        }
-        let h = |a: [u32; 2], b: [u32; 2]| [(a[0] + b[0]) / 2, (a[1] + b[1]) / 2];
-        let [v0, v1, v2] = t;
-        let (m01, m12, m20) = (h(v0, v1), h(v1, v2), h(v2, v0));
-        rec([v0, m01, m20], d - 1, out);
-        rec([m01, v1, m12], d - 1, out);
-        rec([m12, m20, m01], d - 1, out);
-        rec([m20, m12, v2], d - 1, out);
-    }
-    rec([[0, 0], [m, 0], [0, m]], level, &mut out);
-    out
-}
-
-/// Index of lattice point `(i, j)` in a level grid with `n` segments per edge.
-#[inline(always)]
-pub fn grid_index(n: usize, i: usize, j: usize) -> usize {
-    j * (n + 1) - j * j.saturating_sub(1) / 2 + i
 }
 
 /// Index of lattice point `(i, j)`, `-1 <= i, j <= n + 1`, in the square array of a level with
@@ -888,20 +865,28 @@ fn subdivide_checked(mesh: &ControlMesh, level: u32, out: &mut Refined) -> Resul
     let nv = mesh.vertex_count();
     let nf = mesh.triangle_count();
     let ne = prep.edge_count;
-    let m = 1usize << level;
-    let per_edge = m - 1;
-    let per_tri = (m - 1) * m.saturating_sub(2) / 2;
-    let fine_per_tri = 1usize << (2 * level);
-    let total_v = nv as u128 + ne as u128 * per_edge as u128 + nf as u128 * per_tri as u128;
-    let total_f = nf as u128 * fine_per_tri as u128;
-    if total_v > u32::MAX as u128 || total_f > (u32::MAX / 3) as u128 {
-        return Err(SubdivError::TooLarge {
-            level,
-            triangles: nf,
-            what: "more than 2^32 vertices or indices",
-        });
+    let too_large = || SubdivError::TooLarge {
+        level,
+        triangles: nf,
+        what: "more than 2^32 vertices or indices",
+    };
+    let count = |x: usize| u32::try_from(x).map_err(|_| too_large());
+    let numbering = Numbering {
+        level,
+        vertices: count(nv)?,
+        edges: count(ne)?,
+        triangles: count(nf)?,
+    };
+    if numbering.vertex_count() > u64::from(u32::MAX)
+        || numbering.triangle_count() > u64::from(u32::MAX / 3)
+    {
+        return Err(too_large());
     }
-    let total_v = total_v as usize;
+    let m = 1usize << level;
+    let per_edge = numbering.per_edge() as usize;
+    let per_tri = numbering.per_triangle() as usize;
+    let fine_per_tri = 1usize << (2 * level);
+    let total_v = numbering.vertex_count() as usize;
     // Fine triangles as square indices of their corners, by path.
     let local_cells: Vec<[u32; 3]> = subtriangle_cells(level)
         .iter()
@@ -996,25 +981,26 @@ fn subdivide_checked(mesh: &ControlMesh, level: u32, out: &mut Refined) -> Resul
                     }
                 }
                 for e in 0..3 {
-                    let id = mesh.edges[3 * t + e] as usize;
-                    let base = nv + id * per_edge;
+                    let id = mesh.edges[3 * t + e];
                     if own_edge[e] {
                         // Only an owned edge lies in this job's contiguous slice of edge
                         // points; an edge owned by an earlier triangle may have a smaller id.
-                        let local = (id - prep.edge_start[job.t0] as usize) * per_edge;
+                        let local = (id - prep.edge_start[job.t0]) as usize * per_edge;
                         for k in 1..m {
                             let x = sq_edge(m, e, k);
-                            gmap[x] = (base + k - 1) as u32;
+                            gmap[x] = numbering.edge_point(id, k as u64) as u32;
                             job.edge_pos[local + k - 1] = patch.sq[x].to_array();
                             job.edge_nrm[local + k - 1] = normalize(patch.vertex_normal(m, x));
                         }
                     } else {
+                        // Counted from the owner's end, the other way round.
                         for k in 1..m {
-                            gmap[sq_edge(m, e, k)] = (base + m - 1 - k) as u32;
+                            gmap[sq_edge(m, e, k)] =
+                                numbering.edge_point(id, (m - k) as u64) as u32;
                         }
                     }
                 }
-                let ibase = nv + ne * per_edge + t * per_tri;
+                let ibase = numbering.interior_point(t as u32, 0) as usize;
                 let local = (t - job.t0) * per_tri;
                 let mut q = 0;
                 for j in 1..m {
