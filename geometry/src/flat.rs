@@ -11,7 +11,7 @@ use crate::lattice::{
     corner_point, edge_point, fine_corners, incident_paths, interior_coords, interior_index, site,
     Numbering, RefinedPoint, Site,
 };
-use crate::tables::InvalidObject;
+use crate::tables::{check_triangles, InvalidObject, TriangleEdges};
 
 /// The refined-mesh connectivity a flat refinement needs beyond the control mesh: edge end
 /// points in the owner's direction, and for each vertex and edge the triangles that touch it.
@@ -32,65 +32,24 @@ pub struct FlatTopology {
 }
 
 impl FlatTopology {
-    /// Builds the tables from a control mesh, checking indices, edge ids (dense, numbered in
-    /// order of first appearance) and that every appearance of an edge joins the same two
-    /// vertices.
+    /// Builds the tables from a control mesh whose triangles pass
+    /// [`check_triangles`](crate::tables::check_triangles) (indices in range, no degenerate
+    /// triangle, edge ids dense, numbered in order of first appearance and joining the same two
+    /// vertices wherever they appear) and whose indices fit the kernels' 32-bit arithmetic.
     pub fn new(name: &str, mesh: &ControlMesh) -> Result<Self, InvalidObject> {
         let err = |reason: String| InvalidObject {
             object: name.to_string(),
             reason,
         };
-        if mesh.positions.len() % 3 != 0 || mesh.triangles.len() % 3 != 0 {
-            return Err(err("positions or triangles not a multiple of 3 long".into()));
-        }
         let v = mesh.vertex_count();
         let f = mesh.triangle_count();
         if v > u32::MAX as usize / 2 || f > u32::MAX as usize / 4 {
             return Err(err("mesh too large for 32-bit indices".into()));
         }
-        if mesh.edges.len() != mesh.triangles.len() {
-            return Err(err(format!(
-                "{} edge ids for {} triangle edges",
-                mesh.edges.len(),
-                mesh.triangles.len()
-            )));
-        }
-        let mut edge_verts: Vec<u32> = Vec::new();
-        let mut side_count: Vec<u32> = Vec::new();
-        for t in 0..f {
-            let tri = mesh.triangle(t);
-            for (c, &x) in tri.iter().enumerate() {
-                if x as usize >= v {
-                    return Err(err(format!("triangle {t} corner {c}: vertex {x} >= {v}")));
-                }
-            }
-            if tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0] {
-                return Err(err(format!("triangle {t} is degenerate: {tri:?}")));
-            }
-            for e in 0..3 {
-                let id = mesh.edges[3 * t + e];
-                let (a, b) = (tri[e], tri[(e + 1) % 3]);
-                let count = side_count.len() as u32;
-                if id == count {
-                    edge_verts.extend([a, b]);
-                    side_count.push(1);
-                } else if id < count {
-                    let (oa, ob) = (edge_verts[2 * id as usize], edge_verts[2 * id as usize + 1]);
-                    if !((oa == a && ob == b) || (oa == b && ob == a)) {
-                        return Err(err(format!(
-                            "triangle {t} edge {e}: edge id {id} joins ({oa}, {ob}) elsewhere \
-                             but ({a}, {b}) here"
-                        )));
-                    }
-                    side_count[id as usize] += 1;
-                } else {
-                    return Err(err(format!(
-                        "triangle {t} edge {e}: edge id {id} skips ids (next new id is {count}); \
-                         ids must be numbered in order of first appearance"
-                    )));
-                }
-            }
-        }
+        let TriangleEdges {
+            verts: edge_verts,
+            sides: side_count,
+        } = check_triangles(mesh).map_err(err)?;
         let edge_side_offsets = prefix(&side_count);
         let mut fill = edge_side_offsets.clone();
         let mut edge_sides = vec![0u32; 3 * f];

@@ -98,6 +98,7 @@ use hce_format::{
 use rayon::prelude::*;
 
 use crate::lattice::{subtriangle_cells, Numbering};
+use crate::tables::check_loop_tables;
 
 /// Highest supported subdivision level.
 pub const MAX_LEVEL: u32 = 6;
@@ -564,99 +565,14 @@ pub struct Prepared {
     pub edge_count: usize,
 }
 
-/// Validates every table index the subdivision reads and derives [`Prepared`].
+/// Validates every table the subdivision reads ([`check_loop_tables`]) and derives
+/// [`Prepared`].
 pub fn prepare(mesh: &ControlMesh) -> Result<Prepared, SubdivError> {
-    let bad = |s: String| Err(SubdivError::Tables(s));
+    let tables = check_loop_tables(mesh).map_err(SubdivError::Tables)?;
     let nv = mesh.vertex_count();
     let nf = mesh.triangle_count();
-    if mesh.positions.len() != 3 * nv
-        || mesh.triangles.len() != 3 * nf
-        || mesh.ring_offsets.len() != nv + 1
-        || mesh.vertex_flags.len() != nv
-        || mesh.corner_spokes.len() != 3 * nf
-        || mesh.neighbours.len() != 3 * nf
-        || mesh.edges.len() != 3 * nf
-        || mesh.spoke_flags.len() != mesh.ring.len()
-    {
-        return bad("array lengths disagree with the vertex and triangle counts".into());
-    }
-    if nf == 0 {
-        return bad("no triangles".into());
-    }
-    if mesh.ring_offsets[0] != 0 || mesh.ring_offsets[nv] as usize != mesh.ring.len() {
-        return bad("ring_offsets do not span the ring array".into());
-    }
-    // The checks run in parallel over fixed chunks; each chunk stops at its first fault and the
-    // first faulty chunk in order is reported, so the error does not depend on scheduling.
-    // Per chunk: the largest valence, the crease spokes, the first fault.
-    type VertexChunk = (usize, Vec<[u32; 2]>, Result<(), String>);
-    let vertex_chunks: Vec<VertexChunk> = (0..nv.div_ceil(PREPARE_CHUNK))
-        .into_par_iter()
-        .map(|chunk| {
-            let mut max_valence = 6;
-            let range = chunk * PREPARE_CHUNK..((chunk + 1) * PREPARE_CHUNK).min(nv);
-            let mut crease_spokes = Vec::with_capacity(range.len());
-            for v in range {
-                let (a, b) = (
-                    mesh.ring_offsets[v] as usize,
-                    mesh.ring_offsets[v + 1] as usize,
-                );
-                if b < a + 2 {
-                    return (
-                        0,
-                        crease_spokes,
-                        Err(format!("vertex {v}: ring shorter than 2")),
-                    );
-                }
-                // Checked before slicing: a later offset that decreases is caught only afterwards.
-                if b > mesh.ring.len() {
-                    let e = format!("vertex {v}: ring_offsets run past the ring array");
-                    return (0, crease_spokes, Err(e));
-                }
-                max_valence = max_valence.max(b - a);
-                if let Some(&s) = mesh.ring[a..b].iter().find(|&&s| s as usize >= nv) {
-                    let e = format!("vertex {v}: spoke {s} out of range");
-                    return (0, crease_spokes, Err(e));
-                }
-                let mut spokes = [0u32; 2];
-                if mesh.rule(v as u32) == RULE_CREASE {
-                    let sharp: Vec<usize> = (0..b - a)
-                        .filter(|&k| mesh.spoke_flags[a + k] & SPOKE_SHARP != 0)
-                        .collect();
-                    if sharp.len() != 2 {
-                        let e =
-                            format!("vertex {v}: crease rule with {} sharp spokes", sharp.len());
-                        return (0, crease_spokes, Err(e));
-                    }
-                    spokes = [sharp[0] as u32, sharp[1] as u32];
-                }
-                crease_spokes.push(spokes);
-            }
-            (max_valence, crease_spokes, Ok(()))
-        })
-        .collect();
-    let mut max_valence = 6;
-    let mut crease_spokes = Vec::with_capacity(nv);
-    for (m, spokes, fault) in vertex_chunks {
-        if let Err(e) = fault {
-            return bad(e);
-        }
-        max_valence = max_valence.max(m);
-        crease_spokes.extend_from_slice(&spokes);
-    }
-    // Per-triangle checks (everything but the order of edge ids), in parallel.
-    let faults: Vec<Result<(), String>> = (0..nf.div_ceil(PREPARE_CHUNK))
-        .into_par_iter()
-        .map(|chunk| {
-            (chunk * PREPARE_CHUNK..((chunk + 1) * PREPARE_CHUNK).min(nf))
-                .try_for_each(|t| check_triangle(mesh, t))
-        })
-        .collect();
-    if let Some(e) = faults.into_iter().find_map(Result::err) {
-        return bad(e);
-    }
-    // Owners and edge ids: a sequential scan (first appearance), cheap once the indices are
-    // known to be in range.
+    // Owners: a sequential scan in scan order, which is the order of first appearance that the
+    // edge ids were checked to follow.
     let mut vertex_owner = vec![u32::MAX; nv];
     let mut edge_start = Vec::with_capacity(nf + 1);
     let mut owns_edge = vec![false; 3 * nf];
@@ -669,90 +585,24 @@ pub fn prepare(mesh: &ControlMesh) -> Result<Prepared, SubdivError> {
             if vertex_owner[v] == u32::MAX {
                 vertex_owner[v] = (3 * t + c) as u32;
             }
-            let id = mesh.edges[3 * t + c];
-            if id == next {
+            if mesh.edges[3 * t + c] == next {
                 owns_edge[3 * t + c] = true;
                 next += 1;
-            } else if id > next {
-                return bad(format!(
-                    "triangle {t} edge {c}: edge ids are not in first-appearance order"
-                ));
             }
         }
     }
     edge_start.push(next);
-    if let Some(v) = vertex_owner.iter().position(|&o| o == u32::MAX) {
-        return bad(format!("vertex {v} is used by no triangle"));
-    }
-    let cf = (0..=max_valence)
+    let cf = (0..=tables.max_valence)
         .map(|n| if n < 2 { 0.0 } else { correction_factor(n) })
         .collect();
     Ok(Prepared {
         vertex_owner,
         edge_start,
         owns_edge,
-        crease_spokes,
+        crease_spokes: tables.crease_spokes,
         cf,
         edge_count: next as usize,
     })
-}
-
-/// Triangles or vertices per parallel task of [`prepare`].
-const PREPARE_CHUNK: usize = 4096;
-
-/// The checks of one triangle's table entries that do not depend on other triangles.
-fn check_triangle(mesh: &ControlMesh, t: usize) -> Result<(), String> {
-    let nv = mesh.vertex_count();
-    let nf = mesh.triangle_count();
-    let tri = mesh.triangle(t);
-    for c in 0..3 {
-        let v = tri[c] as usize;
-        if v >= nv {
-            return Err(format!("triangle {t}: vertex {v} out of range"));
-        }
-        let ring = mesh.ring_of(tri[c]);
-        let k = mesh.corner_spokes[3 * t + c] as usize;
-        let closed = mesh.vertex_flags[v] & VERTEX_BOUNDARY == 0;
-        let k1 = if closed { (k + 1) % ring.len() } else { k + 1 };
-        if k >= ring.len()
-            || k1 >= ring.len()
-            || ring[k] != tri[(c + 1) % 3]
-            || ring[k1] != tri[(c + 2) % 3]
-        {
-            return Err(format!(
-                "triangle {t} corner {c}: corner_spokes does not point at the triangle's edges"
-            ));
-        }
-        let nb = mesh.neighbours[3 * t + c];
-        // An interior edge needs the spokes before and after the triangle in both rings.
-        if nb != NO_NEIGHBOUR {
-            if nb as usize >= nf {
-                return Err(format!("triangle {t} edge {c}: neighbour out of range"));
-            }
-            if !closed && k == 0 {
-                return Err(format!(
-                    "triangle {t} edge {c}: interior edge on the first (boundary) spoke"
-                ));
-            }
-        } else if closed || mesh.spoke_flags[mesh.ring_offsets[v] as usize + k] & SPOKE_SHARP == 0 {
-            return Err(format!(
-                "triangle {t} edge {c}: boundary edge that is not marked sharp at an interior vertex"
-            ));
-        }
-    }
-    for c in 0..3 {
-        let nb = mesh.neighbours[3 * t + c];
-        let v1 = tri[(c + 1) % 3];
-        let ring = mesh.ring_of(v1);
-        let k = mesh.corner_spokes[3 * t + (c + 1) % 3] as usize;
-        let closed = mesh.vertex_flags[v1 as usize] & VERTEX_BOUNDARY == 0;
-        if nb != NO_NEIGHBOUR && !closed && k + 2 >= ring.len() {
-            return Err(format!(
-                "triangle {t} edge {c}: interior edge on the last (boundary) spoke"
-            ));
-        }
-    }
-    Ok(())
 }
 
 fn make_tri<'a>(mesh: &'a ControlMesh, prep: &'a Prepared, t: usize) -> Tri<'a> {
