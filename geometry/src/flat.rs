@@ -3,6 +3,10 @@
 //! area-weighted vertex colours shared across coarse edges. This is how flat objects are drawn
 //! (SPEC.md A.7, Appendix F), and the step-for-step twin of the GPU flat kernel (`flat.wgsl`),
 //! which tests compare with value by value. Vertices are numbered as in [`crate::lattice`].
+//!
+//! Based on: Concheiro et al. Synthesis of multiresolution scenes with global illumination on a
+//! GPU. GRAPP 2012, section 4 (colour by tree node and nearest representative normal, averaged
+//! at the vertices).
 
 use hce_format::{ControlMesh, Object};
 
@@ -33,7 +37,7 @@ pub struct FlatTopology {
 
 impl FlatTopology {
     /// Builds the tables from a control mesh whose triangles pass
-    /// [`check_triangles`](crate::tables::check_triangles) (indices in range, no degenerate
+    /// [`check_triangles`] (indices in range, no degenerate
     /// triangle, edge ids dense, numbered in order of first appearance and joining the same two
     /// vertices wherever they appear) and whose indices fit the kernels' 32-bit arithmetic.
     pub fn new(name: &str, mesh: &ControlMesh) -> Result<Self, InvalidObject> {

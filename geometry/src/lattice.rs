@@ -1,7 +1,8 @@
 //! The 1-to-4 lattice of a refined coarse triangle and its numbering: the one home, in Rust, of
 //! fine-triangle paths, lattice coordinates, the subtriangles of a level and the numbering of
-//! refined vertices. Flat refinement ([`crate::flat`]), Loop subdivision ([`crate::subdivide`])
-//! and the colour reconstruction ([`crate::colour`], [`crate::lighting`]) all read it from here.
+//! refined vertices. Flat refinement ([`crate::flat`]), Loop subdivision
+//! ([`crate::subdivide`](mod@crate::subdivide)) and the colour reconstruction
+//! ([`crate::colour`], [`crate::lighting`]) all read it from here.
 //!
 //! Its WGSL twin is `runtime/src/gpu/hce_lattice.wgsl`, prepended to the flat and Loop kernels:
 //! [`corner_point`], [`edge_point`], [`interior_index`], [`interior_coords`], [`fine_corners`]
@@ -13,7 +14,8 @@
 //! The split orders children Top `(v0, m01, m20)`, Left `(m01, v1, m12)`, Center
 //! `(m12, m20, m01)`, Right `(m20, m12, v2)` (SPEC.md, Appendix F), so the level-`L` subtriangle
 //! `t · 4^L + path` is the HCE tree node reached by following `path` (two bits per level, the
-//! first split most significant).
+//! first split most significant): the regular 1-to-4 split that Loop subdivision refines (Loop
+//! 1987) and that the HCE trees of Concheiro et al. (GRAPP 2012) encode.
 //!
 //! # Lattice triangles
 //! Every triangle of the split is a [`LatticeTriangle`] `(C0, σ, s)` with corners `C0`,

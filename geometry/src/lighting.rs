@@ -2,6 +2,14 @@
 //! position over the surface and linear in the normal, so that a mesh refined to any level gets
 //! the shading its own normals call for and converges as the level grows.
 //!
+//! Based on:
+//! * Ravi Ramamoorthi and Pat Hanrahan. An efficient representation for irradiance environment
+//!   maps. SIGGRAPH 2001 (the fit over normals).
+//! * Michael F. Cohen and John R. Wallace. Radiosity and Realistic Image Synthesis. Academic
+//!   Press, 1993, section 9.2 (nodal averaging and T-vertices, the interpolation over positions).
+//! * Padrón et al. Hierarchical radiosity for multiresolution systems based on normal tests,
+//!   2010 (the representative normals whose colours are fitted).
+//!
 //! Two steps, both linear in the stored colours:
 //!
 //! * **Over normals**, per coarse triangle: the `n` colours `B_j` of a tree node, stored for the
