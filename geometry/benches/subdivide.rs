@@ -3,8 +3,8 @@
 //! `Far::TopologyRefiner` + `Far::PrimvarRefiner` (the `osd_loop` oracle of
 //! /work/shared/tools, run in the same process tree right before, when `HCE_OSD_LOOP` names it).
 //!
-//! `HCE_EXTRA_MESHES=/work/shared/meshes HCE_OSD_LOOP=/path/osd_loop cargo bench -p hce-runtime
-//! --no-default-features --bench subdivide`
+//! `HCE_EXTRA_MESHES=/work/shared/meshes HCE_OSD_LOOP=/path/osd_loop cargo bench -p hce-geometry
+//! --bench subdivide`
 
 use std::path::Path;
 use std::process::Command;

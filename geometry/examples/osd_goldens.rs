@@ -5,7 +5,7 @@
 //!
 //! ```text
 //! HCE_OSD_LOOP_CREASE=/path/osd_loop_crease HCE_EXTRA_MESHES=/work/shared/meshes \
-//!     cargo run -p hce-runtime --example osd_goldens
+//!     cargo run -p hce-geometry --example osd_goldens
 //! ```
 //!
 //! `osd_loop_crease` is /work/shared/tools/osd_loop.cpp (OpenSubdiv 3.5, Loop,

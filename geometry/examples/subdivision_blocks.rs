@@ -4,7 +4,7 @@
 //! only together with a deliberate change of the pinned hashes:
 //!
 //! ```text
-//! cargo run -p hce-runtime --example subdivision_blocks
+//! cargo run -p hce-geometry --example subdivision_blocks
 //! ```
 
 #[path = "../tests/common/bits.rs"]

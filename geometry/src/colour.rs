@@ -1,6 +1,15 @@
 //! Applying baked HCE colours to a refined mesh on the CPU, exactly as the runtime's renderer
 //! does. This is the reference the GPU kernels are tested against.
 //!
+//! Based on:
+//! * Ravi Ramamoorthi and Pat Hanrahan. An efficient representation for irradiance environment
+//!   maps. SIGGRAPH 2001 (a linear function of the normal carries irradiance; the model of
+//!   [`crate::lighting`]).
+//! * Michael F. Cohen and John R. Wallace. Radiosity and Realistic Image Synthesis. Academic
+//!   Press, 1993, section 9.2 (nodal averaging of elements, T-vertices).
+//! * Concheiro et al. Synthesis of multiresolution scenes with global illumination on a GPU.
+//!   GRAPP 2012, section 4 (the nearest-normal rule).
+//!
 //! Two reconstructions (SPEC.md, Appendix G):
 //!
 //! * [`Reconstruction::Smooth`] (the default): every corner of every level-`L` subtriangle gets
@@ -18,11 +27,12 @@
 
 use hce_format::{rgb9e5, Object, TreeError};
 
+use crate::lattice::subtriangle_cells;
 pub use crate::lighting::Reconstruction;
 use crate::lighting::{
     triangle_lighting, LightingError, LightingTable, TriangleLighting, EVAL_LATTICE_BITS,
 };
-use crate::subdivide::{subtriangle_cells, Refined};
+use crate::subdivide::Refined;
 
 /// Errors of colour application: the object and the refined mesh do not belong together, or the
 /// object's tables are inconsistent.

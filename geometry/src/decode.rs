@@ -1,11 +1,12 @@
-//! Plain-Rust twins of the GPU kernels, step for step, so tests can compare the two.
+//! The paper's colour of one subtriangle, the plain-Rust twin of `hce_tree.wgsl`
+//! (`hce_tree_node`, `hce_choose_normal`, `hce_nearest_colour`) step for step, so tests can
+//! compare the two.
 //!
-//! HCE colour decoding follows Concheiro et al., "Synthesis of multiresolution scenes with
-//! global illumination on a GPU" (GRAPP 2012), section 4: walk the coarse triangle's
-//! breadth-first tree along the subtriangle's path (a node's children are found by ranking it
-//! among the subdivided nodes, a popcount over the tree's bits), stop at a leaf or at the
-//! requested depth, and take the colour of the representative normal whose dot product with the
-//! subtriangle's normal is largest.
+//! Based on: Concheiro et al., "Synthesis of multiresolution scenes with global illumination on
+//! a GPU", GRAPP 2012, section 4. Walk the coarse triangle's breadth-first tree along the
+//! subtriangle's path (a node's children are found by ranking it among the subdivided nodes, a
+//! popcount over the tree's bits), stop at a leaf or at the requested depth, and take the colour
+//! of the representative normal whose dot product with the subtriangle's normal is largest.
 //!
 //! # Bitstream addressing
 //! A triangle's tree is written breadth-first: bit `k` after `bits_start` says whether node `k`

@@ -3,14 +3,19 @@
 //! area-weighted vertex colours shared across coarse edges. This is how flat objects are drawn
 //! (SPEC.md A.7, Appendix F), and the step-for-step twin of the GPU flat kernel (`flat.wgsl`),
 //! which tests compare with value by value. Vertices are numbered as in [`crate::lattice`].
+//!
+//! Based on: Concheiro et al. Synthesis of multiresolution scenes with global illumination on a
+//! GPU. GRAPP 2012, section 4 (colour by tree node and nearest representative normal, averaged
+//! at the vertices).
 
 use hce_format::{ControlMesh, Object};
 
 use crate::decode::{decode_colour_in, triangle_tree};
 use crate::lattice::{
-    edge_point, fine_corners, incident_paths, interior_coords, interior_per_triangle,
+    corner_point, edge_point, fine_corners, incident_paths, interior_coords, interior_index, site,
+    Numbering, RefinedPoint, Site,
 };
-use crate::tables::InvalidObject;
+use crate::tables::{check_triangles, InvalidObject, TriangleEdges};
 
 /// The refined-mesh connectivity a flat refinement needs beyond the control mesh: edge end
 /// points in the owner's direction, and for each vertex and edge the triangles that touch it.
@@ -31,65 +36,24 @@ pub struct FlatTopology {
 }
 
 impl FlatTopology {
-    /// Builds the tables from a control mesh, checking indices, edge ids (dense, numbered in
-    /// order of first appearance) and that every appearance of an edge joins the same two
-    /// vertices.
+    /// Builds the tables from a control mesh whose triangles pass
+    /// [`check_triangles`] (indices in range, no degenerate
+    /// triangle, edge ids dense, numbered in order of first appearance and joining the same two
+    /// vertices wherever they appear) and whose indices fit the kernels' 32-bit arithmetic.
     pub fn new(name: &str, mesh: &ControlMesh) -> Result<Self, InvalidObject> {
         let err = |reason: String| InvalidObject {
             object: name.to_string(),
             reason,
         };
-        if mesh.positions.len() % 3 != 0 || mesh.triangles.len() % 3 != 0 {
-            return Err(err("positions or triangles not a multiple of 3 long".into()));
-        }
         let v = mesh.vertex_count();
         let f = mesh.triangle_count();
         if v > u32::MAX as usize / 2 || f > u32::MAX as usize / 4 {
             return Err(err("mesh too large for 32-bit indices".into()));
         }
-        if mesh.edges.len() != mesh.triangles.len() {
-            return Err(err(format!(
-                "{} edge ids for {} triangle edges",
-                mesh.edges.len(),
-                mesh.triangles.len()
-            )));
-        }
-        let mut edge_verts: Vec<u32> = Vec::new();
-        let mut side_count: Vec<u32> = Vec::new();
-        for t in 0..f {
-            let tri = mesh.triangle(t);
-            for (c, &x) in tri.iter().enumerate() {
-                if x as usize >= v {
-                    return Err(err(format!("triangle {t} corner {c}: vertex {x} >= {v}")));
-                }
-            }
-            if tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0] {
-                return Err(err(format!("triangle {t} is degenerate: {tri:?}")));
-            }
-            for e in 0..3 {
-                let id = mesh.edges[3 * t + e];
-                let (a, b) = (tri[e], tri[(e + 1) % 3]);
-                let count = side_count.len() as u32;
-                if id == count {
-                    edge_verts.extend([a, b]);
-                    side_count.push(1);
-                } else if id < count {
-                    let (oa, ob) = (edge_verts[2 * id as usize], edge_verts[2 * id as usize + 1]);
-                    if !((oa == a && ob == b) || (oa == b && ob == a)) {
-                        return Err(err(format!(
-                            "triangle {t} edge {e}: edge id {id} joins ({oa}, {ob}) elsewhere \
-                             but ({a}, {b}) here"
-                        )));
-                    }
-                    side_count[id as usize] += 1;
-                } else {
-                    return Err(err(format!(
-                        "triangle {t} edge {e}: edge id {id} skips ids (next new id is {count}); \
-                         ids must be numbered in order of first appearance"
-                    )));
-                }
-            }
-        }
+        let TriangleEdges {
+            verts: edge_verts,
+            sides: side_count,
+        } = check_triangles(mesh).map_err(err)?;
         let edge_side_offsets = prefix(&side_count);
         let mut fill = edge_side_offsets.clone();
         let mut edge_sides = vec![0u32; 3 * f];
@@ -120,16 +84,23 @@ impl FlatTopology {
         })
     }
 
+    /// The output numbering at `level`.
+    pub fn numbering(&self, level: u32) -> Numbering {
+        Numbering {
+            level,
+            vertices: self.vertex_count,
+            edges: self.edge_count,
+            triangles: self.triangle_count,
+        }
+    }
+
     /// Output vertex count at `level`.
     pub fn refined_vertex_count(&self, level: u32) -> u64 {
-        let n = 1u64 << level;
-        u64::from(self.vertex_count)
-            + u64::from(self.edge_count) * (n - 1)
-            + u64::from(self.triangle_count) * interior_per_triangle(n)
+        self.numbering(level).vertex_count()
     }
 
     pub fn refined_triangle_count(&self, level: u32) -> u64 {
-        u64::from(self.triangle_count) << (2 * level)
+        self.numbering(level).triangle_count()
     }
 }
 
@@ -160,7 +131,8 @@ pub fn edge_ids(triangles: &[u32]) -> Vec<u32> {
     out
 }
 
-/// Lattice point `(b, c)` of triangle `t` → output vertex index (see the module docs).
+/// Lattice point `(b, c)` of triangle `t` → output vertex index ([`crate::lattice`]'s
+/// numbering; an edge point is counted from the edge owner's end).
 pub fn vertex_index(
     topo: &FlatTopology,
     mesh: &ControlMesh,
@@ -170,29 +142,18 @@ pub fn vertex_index(
     c: i32,
 ) -> u32 {
     let n = 1i32 << level;
-    let a = n - b - c;
     let tri = mesh.triangle(t as usize);
-    let (e, k) = match (a, b, c) {
-        (_, 0, 0) => return tri[0],
-        (0, _, 0) => return tri[1],
-        (0, 0, _) => return tri[2],
-        (_, _, 0) => (0, b),
-        (0, _, _) => (1, c),
-        (_, 0, _) => (2, a),
-        _ => {
-            let j = (n - 1 - c) as u32;
-            let ip = interior_per_triangle(n as u64) as u32;
-            return topo.vertex_count
-                + topo.edge_count * (n as u32 - 1)
-                + t * ip
-                + (ip - j * (j + 1) / 2)
-                + (b as u32 - 1);
+    let numbering = topo.numbering(level);
+    match site(n, b, c) {
+        Site::Corner(c) => tri[c],
+        Site::Edge { edge: e, k } => {
+            let id = mesh.edges[3 * t as usize + e];
+            let forward = topo.edge_verts[2 * id as usize] == tri[e];
+            let kk = if forward { k } else { n - k };
+            numbering.edge_point(id, kk as u64) as u32
         }
-    };
-    let id = mesh.edges[3 * t as usize + e];
-    let forward = topo.edge_verts[2 * id as usize] == tri[e];
-    let kk = if forward { k } else { n - k };
-    topo.vertex_count + id * (n as u32 - 1) + (kk as u32 - 1)
+        Site::Interior => numbering.interior_point(t, u64::from(interior_index(n, b, c))) as u32,
+    }
 }
 
 /// A refined, coloured triangle mesh, ready to draw.
@@ -233,7 +194,8 @@ fn lattice_position(p: [[f32; 3]; 3], n: i32, b: i32, c: i32) -> [f32; 3] {
 pub fn refine_flat_cpu(object: &Object, topo: &FlatTopology, level: u32) -> RefinedMesh {
     let mesh = &object.mesh;
     let n = 1i32 << level;
-    let nv = topo.refined_vertex_count(level) as usize;
+    let numbering = topo.numbering(level);
+    let nv = numbering.vertex_count() as usize;
     let f = topo.triangle_count as usize;
     let per = 1usize << (2 * level);
 
@@ -241,24 +203,21 @@ pub fn refine_flat_cpu(object: &Object, topo: &FlatTopology, level: u32) -> Refi
     let mut positions = vec![0f32; 3 * nv];
     let v = topo.vertex_count as usize;
     positions[..3 * v].copy_from_slice(&mesh.positions[..3 * v]);
-    let ep = (n - 1) as usize;
-    for id in 0..topo.edge_count as usize {
-        let pa = mesh.position(topo.edge_verts[2 * id]);
-        let pb = mesh.position(topo.edge_verts[2 * id + 1]);
+    for id in 0..topo.edge_count {
+        let pa = mesh.position(topo.edge_verts[2 * id as usize]);
+        let pb = mesh.position(topo.edge_verts[2 * id as usize + 1]);
         for k in 1..n {
             let p = lattice_position([pa, pb, pb], n, k, 0);
-            let i = v + id * ep + (k as usize - 1);
+            let i = numbering.edge_point(id, k as u64) as usize;
             positions[3 * i..3 * i + 3].copy_from_slice(&p);
         }
     }
-    let base = v + topo.edge_count as usize * ep;
-    let ip = interior_per_triangle(n as u64) as usize;
-    for t in 0..f {
-        let tri = mesh.triangle(t).map(|x| mesh.position(x));
-        for local in 0..ip {
+    for t in 0..topo.triangle_count {
+        let tri = mesh.triangle(t as usize).map(|x| mesh.position(x));
+        for local in 0..numbering.per_triangle() {
             let (b, c) = interior_coords(n, local as u32);
             let p = lattice_position(tri, n, b, c);
-            let i = base + t * ip + local;
+            let i = numbering.interior_point(t, local) as usize;
             positions[3 * i..3 * i + 3].copy_from_slice(&p);
         }
     }
@@ -288,43 +247,36 @@ pub fn refine_flat_cpu(object: &Object, topo: &FlatTopology, level: u32) -> Refi
     let mut colours = vec![0f32; 4 * nv];
     for (i, out) in colours.chunks_exact_mut(4).enumerate() {
         let mut acc = Accumulator::default();
-        let mut add = |t: u32, b: i32, c: i32| {
+        let mut add = |t: u32, [b, c]: [i32; 2]| {
             for path in incident_paths(level, b, c) {
                 let g = t as usize * per + path as usize;
                 acc.add(&face_colours[4 * g..4 * g + 4]);
             }
         };
-        if i < v {
-            let (s, e) = (
-                topo.vertex_corner_offsets[i] as usize,
-                topo.vertex_corner_offsets[i + 1] as usize,
-            );
-            for &corner in &topo.vertex_corners[s..e] {
-                let [b, c] = match corner % 3 {
-                    0 => [0, 0],
-                    1 => [n, 0],
-                    _ => [0, n],
-                };
-                add(corner / 3, b, c);
+        match numbering.point(i as u64) {
+            RefinedPoint::Coarse(v) => {
+                let (s, e) = (
+                    topo.vertex_corner_offsets[v as usize] as usize,
+                    topo.vertex_corner_offsets[v as usize + 1] as usize,
+                );
+                for &corner in &topo.vertex_corners[s..e] {
+                    add(corner / 3, corner_point(n, corner % 3));
+                }
             }
-        } else if i < base {
-            let id = (i - v) / ep;
-            let kk = ((i - v) % ep) as i32 + 1;
-            let (s, e) = (
-                topo.edge_side_offsets[id] as usize,
-                topo.edge_side_offsets[id + 1] as usize,
-            );
-            for &side in &topo.edge_sides[s..e] {
-                let (t, ed) = (side / 3, side % 3);
-                let forward = mesh.triangles[side as usize] == topo.edge_verts[2 * id];
-                let k = if forward { kk } else { n - kk };
-                let [b, c] = edge_point(n, ed, k);
-                add(t, b, c);
+            RefinedPoint::Edge { id, k: kk } => {
+                let id = id as usize;
+                let (s, e) = (
+                    topo.edge_side_offsets[id] as usize,
+                    topo.edge_side_offsets[id + 1] as usize,
+                );
+                for &side in &topo.edge_sides[s..e] {
+                    let (t, ed) = (side / 3, side % 3);
+                    let forward = mesh.triangles[side as usize] == topo.edge_verts[2 * id];
+                    let k = if forward { kk as i32 } else { n - kk as i32 };
+                    add(t, edge_point(n, ed, k));
+                }
             }
-        } else {
-            let t = (i - base) / ip;
-            let (b, c) = interior_coords(n, ((i - base) % ip) as u32);
-            add(t as u32, b, c);
+            RefinedPoint::Interior { t, local } => add(t, interior_coords(n, local as u32).into()),
         }
         out.copy_from_slice(&acc.mean());
     }

@@ -2,6 +2,14 @@
 //! position over the surface and linear in the normal, so that a mesh refined to any level gets
 //! the shading its own normals call for and converges as the level grows.
 //!
+//! Based on:
+//! * Ravi Ramamoorthi and Pat Hanrahan. An efficient representation for irradiance environment
+//!   maps. SIGGRAPH 2001 (the fit over normals).
+//! * Michael F. Cohen and John R. Wallace. Radiosity and Realistic Image Synthesis. Academic
+//!   Press, 1993, section 9.2 (nodal averaging and T-vertices, the interpolation over positions).
+//! * Padrón et al. Hierarchical radiosity for multiresolution systems based on normal tests,
+//!   2010 (the representative normals whose colours are fitted).
+//!
 //! Two steps, both linear in the stored colours:
 //!
 //! * **Over normals**, per coarse triangle: the `n` colours `B_j` of a tree node, stored for the
@@ -30,10 +38,12 @@ use std::collections::HashMap;
 
 use hce_format::{rgb9e5, Object, ObjectKind, Tree, TreeError, NO_NEIGHBOUR, SPOKE_SHARP};
 
+use crate::lattice::{site, LatticeTriangle, Site};
+
 /// Denominator of the lattice in which leaf corners are identified: the finest split a tree can
 /// have (`hce_format::MAX_DEPTH` = 12).
 const TREE_LATTICE_BITS: u32 = 12;
-const TREE_LATTICE: i64 = 1 << TREE_LATTICE_BITS;
+const TREE_LATTICE: i32 = 1 << TREE_LATTICE_BITS;
 
 /// Denominator of the lattice in which points are evaluated: deep enough for every render level
 /// the kernels accept (15) and every tree depth (12).
@@ -172,56 +182,6 @@ pub fn triangle_lighting(object: &Object, t: usize) -> Result<TriangleLighting<'
     })
 }
 
-/// A node's triangle in the lattice of its coarse triangle: corner 0 at `origin`, corner 1 at
-/// `origin + sigma (side, 0)`, corner 2 at `origin + sigma (0, side)`.
-#[derive(Clone, Copy, Debug)]
-struct Cell {
-    origin: [i64; 2],
-    sigma: i64,
-    side: i64,
-}
-
-impl Cell {
-    fn root(side: i64) -> Self {
-        Cell {
-            origin: [0, 0],
-            sigma: 1,
-            side,
-        }
-    }
-
-    /// Child `c` (Top, Left, Center, Right).
-    fn child(self, c: u32) -> Cell {
-        let h = self.side / 2;
-        let s = self.sigma;
-        let [x, y] = self.origin;
-        match c {
-            0 => Cell { side: h, ..self },
-            1 => Cell {
-                origin: [x + s * h, y],
-                side: h,
-                ..self
-            },
-            2 => Cell {
-                origin: [x + s * h, y + s * h],
-                sigma: -s,
-                side: h,
-            },
-            _ => Cell {
-                origin: [x, y + s * h],
-                side: h,
-                ..self
-            },
-        }
-    }
-
-    fn corners(self) -> [[i64; 2]; 3] {
-        let [x, y] = self.origin;
-        let (s, d) = (self.sigma, self.side);
-        [[x, y], [x + s * d, y], [x, y + s * d]]
-    }
-}
-
 /// Identity of a leaf corner on the object's surface, shared by every leaf that meets there
 /// within one smooth region.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -319,45 +279,28 @@ impl<'a> Surface<'a> {
     }
 
     /// The key of lattice point `(x, y)` (denominator 4096) of coarse triangle `t`.
-    fn key(&self, t: usize, x: i64, y: i64) -> PointKey {
+    fn key(&self, t: usize, x: i32, y: i32) -> PointKey {
         let m = &self.object.mesh;
         let n = TREE_LATTICE;
-        let corner = match (x, y) {
-            (0, 0) => Some(0),
-            (x, 0) if x == n => Some(1),
-            (0, y) if y == n => Some(2),
-            _ => None,
-        };
-        if let Some(c) = corner {
-            return PointKey::Vertex {
+        match site(n, x, y) {
+            Site::Corner(c) => PointKey::Vertex {
                 vertex: m.triangles[3 * t + c],
                 group: self.group[3 * t + c],
-            };
-        }
-        // Edge e runs from v_e to v_{e+1}; `p` is the distance from v_e.
-        let edge = if y == 0 {
-            Some((0, x))
-        } else if x + y == n {
-            Some((1, y))
-        } else if x == 0 {
-            Some((2, n - y))
-        } else {
-            None
-        };
-        if let Some((e, p)) = edge {
-            if self.joined[3 * t + e] {
+            },
+            // Edge e runs from v_e to v_{e+1}; `k` is the distance from v_e.
+            Site::Edge { edge: e, k } if self.joined[3 * t + e] => {
                 let (a, b) = (m.triangles[3 * t + e], m.triangles[3 * t + (e + 1) % 3]);
-                let param = if a < b { p } else { n - p };
-                return PointKey::Edge {
+                let param = if a < b { k } else { n - k };
+                PointKey::Edge {
                     edge: m.edges[3 * t + e],
                     param: param as u32,
-                };
+                }
             }
-        }
-        PointKey::Face {
-            triangle: t as u32,
-            x: x as u32,
-            y: y as u32,
+            _ => PointKey::Face {
+                triangle: t as u32,
+                x: x as u32,
+                y: y as u32,
+            },
         }
     }
 }
@@ -432,7 +375,7 @@ fn mat_vec(m: [[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
 struct Leaf {
     triangle: u32,
     depth: u32,
-    cell: Cell,
+    cell: LatticeTriangle,
     /// Index of the leaf's first corner point in the point list (three consecutive slots of
     /// `corner_points`).
     corners: [usize; 3],
@@ -469,7 +412,7 @@ impl LightingTable {
             let fit = normal_weights(normals);
             let area = coarse_area(object, t);
             // Breadth-first walk: the children of the r-th subdivided node are 1 + 4r + c.
-            let mut cells = vec![Cell::root(TREE_LATTICE); 1];
+            let mut cells = vec![LatticeTriangle::root(TREE_LATTICE); 1];
             let mut subdivided_seen = 0usize;
             for info in tree.nodes() {
                 let k = info.index as usize;
@@ -648,8 +591,8 @@ fn resolve_edge(
     index: &HashMap<PointKey, usize>,
     values: &mut [[f64; MODEL_FLOATS]],
     t: usize,
-    a: ([i64; 2], usize),
-    b: ([i64; 2], usize),
+    a: ([i32; 2], usize),
+    b: ([i32; 2], usize),
 ) {
     let (pa, pb) = (a.0, b.0);
     if (pa[0] - pb[0]).abs() < 2 && (pa[1] - pb[1]).abs() < 2 {

@@ -1,7 +1,8 @@
 //! One object refined to a level as the runtime draws it: Loop subdivision for
-//! multiresolution objects ([`crate::subdivide`]), the linear 1-to-4 split for flat ones
-//! ([`crate::flat`], SPEC.md A.7), then its baked colours ([`crate::colour`]). This is what
-//! `hce subdivide BAKED` writes and what `hce render --cpu-reference` draws.
+//! multiresolution objects ([`crate::subdivide`](mod@crate::subdivide)), the linear 1-to-4
+//! split for flat ones ([`crate::flat`], SPEC.md A.7), then its baked colours
+//! ([`crate::colour`]). This is what `hce subdivide BAKED` writes and what
+//! `hce render --cpu-reference` draws.
 
 use hce_format::{Object, ObjectKind};
 

@@ -17,8 +17,9 @@
 //! Triangle `t = (v0, v1, v2)` at level `l` (`N = 2^l` segments per edge) holds:
 //!
 //! * `grid`: the `(N+1)(N+2)/2` points of the triangle, lattice point `(i, j)` (barycentric
-//!   `v0 + i/N (v1 - v0) + j/N (v2 - v0)`, `i, j >= 0`, `i + j <= N`) at index
-//!   `j (N+1) - j (j-1)/2 + i` (rows of constant `j`).
+//!   `v0 + i/N (v1 - v0) + j/N (v2 - v0)`, `i, j >= 0`, `i + j <= N`; the `(b, c)` of
+//!   [`crate::lattice`]) at index `j (N+1) - j (j-1)/2 + i` (rows of constant `j`,
+//!   [`crate::lattice::grid_index`]).
 //! * `band[e]` for each interior edge `e` (from `v_e` to `v_{e+1}`, points `p_0 = v_e .. p_N`):
 //!   the `N` vertices of the neighbouring triangle one row away from the edge; `band[e][m]` is
 //!   adjacent to `p_m` and `p_{m+1}`. As lattice points outside the grid: edge 0 `(m+1, -1)`,
@@ -59,14 +60,16 @@
 //!
 //! # Output numbering
 //!
-//! With `M = 2^L`, `V` control vertices, `E` edges and `F` triangles:
+//! The numbering of [`crate::lattice`] ([`crate::lattice::Numbering`]), shared with flat
+//! refinement. With `M = 2^L`, `V` control vertices, `E` edges and `F` triangles:
 //! `[V coarse vertices][E edges × (M − 1) points, from the owning triangle's v_e to v_{e+1}]
 //! [F triangles × (M−1)(M−2)/2 interior points]`, interior points in rows of increasing `j`,
 //! each row in increasing `i` (`1 <= i, j`, `i + j <= M - 1`). Fine triangle `t · 4^L + path`
 //! has the corners the recursive 1-to-4 split gives (child order Top, Left, Center, Right of
-//! `hce_format::model`). Every output vertex is written by exactly one owner (a coarse vertex
-//! by the first triangle corner that uses it in scan order, an edge point by the owner of its
-//! edge, an interior point by its triangle), so shared vertices cannot disagree.
+//! `hce_format::model`; [`crate::lattice::subtriangle_cells`]). Every output vertex is written
+//! by exactly one owner (a coarse vertex by the first triangle corner that uses it in scan
+//! order, an edge point by the owner of its edge, an interior point by its triangle), so shared
+//! vertices cannot disagree.
 //!
 //! # Normals
 //!
@@ -93,6 +96,9 @@ use hce_format::{
     ControlMesh, NO_NEIGHBOUR, RULE_CORNER, RULE_CREASE, SPOKE_SHARP, VERTEX_BOUNDARY,
 };
 use rayon::prelude::*;
+
+use crate::lattice::{subtriangle_cells, Numbering};
+use crate::tables::check_loop_tables;
 
 /// Highest supported subdivision level.
 pub const MAX_LEVEL: u32 = 6;
@@ -193,34 +199,6 @@ impl Refined {
     pub fn path(&self, f: usize) -> u32 {
         (f & ((1usize << (2 * self.level)) - 1)) as u32
     }
-}
-
-/// Lattice corners `(i, j)` of each level-`level` subtriangle of a coarse triangle, indexed by
-/// path: the recursive split of `(0,0), (2^L,0), (0,2^L)` into Top, Left, Center, Right.
-pub fn subtriangle_cells(level: u32) -> Vec<[[u32; 2]; 3]> {
-    let m = 1u32 << level;
-    let mut out = Vec::with_capacity(1 << (2 * level));
-    fn rec(t: [[u32; 2]; 3], d: u32, out: &mut Vec<[[u32; 2]; 3]>) {
-        if d == 0 {
-            out.push(t);
-            return;
-        }
-        let h = |a: [u32; 2], b: [u32; 2]| [(a[0] + b[0]) / 2, (a[1] + b[1]) / 2];
-        let [v0, v1, v2] = t;
-        let (m01, m12, m20) = (h(v0, v1), h(v1, v2), h(v2, v0));
-        rec([v0, m01, m20], d - 1, out);
-        rec([m01, v1, m12], d - 1, out);
-        rec([m12, m20, m01], d - 1, out);
-        rec([m20, m12, v2], d - 1, out);
-    }
-    rec([[0, 0], [m, 0], [0, m]], level, &mut out);
-    out
-}
-
-/// Index of lattice point `(i, j)` in a level grid with `n` segments per edge.
-#[inline(always)]
-pub fn grid_index(n: usize, i: usize, j: usize) -> usize {
-    j * (n + 1) - j * j.saturating_sub(1) / 2 + i
 }
 
 /// Index of lattice point `(i, j)`, `-1 <= i, j <= n + 1`, in the square array of a level with
@@ -587,99 +565,14 @@ pub struct Prepared {
     pub edge_count: usize,
 }
 
-/// Validates every table index the subdivision reads and derives [`Prepared`].
+/// Validates every table the subdivision reads ([`check_loop_tables`]) and derives
+/// [`Prepared`].
 pub fn prepare(mesh: &ControlMesh) -> Result<Prepared, SubdivError> {
-    let bad = |s: String| Err(SubdivError::Tables(s));
+    let tables = check_loop_tables(mesh).map_err(SubdivError::Tables)?;
     let nv = mesh.vertex_count();
     let nf = mesh.triangle_count();
-    if mesh.positions.len() != 3 * nv
-        || mesh.triangles.len() != 3 * nf
-        || mesh.ring_offsets.len() != nv + 1
-        || mesh.vertex_flags.len() != nv
-        || mesh.corner_spokes.len() != 3 * nf
-        || mesh.neighbours.len() != 3 * nf
-        || mesh.edges.len() != 3 * nf
-        || mesh.spoke_flags.len() != mesh.ring.len()
-    {
-        return bad("array lengths disagree with the vertex and triangle counts".into());
-    }
-    if nf == 0 {
-        return bad("no triangles".into());
-    }
-    if mesh.ring_offsets[0] != 0 || mesh.ring_offsets[nv] as usize != mesh.ring.len() {
-        return bad("ring_offsets do not span the ring array".into());
-    }
-    // The checks run in parallel over fixed chunks; each chunk stops at its first fault and the
-    // first faulty chunk in order is reported, so the error does not depend on scheduling.
-    // Per chunk: the largest valence, the crease spokes, the first fault.
-    type VertexChunk = (usize, Vec<[u32; 2]>, Result<(), String>);
-    let vertex_chunks: Vec<VertexChunk> = (0..nv.div_ceil(PREPARE_CHUNK))
-        .into_par_iter()
-        .map(|chunk| {
-            let mut max_valence = 6;
-            let range = chunk * PREPARE_CHUNK..((chunk + 1) * PREPARE_CHUNK).min(nv);
-            let mut crease_spokes = Vec::with_capacity(range.len());
-            for v in range {
-                let (a, b) = (
-                    mesh.ring_offsets[v] as usize,
-                    mesh.ring_offsets[v + 1] as usize,
-                );
-                if b < a + 2 {
-                    return (
-                        0,
-                        crease_spokes,
-                        Err(format!("vertex {v}: ring shorter than 2")),
-                    );
-                }
-                // Checked before slicing: a later offset that decreases is caught only afterwards.
-                if b > mesh.ring.len() {
-                    let e = format!("vertex {v}: ring_offsets run past the ring array");
-                    return (0, crease_spokes, Err(e));
-                }
-                max_valence = max_valence.max(b - a);
-                if let Some(&s) = mesh.ring[a..b].iter().find(|&&s| s as usize >= nv) {
-                    let e = format!("vertex {v}: spoke {s} out of range");
-                    return (0, crease_spokes, Err(e));
-                }
-                let mut spokes = [0u32; 2];
-                if mesh.rule(v as u32) == RULE_CREASE {
-                    let sharp: Vec<usize> = (0..b - a)
-                        .filter(|&k| mesh.spoke_flags[a + k] & SPOKE_SHARP != 0)
-                        .collect();
-                    if sharp.len() != 2 {
-                        let e =
-                            format!("vertex {v}: crease rule with {} sharp spokes", sharp.len());
-                        return (0, crease_spokes, Err(e));
-                    }
-                    spokes = [sharp[0] as u32, sharp[1] as u32];
-                }
-                crease_spokes.push(spokes);
-            }
-            (max_valence, crease_spokes, Ok(()))
-        })
-        .collect();
-    let mut max_valence = 6;
-    let mut crease_spokes = Vec::with_capacity(nv);
-    for (m, spokes, fault) in vertex_chunks {
-        if let Err(e) = fault {
-            return bad(e);
-        }
-        max_valence = max_valence.max(m);
-        crease_spokes.extend_from_slice(&spokes);
-    }
-    // Per-triangle checks (everything but the order of edge ids), in parallel.
-    let faults: Vec<Result<(), String>> = (0..nf.div_ceil(PREPARE_CHUNK))
-        .into_par_iter()
-        .map(|chunk| {
-            (chunk * PREPARE_CHUNK..((chunk + 1) * PREPARE_CHUNK).min(nf))
-                .try_for_each(|t| check_triangle(mesh, t))
-        })
-        .collect();
-    if let Some(e) = faults.into_iter().find_map(Result::err) {
-        return bad(e);
-    }
-    // Owners and edge ids: a sequential scan (first appearance), cheap once the indices are
-    // known to be in range.
+    // Owners: a sequential scan in scan order, which is the order of first appearance that the
+    // edge ids were checked to follow.
     let mut vertex_owner = vec![u32::MAX; nv];
     let mut edge_start = Vec::with_capacity(nf + 1);
     let mut owns_edge = vec![false; 3 * nf];
@@ -692,90 +585,24 @@ pub fn prepare(mesh: &ControlMesh) -> Result<Prepared, SubdivError> {
             if vertex_owner[v] == u32::MAX {
                 vertex_owner[v] = (3 * t + c) as u32;
             }
-            let id = mesh.edges[3 * t + c];
-            if id == next {
+            if mesh.edges[3 * t + c] == next {
                 owns_edge[3 * t + c] = true;
                 next += 1;
-            } else if id > next {
-                return bad(format!(
-                    "triangle {t} edge {c}: edge ids are not in first-appearance order"
-                ));
             }
         }
     }
     edge_start.push(next);
-    if let Some(v) = vertex_owner.iter().position(|&o| o == u32::MAX) {
-        return bad(format!("vertex {v} is used by no triangle"));
-    }
-    let cf = (0..=max_valence)
+    let cf = (0..=tables.max_valence)
         .map(|n| if n < 2 { 0.0 } else { correction_factor(n) })
         .collect();
     Ok(Prepared {
         vertex_owner,
         edge_start,
         owns_edge,
-        crease_spokes,
+        crease_spokes: tables.crease_spokes,
         cf,
         edge_count: next as usize,
     })
-}
-
-/// Triangles or vertices per parallel task of [`prepare`].
-const PREPARE_CHUNK: usize = 4096;
-
-/// The checks of one triangle's table entries that do not depend on other triangles.
-fn check_triangle(mesh: &ControlMesh, t: usize) -> Result<(), String> {
-    let nv = mesh.vertex_count();
-    let nf = mesh.triangle_count();
-    let tri = mesh.triangle(t);
-    for c in 0..3 {
-        let v = tri[c] as usize;
-        if v >= nv {
-            return Err(format!("triangle {t}: vertex {v} out of range"));
-        }
-        let ring = mesh.ring_of(tri[c]);
-        let k = mesh.corner_spokes[3 * t + c] as usize;
-        let closed = mesh.vertex_flags[v] & VERTEX_BOUNDARY == 0;
-        let k1 = if closed { (k + 1) % ring.len() } else { k + 1 };
-        if k >= ring.len()
-            || k1 >= ring.len()
-            || ring[k] != tri[(c + 1) % 3]
-            || ring[k1] != tri[(c + 2) % 3]
-        {
-            return Err(format!(
-                "triangle {t} corner {c}: corner_spokes does not point at the triangle's edges"
-            ));
-        }
-        let nb = mesh.neighbours[3 * t + c];
-        // An interior edge needs the spokes before and after the triangle in both rings.
-        if nb != NO_NEIGHBOUR {
-            if nb as usize >= nf {
-                return Err(format!("triangle {t} edge {c}: neighbour out of range"));
-            }
-            if !closed && k == 0 {
-                return Err(format!(
-                    "triangle {t} edge {c}: interior edge on the first (boundary) spoke"
-                ));
-            }
-        } else if closed || mesh.spoke_flags[mesh.ring_offsets[v] as usize + k] & SPOKE_SHARP == 0 {
-            return Err(format!(
-                "triangle {t} edge {c}: boundary edge that is not marked sharp at an interior vertex"
-            ));
-        }
-    }
-    for c in 0..3 {
-        let nb = mesh.neighbours[3 * t + c];
-        let v1 = tri[(c + 1) % 3];
-        let ring = mesh.ring_of(v1);
-        let k = mesh.corner_spokes[3 * t + (c + 1) % 3] as usize;
-        let closed = mesh.vertex_flags[v1 as usize] & VERTEX_BOUNDARY == 0;
-        if nb != NO_NEIGHBOUR && !closed && k + 2 >= ring.len() {
-            return Err(format!(
-                "triangle {t} edge {c}: interior edge on the last (boundary) spoke"
-            ));
-        }
-    }
-    Ok(())
 }
 
 fn make_tri<'a>(mesh: &'a ControlMesh, prep: &'a Prepared, t: usize) -> Tri<'a> {
@@ -888,20 +715,28 @@ fn subdivide_checked(mesh: &ControlMesh, level: u32, out: &mut Refined) -> Resul
     let nv = mesh.vertex_count();
     let nf = mesh.triangle_count();
     let ne = prep.edge_count;
-    let m = 1usize << level;
-    let per_edge = m - 1;
-    let per_tri = (m - 1) * m.saturating_sub(2) / 2;
-    let fine_per_tri = 1usize << (2 * level);
-    let total_v = nv as u128 + ne as u128 * per_edge as u128 + nf as u128 * per_tri as u128;
-    let total_f = nf as u128 * fine_per_tri as u128;
-    if total_v > u32::MAX as u128 || total_f > (u32::MAX / 3) as u128 {
-        return Err(SubdivError::TooLarge {
-            level,
-            triangles: nf,
-            what: "more than 2^32 vertices or indices",
-        });
+    let too_large = || SubdivError::TooLarge {
+        level,
+        triangles: nf,
+        what: "more than 2^32 vertices or indices",
+    };
+    let count = |x: usize| u32::try_from(x).map_err(|_| too_large());
+    let numbering = Numbering {
+        level,
+        vertices: count(nv)?,
+        edges: count(ne)?,
+        triangles: count(nf)?,
+    };
+    if numbering.vertex_count() > u64::from(u32::MAX)
+        || numbering.triangle_count() > u64::from(u32::MAX / 3)
+    {
+        return Err(too_large());
     }
-    let total_v = total_v as usize;
+    let m = 1usize << level;
+    let per_edge = numbering.per_edge() as usize;
+    let per_tri = numbering.per_triangle() as usize;
+    let fine_per_tri = 1usize << (2 * level);
+    let total_v = numbering.vertex_count() as usize;
     // Fine triangles as square indices of their corners, by path.
     let local_cells: Vec<[u32; 3]> = subtriangle_cells(level)
         .iter()
@@ -996,25 +831,26 @@ fn subdivide_checked(mesh: &ControlMesh, level: u32, out: &mut Refined) -> Resul
                     }
                 }
                 for e in 0..3 {
-                    let id = mesh.edges[3 * t + e] as usize;
-                    let base = nv + id * per_edge;
+                    let id = mesh.edges[3 * t + e];
                     if own_edge[e] {
                         // Only an owned edge lies in this job's contiguous slice of edge
                         // points; an edge owned by an earlier triangle may have a smaller id.
-                        let local = (id - prep.edge_start[job.t0] as usize) * per_edge;
+                        let local = (id - prep.edge_start[job.t0]) as usize * per_edge;
                         for k in 1..m {
                             let x = sq_edge(m, e, k);
-                            gmap[x] = (base + k - 1) as u32;
+                            gmap[x] = numbering.edge_point(id, k as u64) as u32;
                             job.edge_pos[local + k - 1] = patch.sq[x].to_array();
                             job.edge_nrm[local + k - 1] = normalize(patch.vertex_normal(m, x));
                         }
                     } else {
+                        // Counted from the owner's end, the other way round.
                         for k in 1..m {
-                            gmap[sq_edge(m, e, k)] = (base + m - 1 - k) as u32;
+                            gmap[sq_edge(m, e, k)] =
+                                numbering.edge_point(id, (m - k) as u64) as u32;
                         }
                     }
                 }
-                let ibase = nv + ne * per_edge + t * per_tri;
+                let ibase = numbering.interior_point(t as u32, 0) as usize;
                 let local = (t - job.t0) * per_tri;
                 let mut q = 0;
                 for j in 1..m {

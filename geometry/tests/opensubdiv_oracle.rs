@@ -1,7 +1,7 @@
 //! Compares the CPU Loop subdivision with OpenSubdiv 3.5 (`osd_loop`, see
 //! /work/shared/tools/README.md) on the meshes of `HCE_EXTRA_MESHES` at levels 1 to 4. Needs
 //! the oracle binary (`HCE_OSD_LOOP`), so it is ignored by default:
-//! `HCE_OSD_LOOP=/path/osd_loop HCE_EXTRA_MESHES=... cargo test -p hce-runtime --release
+//! `HCE_OSD_LOOP=/path/osd_loop HCE_EXTRA_MESHES=... cargo test -p hce-geometry --release
 //! --test opensubdiv_oracle -- --ignored --nocapture`.
 
 mod common;

@@ -8,7 +8,8 @@ mod common;
 use std::collections::HashMap;
 use std::path::Path;
 
-use hce_geometry::subdivide::{subdivide, subtriangle_cells, SubdivError};
+use hce_geometry::lattice::subtriangle_cells;
+use hce_geometry::subdivide::{subdivide, SubdivError};
 use hce_geometry::topology::{build_control_mesh, Topology, TopologyConfig};
 
 fn data_mesh(name: &str) -> Topology {
