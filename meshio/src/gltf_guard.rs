@@ -1,11 +1,11 @@
 //! Guards around the `gltf` crate for files that may be hostile: that crate's reader slices
 //! buffers without checking, follows any buffer URI (absolute paths, `/dev/zero`) and indexes
 //! some references before validating them, so a small file can make it panic, hang or allocate
-//! without bound. Every glTF reader of hce goes through these checks: [`open`] (the JSON
+//! without bound. Every glTF reader of hce goes through these checks: `open` (the JSON
 //! pre-check, the `gltf` crate's parse, buffers loaded one by one through [`read_uri`]),
-//! [`check_accessor`] before any accessor is read, and [`panic_free`] around the whole read for
+//! `check_accessor` before any accessor is read, and `panic_free` around the whole read for
 //! the panics the checks miss. The baker's scene importer, the mesh reader of `hce subdivide`
-//! and the preview reader of `hce render` all use [`open`]; the runtime, which parses glTF
+//! and the preview reader of `hce render` all use `open`; the runtime, which parses glTF
 //! without the `gltf` crate, reads external files through [`uri_path`] and
 //! [`read_regular_file`].
 //!

@@ -459,4 +459,21 @@ mod tests {
         let err = load_mesh(&path).unwrap_err().to_string();
         assert!(err.contains("nodes[0] is reached twice"), "{err}");
     }
+
+    #[test]
+    fn gltf_without_nodes_has_its_meshes_taken_once_untransformed() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = gltf_with_nodes(dir.path(), "[]", "[]");
+        let text = std::fs::read_to_string(&path)
+            .unwrap()
+            .replace(r#""scene":0,"scenes":[{"nodes":[]}],"#, "")
+            .replace(r#""nodes":[],"#, "");
+        std::fs::write(&path, text).unwrap();
+        let m = load_mesh(&path).unwrap();
+        assert_eq!(
+            m.positions,
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+        );
+        assert_eq!(m.triangles, vec![[0, 1, 2]]);
+    }
 }

@@ -10,12 +10,12 @@
 //! * [`atomic`]: [`write_atomic`], the one way every tool output is written.
 //!
 //! Feature `import` (default): the readers, on the `gltf` crate, `tobj` and `image`:
-//! * [`scene`]: the baker's scene importer (objects per node instance and primitive,
+//! * `scene`: the baker's scene importer (objects per node instance and primitive,
 //!   materials and textures, lights, camera);
-//! * [`import`]: [`load_mesh`], one triangle mesh in world space from OBJ/glTF (`hce subdivide`);
-//! * [`plain`]: `hce render`'s preview of a plain mesh, by the same reader as [`load_mesh`].
+//! * `import`: `load_mesh`, one triangle mesh in world space from OBJ/glTF (`hce subdivide`);
+//! * `plain`: `hce render`'s preview of a plain mesh, by the same reader as `load_mesh`.
 //!
-//! Feature `export` (default): [`export`], OBJ/glTF/GLB writers of refined meshes.
+//! Feature `export` (default): `export`, OBJ/glTF/GLB writers of refined meshes.
 //!
 //! Hostile files get an error, never a panic, a hang or an unbounded allocation.
 

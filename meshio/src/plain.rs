@@ -149,17 +149,15 @@ mod tests {
         for c in [[1.0f32, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] {
             bin.extend(c.iter().flat_map(|c| c.to_le_bytes()));
         }
-        let data = crate::export::base64(&bin);
-        let json = format!(
-            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
-            "nodes":[{{"translation":[0,5,0],"children":[1]}},{{"mesh":0,"scale":[-1,1,1]}}],
-            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"COLOR_0":1}}}}]}}],
-            "buffers":[{{"byteLength":72,"uri":"data:application/octet-stream;base64,{data}"}}],
-            "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},
-                {{"buffer":0,"byteOffset":36,"byteLength":36}}],
-            "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
-                {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}}]}}"#
-        );
+        std::fs::write(dir.join("translated.bin"), &bin).unwrap();
+        let json = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],
+            "nodes":[{"translation":[0,5,0],"children":[1]},{"mesh":0,"scale":[-1,1,1]}],
+            "meshes":[{"primitives":[{"attributes":{"POSITION":0,"COLOR_0":1}}]}],
+            "buffers":[{"byteLength":72,"uri":"translated.bin"}],
+            "bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":36},
+                {"buffer":0,"byteOffset":36,"byteLength":36}],
+            "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]},
+                {"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}]}"#;
         let path = dir.join("translated.gltf");
         std::fs::write(&path, json).unwrap();
         path

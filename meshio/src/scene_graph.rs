@@ -3,8 +3,8 @@
 //! is in the world.
 //!
 //! Every reader of hce that places glTF meshes goes through [`walk`]: the baker's scene
-//! importer ([`crate::scene`]), the mesh readers of `hce subdivide` and of `hce render`'s
-//! preview ([`crate::import`], [`crate::plain`]) and the runtime's asset loader, so a mesh
+//! importer (`scene`), the mesh readers of `hce subdivide` and of `hce render`'s preview
+//! (`import`, `plain`) and the runtime's asset loader, so a mesh
 //! lands in the same place, bit for bit, whichever of them reads it. It works on the JSON
 //! (`serde_json`), not on the `gltf` crate's document, so that the runtime gets it without that
 //! crate and its image decoders.
