@@ -50,9 +50,9 @@ use hce_format::{Container, ControlMesh, Metadata, Object, ObjectKind};
 use hce_geometry::{build_control_mesh, subdivide, weld, Creases, TopologyConfig};
 
 use crate::hierarchical::{BakeParams, Progress, TriangleSolution};
-use crate::import::{import_scene, ImportOptions, ImportedScene};
+use crate::import::{import_scene, ImportOptions, ImportedScene, ToSolver};
 use crate::normal_sets::{select_normal_sets, NormalSetParams};
-use crate::output::{bake_gltf, write_atomically, ObjectLink};
+use crate::output::{bake_gltf, ObjectLink};
 
 /// Everything `hce bake` can set.
 #[derive(Clone, Debug)]
@@ -89,8 +89,11 @@ pub enum PipelineError {
     Bake(#[from] crate::BakeError),
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),
+    /// The container could not be encoded.
     #[error(transparent)]
     Write(#[from] hce_format::WriteError),
+    #[error(transparent)]
+    FileWrite(#[from] hce_meshio::FileWriteError),
     #[error("object {index} '{name}': {message}")]
     Object {
         index: usize,
@@ -279,7 +282,7 @@ pub fn bake_file(
     progress("write", 0, 1);
     let (colours, exposure) = fallback_colours(&scene, &per_triangle_light);
     let output_bytes = if ext.as_deref() == Some("hce") {
-        write_atomically(&options.output, &bytes)?;
+        hce_meshio::write_atomic(&options.output, &bytes)?;
         bytes.len() as u64
     } else {
         let links: Vec<Option<ObjectLink>> = (0..n)

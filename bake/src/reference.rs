@@ -730,6 +730,7 @@ mod tests {
     fn cornell() -> Scene {
         let path =
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../samples/cornell-box.glb");
+        use crate::import::ToSolver;
         crate::import::import_scene(&path, &crate::import::ImportOptions::default())
             .unwrap()
             .solver_scene()

@@ -104,20 +104,8 @@ impl SceneObject {
     }
 }
 
-/// The kind of a punctual light (KHR_lights_punctual).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum LightKind {
-    /// Emits `intensity` candela in every direction from `position`.
-    Point,
-    /// As a point light inside a cone around `direction`; angles in radians from the axis,
-    /// with glTF's smooth falloff between them.
-    Spot {
-        inner_cone_angle: f32,
-        outer_cone_angle: f32,
-    },
-    /// Parallel light travelling along `direction`; `intensity` in lux.
-    Directional,
-}
+/// The kind of a punctual light (KHR_lights_punctual), as the importer reads it.
+pub use hce_meshio::scene::LightKind;
 
 /// A punctual light source.
 #[derive(Clone, Debug, PartialEq)]

@@ -18,7 +18,7 @@
 use std::path::Path;
 
 use glam::Vec3;
-use hce_bake::import::{import_scene, ImportOptions};
+use hce_bake::import::{import_scene, ImportOptions, ToSolver};
 use hce_bake::reference::PathTracer;
 use hce_bake::{bake, BakeParams};
 

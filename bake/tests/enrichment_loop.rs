@@ -18,7 +18,7 @@
 use std::path::Path;
 
 use glam::{Quat, Vec3};
-use hce_bake::import::{import_scene, ImportOptions};
+use hce_bake::import::{import_scene, ImportOptions, ToSolver};
 use hce_bake::normal_sets::NormalSetParams;
 use hce_bake::pipeline::{bake_file, PipelineOptions};
 use hce_bake::{bake, BakeParams, SceneObject};

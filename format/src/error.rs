@@ -1,7 +1,6 @@
 //! Errors of the reader and writer. Each variant cites the SPEC.md section it enforces.
 
 use crate::layout::SectionType;
-use std::path::PathBuf;
 
 /// Why bytes are not a readable container.
 #[derive(Debug, thiserror::Error, Clone, PartialEq, Eq)]
@@ -116,10 +115,4 @@ pub enum WriteError {
     },
     #[error("{what} does not fit the 32-bit counts of container version 1 (SPEC.md A.7)")]
     TooLarge { what: String },
-    #[error("{}: {source}", path.display())]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
 }

@@ -7,7 +7,8 @@
 //! reference implementation.
 //!
 //! This crate knows nothing of GPUs or geometry algorithms: it moves plain data between bytes
-//! and [`model`] types, and checks it.
+//! and [`model`] types, and checks it. It does not write files either: every hce output goes to
+//! disk through `hce_meshio::write_atomic`.
 #![forbid(unsafe_code)]
 
 pub mod error;
@@ -26,4 +27,4 @@ pub use model::*;
 pub use read::{read, read_with, ReadOptions};
 pub use tree::{triangle_trees, BitWriter, Tree, TreeError, TreeShape, MAX_DEPTH};
 pub use validate::{validate, validate_bytes, Problem};
-pub use write::{write, write_atomically, write_file};
+pub use write::write;

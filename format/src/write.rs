@@ -4,8 +4,6 @@
 use crate::error::WriteError;
 use crate::layout::*;
 use crate::model::{Container, Object, ObjectKind};
-use std::io::Write;
-use std::path::Path;
 
 fn shape(object: usize, field: &'static str, reason: String) -> WriteError {
     WriteError::Shape {
@@ -280,44 +278,4 @@ pub fn write(c: &Container) -> Result<Vec<u8>, WriteError> {
     }
     out.resize(file_len, 0);
     Ok(out)
-}
-
-/// Writes a container to `path` atomically: a temporary file in the same directory, flushed to
-/// disk, then renamed over `path`, so that readers never see a partial file.
-pub fn write_file(path: &Path, c: &Container) -> Result<(), WriteError> {
-    let bytes = write(c)?;
-    write_atomically(path, &bytes)
-}
-
-/// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
-    let io = |source| WriteError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    let file_name = path.file_name().ok_or_else(|| {
-        io(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            "the path names no file",
-        ))
-    })?;
-    let mut tmp_name = std::ffi::OsString::from(".");
-    tmp_name.push(file_name);
-    tmp_name.push(format!(".{}.tmp", std::process::id()));
-    let tmp = dir.join(tmp_name);
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        drop(f);
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(io)
 }

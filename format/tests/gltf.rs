@@ -93,14 +93,14 @@ fn sample_files_can_be_written_for_external_tools() {
     if let Some(dir) = std::env::var_os("HCE_WRITE_SAMPLES") {
         let dir = std::path::PathBuf::from(dir);
         std::fs::create_dir_all(&dir).unwrap();
-        hce_format::write_atomically(&dir.join("triangle.glb"), &glb).unwrap();
-        hce_format::write_file(
-            &dir.join("single_triangle.hce"),
-            &example::single_triangle(),
-        )
-        .unwrap();
-        hce_format::write_file(&dir.join("two_triangles.hce"), &example::two_triangles()).unwrap();
-        hce_format::write_file(&dir.join("grid.hce"), &example::grid(3, 3)).unwrap();
+        std::fs::write(dir.join("triangle.glb"), &glb).unwrap();
+        for (name, c) in [
+            ("single_triangle.hce", example::single_triangle()),
+            ("two_triangles.hce", example::two_triangles()),
+            ("grid.hce", example::grid(3, 3)),
+        ] {
+            std::fs::write(dir.join(name), hce_format::write(&c).unwrap()).unwrap();
+        }
         println!("wrote samples to {}", dir.display());
     }
 }

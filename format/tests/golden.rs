@@ -76,23 +76,3 @@ fn example_is_valid_and_round_trips() {
     assert_eq!(read(&bytes).unwrap(), c);
     assert_eq!(bytes.len(), 256 * 16 + 4 * 9);
 }
-
-#[test]
-fn write_file_replaces_atomically_and_leaves_no_temporary() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("scene.hce");
-    std::fs::write(&path, b"old contents").unwrap();
-    hce_format::write_file(&path, &example::two_triangles()).unwrap();
-    assert_eq!(
-        read(&std::fs::read(&path).unwrap()).unwrap(),
-        example::two_triangles()
-    );
-    let names: Vec<_> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
-    assert_eq!(names, vec![std::ffi::OsString::from("scene.hce")]);
-    let missing_dir = dir.path().join("no/such/dir/x.hce");
-    let err = hce_format::write_file(&missing_dir, &example::two_triangles()).unwrap_err();
-    assert!(err.to_string().contains("no/such/dir/x.hce"), "{err}");
-}

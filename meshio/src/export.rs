@@ -1,19 +1,16 @@
 //! Writing refined meshes as Wavefront OBJ or glTF 2.0 (`.gltf` with an embedded base64 buffer,
-//! or binary `.glb`), atomically: the file is written beside its destination under a temporary
-//! name and renamed over it, so a reader never sees half a file.
+//! or binary `.glb`), through [`crate::atomic`].
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use crate::atomic::{write_atomic, write_atomic_with, FileWriteError};
+
 /// Errors of mesh export.
 #[derive(Debug, thiserror::Error)]
 pub enum ExportError {
-    #[error("{path}: cannot write: {source}")]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Write(#[from] FileWriteError),
     #[error("{path}: unknown mesh extension; use .obj, .gltf or .glb")]
     UnknownFormat { path: PathBuf },
     #[error("{path}: position {index} is not finite; glTF cannot store it")]
@@ -75,59 +72,21 @@ fn write_any(
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     match ext.as_deref() {
-        Some("obj") => {
-            write_atomic_with(path, |w| write_obj(w, positions, normals, colours, indices))
-        }
+        Some("obj") => Ok(write_atomic_with(path, |w| {
+            write_obj(w, positions, normals, colours, indices)
+        })?),
         Some("gltf") => {
             let bytes = gltf_text(path, positions, normals, colours, indices)?;
-            write_atomic(path, &bytes)
+            Ok(write_atomic(path, &bytes)?)
         }
         Some("glb") => {
             let glb = Glb::new(path, positions, normals, colours, indices)?;
-            write_atomic_with(path, |w| glb.write(w))
+            Ok(write_atomic_with(path, |w| glb.write(w))?)
         }
         _ => Err(ExportError::UnknownFormat {
             path: path.to_owned(),
         }),
     }
-}
-
-/// Writes `bytes` to a temporary file in `path`'s directory, then renames it to `path`.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ExportError> {
-    write_atomic_with(path, |w| w.write_all(bytes))
-}
-
-/// Streams a file through `fill` into a buffered temporary file in `path`'s directory,
-/// flushes it to disk, then renames it to `path`, so that a reader never sees half a file.
-pub fn write_atomic_with(
-    path: &Path,
-    fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-) -> Result<(), ExportError> {
-    let io = |source| ExportError::Io {
-        path: path.to_owned(),
-        source,
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
-        _ => PathBuf::from("."),
-    };
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = (|| {
-        let mut f = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(&tmp)?);
-        fill(&mut f)?;
-        let f = f.into_inner().map_err(|e| e.into_error())?;
-        f.sync_all()?;
-        drop(f);
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(io)
 }
 
 /// Items formatted per parallel task, and tasks per batch written in order: the text in memory
@@ -448,6 +407,7 @@ fn gltf_text(
 mod tests {
     use super::*;
 
+    #[cfg(feature = "import")]
     #[test]
     fn gltf_and_glb_round_trip_through_the_importer() {
         let dir = tempfile::tempdir().unwrap();
@@ -471,6 +431,7 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 3);
     }
 
+    #[cfg(feature = "import")]
     #[test]
     fn colours_are_written_clamped_as_color_0_and_obj_vertex_colours() {
         let dir = tempfile::tempdir().unwrap();

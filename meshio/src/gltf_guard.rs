@@ -1,16 +1,24 @@
 //! Guards around the `gltf` crate for files that may be hostile: that crate's reader slices
 //! buffers without checking, follows any buffer URI (absolute paths, `/dev/zero`) and indexes
 //! some references before validating them, so a small file can make it panic, hang or allocate
-//! without bound. Both glTF readers of hce (the runtime's mesh loader and the baker's scene
-//! importer) go through these checks before they read any accessor.
+//! without bound. Every glTF reader of hce goes through these checks: `open` (the JSON
+//! pre-check, the `gltf` crate's parse, buffers loaded one by one through [`read_uri`]),
+//! `check_accessor` before any accessor is read, and `panic_free` around the whole read for
+//! the panics the checks miss. The baker's scene importer, the mesh reader of `hce subdivide`
+//! and the preview reader of `hce render` all use `open`; the runtime, which parses glTF
+//! without the `gltf` crate, reads external files through [`uri_path`] and
+//! [`read_regular_file`].
+//!
+//! Only the URI functions are built without the `import` feature.
 
-use std::path::Path;
+use std::path::{Component, Path, PathBuf};
 
-/// Checks the references that `gltf-json`'s own validation indexes without checking.
-pub fn precheck(bytes: &[u8]) -> Result<(), String> {
-    // Parsed leniently (invalid UTF-8 replaced), because the `gltf` crate's parser accepts
-    // invalid UTF-8 in content it skips; a file that still does not parse is left to that
-    // crate's better message.
+use serde_json::Value;
+
+/// The JSON of a `.gltf` or of a GLB's JSON chunk, parsed leniently (invalid UTF-8 replaced,
+/// because the `gltf` crate's parser accepts invalid UTF-8 in content it skips); `None` when it
+/// does not parse at all.
+pub fn lenient_json(bytes: &[u8]) -> Option<Value> {
     let text = if bytes.starts_with(b"glTF") {
         let len = bytes
             .get(12..16)
@@ -19,10 +27,11 @@ pub fn precheck(bytes: &[u8]) -> Result<(), String> {
     } else {
         bytes
     };
-    let Ok(json) = serde_json::from_str::<serde_json::Value>(&String::from_utf8_lossy(text)) else {
-        return Ok(());
-    };
-    let json = &json;
+    serde_json::from_str::<Value>(&String::from_utf8_lossy(text)).ok()
+}
+
+/// Checks the references that `gltf-json`'s own validation indexes without checking.
+pub fn precheck(json: &Value) -> Result<(), String> {
     let accessors = json
         .get("accessors")
         .and_then(|a| a.as_array())
@@ -64,7 +73,56 @@ pub fn percent_decode(s: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
-/// Reads a URI relative to `base` (a base64 `data:` URI is decoded in place).
+/// How far a relative URI may reach from the file that names it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum UriScope {
+    /// Anywhere relative to the file, `..` included: scenes an author bakes, whose buffers and
+    /// textures often sit in a sibling folder.
+    Relative,
+    /// Only inside the file's folder (no `..`): baked assets a viewer opens, which may come
+    /// from anywhere.
+    Folder,
+}
+
+/// The file a URI names relative to `base`: percent-decoded, never absolute, never another
+/// scheme, within `scope`. (`data:` URIs name no file; [`read_uri`] decodes them.)
+pub fn uri_path(base: &Path, uri: &str, scope: UriScope) -> Result<PathBuf, String> {
+    if uri.contains("://") {
+        return Err("only relative file URIs and data URIs are supported".into());
+    }
+    let rel = percent_decode(uri);
+    let rel = Path::new(&rel);
+    for c in rel.components() {
+        match c {
+            Component::Normal(_) | Component::CurDir => {}
+            Component::ParentDir if scope == UriScope::Relative => {}
+            Component::ParentDir => {
+                return Err("only relative paths inside the asset's folder are followed".into())
+            }
+            Component::RootDir | Component::Prefix(_) => {
+                return Err(
+                    "an absolute path is not a relative URI; give the file relative to \
+                            the scene"
+                        .into(),
+                )
+            }
+        }
+    }
+    Ok(base.join(rel))
+}
+
+/// Reads a regular file: a device or a pipe (`/dev/zero`, a FIFO) would be read forever, so
+/// only files whose size is known are read.
+pub fn read_regular_file(p: &Path) -> Result<Vec<u8>, String> {
+    let meta = std::fs::metadata(p).map_err(|e| format!("{}: {e}", p.display()))?;
+    if !meta.is_file() {
+        return Err(format!("{} is not a regular file", p.display()));
+    }
+    std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()))
+}
+
+/// Reads a URI relative to `base` (a base64 `data:` URI is decoded in place), with `..`
+/// allowed ([`UriScope::Relative`]): the reader of scenes being baked.
 pub fn read_uri(base: &Path, uri: &str) -> Result<Vec<u8>, String> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let (_, payload) = rest
@@ -72,23 +130,7 @@ pub fn read_uri(base: &Path, uri: &str) -> Result<Vec<u8>, String> {
             .ok_or("the data URI is not base64")?;
         return hce_format::gltf::decode_base64(payload).ok_or_else(|| "invalid base64".into());
     }
-    if uri.contains("://") {
-        return Err("only relative file URIs and data URIs are supported".into());
-    }
-    let rel = percent_decode(uri);
-    if Path::new(&rel).is_absolute() {
-        return Err(
-            "an absolute path is not a relative URI; give the file relative to the scene".into(),
-        );
-    }
-    let p = base.join(rel);
-    // A device or a pipe (`/dev/zero`, a FIFO) would be read forever: only regular files,
-    // whose size is known, are read.
-    let meta = std::fs::metadata(&p).map_err(|e| format!("{}: {e}", p.display()))?;
-    if !meta.is_file() {
-        return Err(format!("{} is not a regular file", p.display()));
-    }
-    std::fs::read(&p).map_err(|e| format!("{}: {e}", p.display()))
+    read_regular_file(&uri_path(base, uri, UriScope::Relative)?)
 }
 
 /// Reads a URI relative to `base`; without a base only `data:` URIs can be read.
@@ -100,7 +142,68 @@ pub fn read_uri_from(base: Option<&Path>, uri: &str) -> Result<Vec<u8>, String> 
     }
 }
 
+/// A glTF or GLB read through the guards.
+#[cfg(feature = "import")]
+pub struct GuardedGltf {
+    /// The JSON, for [`crate::scene_graph::walk`] and whatever the document does not expose.
+    pub json: Value,
+    /// The `gltf` crate's validated document.
+    pub document: gltf::Document,
+    /// Every buffer's bytes, `None` where it could not be loaded.
+    pub buffers: Vec<Option<Vec<u8>>>,
+    /// Why each missing buffer is missing, naming it.
+    pub buffer_problems: Vec<String>,
+}
+
+/// Why [`open`] refused a file.
+#[cfg(feature = "import")]
+#[derive(Debug)]
+pub enum OpenError {
+    /// A reference the `gltf` crate would follow unchecked.
+    Invalid(String),
+    /// The `gltf` crate's own parse or validation failed.
+    Gltf(gltf::Error),
+}
+
+/// Parses a `.gltf` or `.glb` held in memory and loads its buffers: the GLB's BIN chunk,
+/// `data:` URIs, and files relative to `base` through [`read_uri`] (none without a base).
+/// Run it, and everything that reads the result, inside [`panic_free`].
+#[cfg(feature = "import")]
+pub fn open(bytes: &[u8], base: Option<&Path>) -> Result<GuardedGltf, OpenError> {
+    // A file whose JSON does not parse is left to the `gltf` crate's better message.
+    let json = lenient_json(bytes);
+    if let Some(json) = &json {
+        precheck(json).map_err(OpenError::Invalid)?;
+    }
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(bytes).map_err(OpenError::Gltf)?;
+    let json = json.ok_or_else(|| OpenError::Invalid("the JSON cannot be read".into()))?;
+    let mut buffer_problems = Vec::new();
+    let buffers = load_buffers(&document, base, blob, &mut buffer_problems);
+    Ok(GuardedGltf {
+        json,
+        document,
+        buffers,
+        buffer_problems,
+    })
+}
+
+/// Runs a read and turns a panic into an error message. The checks of this module cover
+/// every panic of the `gltf` crate we know of; this catches the ones we do not, so that a bad
+/// file is an error, never a crash.
+#[cfg(feature = "import")]
+pub fn panic_free<T>(read: impl FnOnce() -> T) -> Result<T, String> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(read)).map_err(|panic| {
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        format!("the glTF reader failed on this file ({what})")
+    })
+}
+
 /// Every buffer's bytes, `None` where it could not be loaded (with a warning).
+#[cfg(feature = "import")]
 pub fn load_buffers(
     document: &gltf::Document,
     base: Option<&Path>,
@@ -144,20 +247,24 @@ pub fn load_buffers(
 
 /// The accessor layouts the `gltf` reader handles for each use; it reinterprets bytes by the
 /// expected type (or reaches `unreachable!`), so anything else must be refused beforehand.
+#[cfg(feature = "import")]
 #[derive(Clone, Copy)]
 pub enum AccessorUse {
     Position,
     Normal,
     TexCoord,
+    Colour,
     Index,
 }
 
+#[cfg(feature = "import")]
 impl AccessorUse {
     pub fn name(self) -> &'static str {
         match self {
             AccessorUse::Position => "POSITION",
             AccessorUse::Normal => "NORMAL",
             AccessorUse::TexCoord => "TEXCOORD_0",
+            AccessorUse::Colour => "COLOR_0",
             AccessorUse::Index => "indices",
         }
     }
@@ -171,6 +278,10 @@ impl AccessorUse {
             AccessorUse::TexCoord => {
                 matches!(a.data_type(), D::F32 | D::U8 | D::U16) && a.dimensions() == Dim::Vec2
             }
+            AccessorUse::Colour => {
+                matches!(a.data_type(), D::F32 | D::U8 | D::U16)
+                    && matches!(a.dimensions(), Dim::Vec3 | Dim::Vec4)
+            }
             AccessorUse::Index => {
                 matches!(a.data_type(), D::U8 | D::U16 | D::U32) && a.dimensions() == Dim::Scalar
             }
@@ -180,6 +291,7 @@ impl AccessorUse {
 
 /// Checks that an accessor has the layout its use needs and lies inside loaded data, so that
 /// the `gltf` reader cannot panic.
+#[cfg(feature = "import")]
 pub fn check_accessor(
     a: &gltf::Accessor,
     use_: AccessorUse,
@@ -249,5 +361,37 @@ mod tests {
         assert_eq!(percent_decode("a%20b.bin"), "a b.bin");
         assert_eq!(percent_decode("100%"), "100%");
         assert_eq!(percent_decode("%4"), "%4");
+    }
+
+    #[test]
+    fn uris_stay_relative_and_folder_uris_stay_inside() {
+        let base = Path::new("scenes");
+        let ok = |uri, scope| uri_path(base, uri, scope);
+        assert_eq!(
+            ok("tex/a%20b.png", UriScope::Folder).unwrap(),
+            Path::new("scenes/tex/a b.png")
+        );
+        assert_eq!(
+            ok("../shared/x.bin", UriScope::Relative).unwrap(),
+            Path::new("scenes/../shared/x.bin")
+        );
+        for (uri, scope, says) in [
+            ("../x.bin", UriScope::Folder, "inside the asset's folder"),
+            (
+                "a/%2e%2e/%2e%2e/x.bin",
+                UriScope::Folder,
+                "inside the asset's folder",
+            ),
+            ("/dev/zero", UriScope::Relative, "absolute path"),
+            ("%2Fetc%2Fpasswd", UriScope::Folder, "absolute path"),
+            (
+                "https://example.com/x.bin",
+                UriScope::Relative,
+                "only relative",
+            ),
+        ] {
+            let e = ok(uri, scope).unwrap_err();
+            assert!(e.contains(says), "{uri}: {e}");
+        }
     }
 }

@@ -48,57 +48,111 @@ pub enum ImportError {
     Empty { path: PathBuf },
 }
 
-/// Reads `.obj`, `.gltf` or `.glb`, chosen by extension.
+/// Reads `.obj`, `.gltf` or `.glb`, chosen by extension, with corner normals where the file
+/// has them.
 pub fn load_mesh(path: &Path) -> Result<InputMesh, ImportError> {
+    let read = read_triangles(
+        path,
+        Wanted {
+            normals: true,
+            colours: false,
+        },
+    )?;
+    Ok(InputMesh {
+        positions: read.positions,
+        triangles: read.triangles,
+        corner_normals: read.corner_normals,
+    })
+}
+
+/// What a reader wants besides positions and triangles.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Wanted {
+    /// Corner normals (glTF `NORMAL`, OBJ `vn`).
+    pub normals: bool,
+    /// Per-vertex colours (glTF `COLOR_0`, OBJ `v x y z r g b`).
+    pub colours: bool,
+}
+
+/// The triangles of a mesh file, placed in world space.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct Triangles {
+    pub positions: Vec<[f32; 3]>,
+    /// Counter-clockwise triangles indexing `positions`.
+    pub triangles: Vec<[u32; 3]>,
+    /// One normal per triangle corner (`3 * t + c`), when every triangle has them.
+    pub corner_normals: Option<Vec<[f32; 3]>>,
+    /// One linear RGB colour per vertex, `None` for vertices of a primitive or OBJ object
+    /// without colours; `None` as a whole when no vertex has one.
+    pub colours: Option<Vec<Option<[f32; 3]>>>,
+}
+
+/// The one mesh reader behind [`load_mesh`] and [`crate::plain::load_plain_mesh`].
+pub(crate) fn read_triangles(path: &Path, wanted: Wanted) -> Result<Triangles, ImportError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    // The parsers report a missing or unreadable file as a parse failure; say what it is.
-    std::fs::File::open(path).map_err(|source| ImportError::Io {
+    let bytes = std::fs::read(path).map_err(|source| ImportError::Io {
         path: path.to_owned(),
         source,
     })?;
-    let mesh = match ext.as_deref() {
-        Some("obj") => load_obj(path)?,
-        Some("gltf") | Some("glb") => load_gltf(path)?,
+    let read = match ext.as_deref() {
+        Some("obj") => read_obj(path, &bytes)?,
+        Some("gltf") | Some("glb") => read_gltf(path, &bytes, wanted)?,
         _ => {
             return Err(ImportError::UnknownFormat {
                 path: path.to_owned(),
             })
         }
     };
-    if mesh.triangles.is_empty() {
+    if read.triangles.is_empty() {
         return Err(ImportError::Empty {
             path: path.to_owned(),
         });
     }
-    Ok(mesh)
+    Ok(read)
 }
 
 /// Reads an OBJ file; polygons are fan-triangulated by `tobj`, faces indexed by position.
 /// `tobj` keeps only the positions that faces reference, so unused OBJ vertices are already
-/// gone here (and the topology report counts none for OBJ input).
-pub fn load_obj(path: &Path) -> Result<InputMesh, ImportError> {
+/// gone here (and the topology report counts none for OBJ input). `mtllib` is not followed:
+/// materials are not needed here, and `tobj` panics on some malformed MTL files.
+fn read_obj(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, _materials) = tobj::load_obj(path, &opts).map_err(|source| ImportError::Obj {
+    let (models, _materials) = tobj::load_obj_buf(&mut &bytes[..], &opts, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|source| ImportError::Obj {
         path: path.to_owned(),
         source,
     })?;
-    let mut out = InputMesh::default();
+    let mut out = Triangles::default();
     let mut normals = Vec::new();
     let mut all_normals = true;
+    let mut colours = Vec::new();
+    let mut any_colour = false;
     for model in &models {
         let m = &model.mesh;
-        let base = out.positions.len() as u32;
+        let base = u32::try_from(out.positions.len()).map_err(|_| too_many(path))?;
         let nv = m.positions.len() / 3;
         out.positions
             .extend(m.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]));
+        if m.vertex_color.len() == 3 * nv {
+            any_colour |= nv > 0;
+            colours.extend(
+                m.vertex_color
+                    .chunks_exact(3)
+                    .map(|c| Some([c[0], c[1], c[2]])),
+            );
+        } else {
+            colours.extend(std::iter::repeat_n(None, nv));
+        }
         let has_normals = m.normal_indices.len() == m.indices.len() && !m.normals.is_empty();
         all_normals &= has_normals;
         for (k, tri) in m.indices.chunks_exact(3).enumerate() {
@@ -135,18 +189,26 @@ pub fn load_obj(path: &Path) -> Result<InputMesh, ImportError> {
     if all_normals && normals.len() == 3 * out.triangles.len() {
         out.corner_normals = Some(normals);
     }
+    out.colours = any_colour.then_some(colours);
     Ok(out)
+}
+
+fn too_many(path: &Path) -> ImportError {
+    ImportError::Invalid {
+        path: path.to_owned(),
+        what: "more than 2^32 vertices in all mesh instances; split the scene".into(),
+    }
 }
 
 /// Reads every triangle primitive of every mesh instance of a glTF/GLB file, placed where the
 /// scene puts it.
 ///
-/// The nodes of the default scene (the first scene when none is named default) are walked
-/// depth-first in file order, and each node's mesh is taken with the node's world transform
-/// (the product of its ancestors' and its own matrix or TRS): positions by the matrix, corner
-/// normals by its inverse transpose, and a mirroring transform (negative determinant) has its
-/// triangles' winding reversed so that they still face out. A mesh used by several nodes
-/// contributes one copy per node. A file without scenes has its meshes taken once each,
+/// The nodes of the scene are walked by [`crate::scene_graph::walk`] (the default scene, else
+/// the first, else every parentless node; a node hierarchy that is not a tree is refused here),
+/// and each node's mesh is taken with the node's world transform: positions by the matrix,
+/// corner normals by its inverse transpose, and a mirroring transform (negative determinant)
+/// has its triangles' winding reversed so that they still face out. A mesh used by several
+/// nodes contributes one copy per node. A file without nodes has its meshes taken once each,
 /// untransformed, in mesh order. Primitives that are not triangle lists (points, lines,
 /// strips, fans) are skipped.
 ///
@@ -154,81 +216,58 @@ pub fn load_obj(path: &Path) -> Result<InputMesh, ImportError> {
 /// through [`crate::gltf_guard`] (reference pre-check, buffers only from the GLB, `data:` URIs
 /// and regular files relative to it, every accessor bounds-checked before it is read), and a
 /// panic of the `gltf` crate that those checks miss is caught and reported as an error.
-pub fn load_gltf(path: &Path) -> Result<InputMesh, ImportError> {
-    let bytes = std::fs::read(path).map_err(|source| ImportError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    crate::gltf_guard::precheck(&bytes).map_err(|what| ImportError::Invalid {
-        path: path.to_owned(),
-        what,
-    })?;
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        load_gltf_checked(path, &bytes)
-    }))
-    .unwrap_or_else(|panic| {
-        let what = panic
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .unwrap_or_default();
-        Err(ImportError::Invalid {
-            path: path.to_owned(),
-            what: format!("the glTF reader failed on this file ({what})"),
-        })
-    })
+fn read_gltf(path: &Path, bytes: &[u8], wanted: Wanted) -> Result<Triangles, ImportError> {
+    let base = path.parent().unwrap_or_else(|| Path::new("."));
+    crate::gltf_guard::panic_free(|| read_gltf_checked(path, base, bytes, wanted)).unwrap_or_else(
+        |what| {
+            Err(ImportError::Invalid {
+                path: path.to_owned(),
+                what,
+            })
+        },
+    )
 }
 
-fn load_gltf_checked(path: &Path, bytes: &[u8]) -> Result<InputMesh, ImportError> {
-    use crate::gltf_guard::{check_accessor, load_buffers, AccessorUse};
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|source| ImportError::Gltf {
+fn read_gltf_checked(
+    path: &Path,
+    base: &Path,
+    bytes: &[u8],
+    wanted: Wanted,
+) -> Result<Triangles, ImportError> {
+    use crate::gltf_guard::{check_accessor, AccessorUse, OpenError};
+    use crate::scene_graph::SceneWalk;
+    let invalid = |what: String| ImportError::Invalid {
         path: path.to_owned(),
-        source,
+        what,
+    };
+    let gltf = crate::gltf_guard::open(bytes, Some(base)).map_err(|e| match e {
+        OpenError::Invalid(what) => invalid(what),
+        OpenError::Gltf(source) => ImportError::Gltf {
+            path: path.to_owned(),
+            source,
+        },
     })?;
-    let base = path.parent().unwrap_or_else(|| Path::new("."));
-    let mut buffer_problems = Vec::new();
-    let buffers = load_buffers(
-        &gltf.document,
-        Some(base),
-        gltf.blob.clone(),
-        &mut buffer_problems,
-    );
-    let doc = &gltf.document;
-    let mut instances: Vec<(gltf::Mesh, glam::Mat4)> = Vec::new();
-    match doc.default_scene().or_else(|| doc.scenes().next()) {
-        Some(scene) => {
-            // An explicit stack and a visited set: a malformed file whose nodes do not form a
-            // tree (a cycle, or a node with two parents) must be an error, not a stack
-            // overflow, an endless walk or an exponential number of instances.
-            let mut seen = vec![false; doc.nodes().len()];
-            let mut stack: Vec<(gltf::Node, glam::Mat4)> =
-                scene.nodes().map(|n| (n, glam::Mat4::IDENTITY)).collect();
-            stack.reverse();
-            while let Some((node, parent)) = stack.pop() {
-                if std::mem::replace(&mut seen[node.index()], true) {
-                    return Err(ImportError::Invalid {
-                        path: path.to_owned(),
-                        what: format!(
-                            "nodes[{}] is reached twice from scene {}; glTF nodes must form trees (one parent per node, no cycles)",
-                            node.index(),
-                            scene.index()
-                        ),
-                    });
-                }
-                let world = parent * glam::Mat4::from_cols_array_2d(&node.transform().matrix());
-                if let Some(mesh) = node.mesh() {
-                    instances.push((mesh, world));
-                }
-                let children: Vec<_> = node.children().collect();
-                stack.extend(children.into_iter().rev().map(|c| (c, world)));
-            }
-        }
-        None => instances.extend(doc.meshes().map(|m| (m, glam::Mat4::IDENTITY))),
+    let walk = crate::scene_graph::walk(&gltf.json).map_err(|e| invalid(e.to_string()))?;
+    if let Some(&node) = walk.repeated.first() {
+        return Err(invalid(SceneWalk::repeated_message(node)));
     }
-    let mut out = InputMesh::default();
+    let doc = &gltf.document;
+    let buffers = &gltf.buffers;
+    let meshes: Vec<gltf::Mesh> = doc.meshes().collect();
+    let instances: Vec<(usize, glam::Mat4)> = if doc.nodes().len() == 0 {
+        (0..meshes.len())
+            .map(|m| (m, glam::Mat4::IDENTITY))
+            .collect()
+    } else {
+        walk.mesh_instances().map(|(v, m)| (m, v.world)).collect()
+    };
+    let mut out = Triangles::default();
     let mut normals = Vec::new();
     let mut all_normals = true;
-    for (mesh, world) in instances {
+    let mut colours = Vec::new();
+    let mut any_colour = false;
+    for (m, world) in instances {
+        let mesh = &meshes[m];
         let identity = world == glam::Mat4::IDENTITY;
         let mirrored = world.determinant() < 0.0;
         let normal_matrix = glam::Mat3::from_mat4(world).inverse().transpose();
@@ -257,22 +296,25 @@ fn load_gltf_checked(path: &Path, bytes: &[u8]) -> Result<InputMesh, ImportError
             };
             let mut used = vec![(pos_acc, AccessorUse::Position)];
             used.extend(prim.indices().map(|a| (a, AccessorUse::Index)));
-            let normal_acc = prim.get(&gltf::Semantic::Normals);
-            used.extend(normal_acc.map(|a| (a, AccessorUse::Normal)));
+            if wanted.normals {
+                let normal_acc = prim.get(&gltf::Semantic::Normals);
+                used.extend(normal_acc.map(|a| (a, AccessorUse::Normal)));
+            }
+            if wanted.colours {
+                let colour_acc = prim.get(&gltf::Semantic::Colors(0));
+                used.extend(colour_acc.map(|a| (a, AccessorUse::Colour)));
+            }
             if let Err(e) = used
                 .iter()
-                .try_for_each(|(a, u)| check_accessor(a, *u, &buffers))
+                .try_for_each(|(a, u)| check_accessor(a, *u, buffers))
             {
                 let mut what =
                     format!("meshes[{}].primitives[{}]: {e}", mesh.index(), prim.index());
-                for p in &buffer_problems {
+                for p in &gltf.buffer_problems {
                     what.push_str("; ");
                     what.push_str(p);
                 }
-                return Err(ImportError::Invalid {
-                    path: path.to_owned(),
-                    what,
-                });
+                return Err(invalid(what));
             }
             let reader = prim.reader(|b| buffers.get(b.index()).and_then(|d| d.as_deref()));
             let Some(pos) = reader.read_positions() else {
@@ -283,12 +325,12 @@ fn load_gltf_checked(path: &Path, bytes: &[u8]) -> Result<InputMesh, ImportError
             let base_v = u32::try_from(out.positions.len())
                 .ok()
                 .filter(|b| b.checked_add(nv as u32).is_some() && nv <= u32::MAX as usize)
-                .ok_or_else(|| ImportError::Invalid {
-                    path: path.to_owned(),
-                    what: "more than 2^32 vertices in all mesh instances; split the scene".into(),
-                })?;
-            let prim_normals: Option<Vec<[f32; 3]>> =
-                reader.read_normals().map(|n| n.map(turn).collect());
+                .ok_or_else(|| too_many(path))?;
+            let prim_normals: Option<Vec<[f32; 3]>> = if wanted.normals {
+                reader.read_normals().map(|n| n.map(turn).collect())
+            } else {
+                None
+            };
             let indices: Vec<u32> = match reader.read_indices() {
                 Some(i) => i.into_u32().collect(),
                 None => (0..nv as u32).collect(),
@@ -297,14 +339,11 @@ fn load_gltf_checked(path: &Path, bytes: &[u8]) -> Result<InputMesh, ImportError
             all_normals &= has_normals;
             for (k, tri) in indices.chunks_exact(3).enumerate() {
                 if tri.iter().any(|&i| i as usize >= nv) {
-                    return Err(ImportError::Invalid {
-                        path: path.to_owned(),
-                        what: format!(
-                            "meshes[{}].primitives[{}]: triangle {k} index out of bounds",
-                            mesh.index(),
-                            prim.index()
-                        ),
-                    });
+                    return Err(invalid(format!(
+                        "meshes[{}].primitives[{}]: triangle {k} index out of bounds",
+                        mesh.index(),
+                        prim.index()
+                    )));
                 }
                 let tri = if mirrored {
                     [tri[0], tri[2], tri[1]]
@@ -316,12 +355,28 @@ fn load_gltf_checked(path: &Path, bytes: &[u8]) -> Result<InputMesh, ImportError
                     normals.extend(tri.iter().map(|&i| n[i as usize]));
                 }
             }
+            let prim_colours: Option<Vec<[f32; 3]>> = if wanted.colours {
+                reader
+                    .read_colors(0)
+                    .map(|c| c.into_rgb_f32().collect::<Vec<_>>())
+                    .filter(|c| c.len() == nv)
+            } else {
+                None
+            };
+            match prim_colours {
+                Some(c) => {
+                    any_colour = true;
+                    colours.extend(c.into_iter().map(Some));
+                }
+                None => colours.extend(std::iter::repeat_n(None, nv)),
+            }
             out.positions.extend(pos);
         }
     }
-    if all_normals && normals.len() == 3 * out.triangles.len() {
+    if wanted.normals && all_normals && normals.len() == 3 * out.triangles.len() {
         out.corner_normals = Some(normals);
     }
+    out.colours = any_colour.then_some(colours);
     Ok(out)
 }
 
@@ -369,7 +424,7 @@ mod tests {
                 {"scale":[-1,1,1],"mesh":0}]"#,
             "[0, 2]",
         );
-        let m = load_gltf(&path).unwrap();
+        let m = load_mesh(&path).unwrap();
         assert_eq!(
             m.positions,
             vec![
@@ -401,7 +456,24 @@ mod tests {
             r#"[{"children":[1]},{"children":[0],"mesh":0}]"#,
             "[0]",
         );
-        let err = load_gltf(&path).unwrap_err().to_string();
+        let err = load_mesh(&path).unwrap_err().to_string();
         assert!(err.contains("nodes[0] is reached twice"), "{err}");
+    }
+
+    #[test]
+    fn gltf_without_nodes_has_its_meshes_taken_once_untransformed() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = gltf_with_nodes(dir.path(), "[]", "[]");
+        let text = std::fs::read_to_string(&path)
+            .unwrap()
+            .replace(r#""scene":0,"scenes":[{"nodes":[]}],"#, "")
+            .replace(r#""nodes":[],"#, "");
+        std::fs::write(&path, text).unwrap();
+        let m = load_mesh(&path).unwrap();
+        assert_eq!(
+            m.positions,
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+        );
+        assert_eq!(m.triangles, vec![[0, 1, 2]]);
     }
 }

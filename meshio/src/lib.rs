@@ -1,13 +1,39 @@
 //! # hce-meshio
 //!
-//! Reading and writing meshes for hce: glTF 2.0 and Wavefront OBJ import behind the guards of
-//! [`gltf_guard`] (hostile files get an error, never a panic, hang or unbounded allocation),
-//! OBJ/glTF export of refined meshes, and the atomic file write every tool output goes through.
+//! Reading and writing meshes and scenes for hce.
+//!
+//! Always built, for every crate that touches files, the runtime included:
+//! * [`scene_graph`]: the one walk of a glTF node hierarchy (default scene, world transforms,
+//!   trees only), over the JSON, used by every reader that places glTF meshes.
+//! * [`gltf_guard`]: the guards every glTF reader goes through (URI rules here; with `import`
+//!   also the guarded open, accessor checks and panic catching around the `gltf` crate).
+//! * [`atomic`]: [`write_atomic`], the one way every tool output is written.
+//!
+//! Feature `import` (default): the readers, on the `gltf` crate, `tobj` and `image`:
+//! * `scene`: the baker's scene importer (objects per node instance and primitive,
+//!   materials and textures, lights, camera);
+//! * `import`: `load_mesh`, one triangle mesh in world space from OBJ/glTF (`hce subdivide`);
+//! * `plain`: `hce render`'s preview of a plain mesh, by the same reader as `load_mesh`.
+//!
+//! Feature `export` (default): `export`, OBJ/glTF/GLB writers of refined meshes.
+//!
+//! Hostile files get an error, never a panic, a hang or an unbounded allocation.
 
-pub mod export;
+pub mod atomic;
 pub mod gltf_guard;
-pub mod import;
-pub mod plain;
+pub mod scene_graph;
 
-pub use export::{write_atomic, write_atomic_with, ExportError};
+#[cfg(feature = "export")]
+pub mod export;
+#[cfg(feature = "import")]
+pub mod import;
+#[cfg(feature = "import")]
+pub mod plain;
+#[cfg(feature = "import")]
+pub mod scene;
+
+pub use atomic::{write_atomic, write_atomic_with, FileWriteError};
+#[cfg(feature = "export")]
+pub use export::ExportError;
+#[cfg(feature = "import")]
 pub use import::{load_mesh, ImportError, InputMesh};

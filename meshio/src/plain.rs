@@ -1,7 +1,9 @@
 //! A minimal loader for plain (not yet baked) meshes, so `hce render` can preview any OBJ or
-//! glTF: positions, triangle indices and `COLOR_0` when present, welded on exactly equal
-//! positions and turned into a flat object whose single-node trees carry one colour per
-//! triangle, which the runtime's flat kernel draws.
+//! glTF: positions, triangle indices and `COLOR_0` when present, read by the same reader as
+//! [`crate::load_mesh`] (the guards of [`crate::gltf_guard`], meshes placed by their nodes'
+//! world transforms through [`crate::scene_graph`]), then welded on exactly equal positions and
+//! turned into a flat object whose single-node trees carry one colour per triangle, which the
+//! runtime's flat kernel draws.
 
 use std::path::Path;
 
@@ -9,7 +11,7 @@ use hce_format::{rgb9e5, ControlMesh, Object, ObjectKind, TriangleRecord};
 
 use hce_geometry::flat::{edge_ids, normal_and_area};
 
-use crate::import::ImportError;
+use crate::import::{read_triangles, ImportError, Wanted};
 
 /// Triangles with optional linear per-vertex colours.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -20,109 +22,26 @@ pub struct PlainMesh {
     pub colours: Option<Vec<f32>>,
 }
 
-fn load_err(path: &Path, reason: impl std::fmt::Display) -> ImportError {
-    ImportError::Invalid {
-        path: path.to_path_buf(),
-        what: reason.to_string(),
-    }
-}
+/// Grey for the vertices without colours of a partly coloured file.
+const NO_COLOUR: [f32; 3] = [0.5; 3];
 
-/// Loads every triangle primitive of an OBJ, glTF or GLB file into one mesh.
+/// Loads every triangle primitive of every mesh instance of an OBJ, glTF or GLB file into one
+/// mesh, in world space.
 pub fn load_plain_mesh(path: &Path) -> Result<PlainMesh, ImportError> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    let mut mesh = PlainMesh::default();
-    let mut colours = Vec::new();
-    let mut any_colour = false;
-    match ext.as_str() {
-        "obj" => {
-            let (models, _) = tobj::load_obj(
-                path,
-                &tobj::LoadOptions {
-                    triangulate: true,
-                    single_index: true,
-                    ..Default::default()
-                },
-            )
-            .map_err(|e| load_err(path, e))?;
-            for m in models {
-                let base = (mesh.positions.len() / 3) as u32;
-                let n = m.mesh.positions.len() / 3;
-                mesh.positions.extend(&m.mesh.positions);
-                if m.mesh.vertex_color.len() == 3 * n {
-                    any_colour = true;
-                    colours.extend(&m.mesh.vertex_color);
-                } else {
-                    colours.extend(std::iter::repeat_n(-1.0, 3 * n));
-                }
-                mesh.indices.extend(m.mesh.indices.iter().map(|i| i + base));
-            }
-        }
-        "gltf" | "glb" => {
-            let (doc, buffers, _) = gltf::import(path).map_err(|e| load_err(path, e))?;
-            for gm in doc.meshes() {
-                for prim in gm.primitives() {
-                    if prim.mode() != gltf::mesh::Mode::Triangles {
-                        continue;
-                    }
-                    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-                    let Some(pos) = reader.read_positions() else {
-                        continue;
-                    };
-                    let base = (mesh.positions.len() / 3) as u32;
-                    let pos: Vec<[f32; 3]> = pos.collect();
-                    let n = pos.len() as u32;
-                    mesh.positions.extend(pos.iter().flatten());
-                    match reader.read_colors(0) {
-                        Some(c) => {
-                            any_colour = true;
-                            colours.extend(c.into_rgb_f32().flatten());
-                        }
-                        None => colours.extend(std::iter::repeat_n(-1.0, 3 * n as usize)),
-                    }
-                    match reader.read_indices() {
-                        Some(ix) => {
-                            for i in ix.into_u32() {
-                                if i >= n {
-                                    return Err(load_err(
-                                        path,
-                                        format!(
-                                            "mesh {:?}: index {i} >= {n} vertices",
-                                            gm.name().unwrap_or("")
-                                        ),
-                                    ));
-                                }
-                                mesh.indices.push(base + i);
-                            }
-                        }
-                        None => mesh.indices.extend(base..base + n - n % 3),
-                    }
-                }
-            }
-        }
-        _ => {
-            return Err(load_err(
-                path,
-                "unsupported extension (expected .obj, .gltf or .glb)",
-            ))
-        }
-    }
-    if mesh.indices.is_empty() {
-        return Err(load_err(path, "no triangles found"));
-    }
-    if any_colour {
-        // Vertices without colours in a partly coloured file take neutral grey.
-        mesh.colours = Some(
-            colours
-                .iter()
-                .map(|&c| if c < 0.0 { 0.5 } else { c })
-                .collect(),
-        );
-    }
-    Ok(mesh)
+    let read = read_triangles(
+        path,
+        Wanted {
+            normals: false,
+            colours: true,
+        },
+    )?;
+    Ok(PlainMesh {
+        positions: read.positions.iter().flatten().copied().collect(),
+        indices: read.triangles.iter().flatten().copied().collect(),
+        colours: read
+            .colours
+            .map(|c| c.iter().flat_map(|c| c.unwrap_or(NO_COLOUR)).collect()),
+    })
 }
 
 /// Direction of the preview light used for meshes without colours.
@@ -215,4 +134,67 @@ pub fn to_flat_object(name: &str, mesh: &PlainMesh) -> (Object, usize) {
         colours: tri_colours,
     };
     (object, dropped)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A one-triangle glTF (with `COLOR_0`) whose mesh sits under a translated, mirrored node.
+    fn translated_gltf(dir: &Path) -> std::path::PathBuf {
+        let mut bin = Vec::new();
+        for p in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+            bin.extend(p.iter().flat_map(|c| c.to_le_bytes()));
+        }
+        for c in [[1.0f32, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] {
+            bin.extend(c.iter().flat_map(|c| c.to_le_bytes()));
+        }
+        std::fs::write(dir.join("translated.bin"), &bin).unwrap();
+        let json = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],
+            "nodes":[{"translation":[0,5,0],"children":[1]},{"mesh":0,"scale":[-1,1,1]}],
+            "meshes":[{"primitives":[{"attributes":{"POSITION":0,"COLOR_0":1}}]}],
+            "buffers":[{"byteLength":72,"uri":"translated.bin"}],
+            "bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":36},
+                {"buffer":0,"byteOffset":36,"byteLength":36}],
+            "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]},
+                {"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}]}"#;
+        let path = dir.join("translated.gltf");
+        std::fs::write(&path, json).unwrap();
+        path
+    }
+
+    #[test]
+    fn a_mesh_under_a_translated_node_previews_where_the_node_puts_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let mesh = load_plain_mesh(&translated_gltf(dir.path())).unwrap();
+        // Moved up 5 by the parent, mirrored in x by the child.
+        assert_eq!(
+            mesh.positions,
+            vec![0.0, 5.0, 0.0, -1.0, 5.0, 0.0, 0.0, 6.0, 0.0]
+        );
+        // The mirror reverses the winding, so the triangle still faces +z.
+        assert_eq!(mesh.indices, vec![0, 2, 1]);
+        let (object, dropped) = to_flat_object("t", &mesh);
+        assert_eq!(dropped, 0);
+        assert_eq!(object.normals, vec![[0.0, 0.0, 1.0]]);
+        // The triangle's colour is the mean of its corners' COLOR_0.
+        let c = rgb9e5::decode(object.colours[0]);
+        for k in 0..3 {
+            assert!((c[k] - 1.0 / 3.0).abs() < 0.01, "{c:?}");
+        }
+    }
+
+    #[test]
+    fn hostile_buffers_are_errors_not_panics() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = translated_gltf(dir.path());
+        // COLOR_0 claims more elements than its view holds.
+        let text = std::fs::read_to_string(&path).unwrap().replace(
+            r#""count":3,"type":"VEC3"}]"#,
+            r#""count":3000,"type":"VEC3"}]"#,
+        );
+        std::fs::write(&path, text).unwrap();
+        let e = load_plain_mesh(&path).unwrap_err().to_string();
+        assert!(e.contains("do not fit in bufferViews[1]"), "{e}");
+    }
 }

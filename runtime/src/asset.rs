@@ -14,7 +14,8 @@
 //! * Each object's geometry hash (SPEC.md 2.5) against its control mesh (`POSN` through `TRIS`),
 //!   and, for glTF, each linked primitive's recomputed hash against its `geometryHash` and the
 //!   object's; each primitive's triangle range inside its object, ranges not overlapping.
-//! * The glTF scene graph: node indices in range, finite transforms, camera parameters.
+//! * The glTF scene graph: node and mesh indices in range, finite transforms, camera
+//!   parameters.
 //!
 //! With [`OpenOptions::strict`] (the default) any of these problems is an error. Without it,
 //! problems with single primitives follow SPEC.md 3.5: the primitive's link is ignored, with a
@@ -30,11 +31,20 @@
 //!
 //! # Instances
 //!
-//! The default scene (`scene`, else the first of `scenes`, else every node without a parent) is
-//! walked depth first in child order, as `hce bake` walks it. Every node whose mesh has a
-//! primitive linked to object `k` adds one [`Instance`] of object `k` with the node's world
-//! transform (several primitives of one mesh that share an object add it once). `hce bake`
-//! copies meshes per node, so each of its objects has exactly one instance.
+//! The scene is walked by `hce_meshio::scene_graph::walk`, the walk `hce bake` places meshes
+//! with (the default scene, else the first, else every node without a parent; depth first in
+//! child order; the same world transforms to the bit; a node reached twice is walked once, with
+//! a warning). Every node whose mesh has a primitive linked to object `k` adds one [`Instance`]
+//! of object `k` with the node's world transform (several primitives of one mesh that share an
+//! object add it once). `hce bake` copies meshes per node, so each of its objects has exactly
+//! one instance.
+//!
+//! # Where the container is
+//!
+//! [`GltfSource`] is the one way hce finds a baked container in a glTF or GLB: the JSON and
+//! every buffer (external files through [`buffer_files`]: inside the asset's folder, regular
+//! files, each once), then the buffer view the root extension names. `hce inspect` and
+//! `hce subdivide` use it too.
 //!
 //! # Memory
 //!
@@ -45,9 +55,11 @@
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
-use glam::{Mat4, Quat, Vec3};
+use glam::{Mat4, Vec3};
 use hce_format::gltf::{self as hgltf, GltfError, PrimitiveLink};
 use hce_format::{geometry_hash, Metadata, Object, ObjectKind, Problem, ReadError};
+use hce_meshio::gltf_guard::{self, UriScope};
+use hce_meshio::scene_graph;
 use serde_json::Value;
 
 /// Files at least this large (16 MiB) are memory-mapped instead of read into memory.
@@ -300,6 +312,90 @@ fn read_file(path: &Path) -> Result<FileBytes, std::io::Error> {
 
 const HCE_IDENTIFIER: &[u8; 4] = b"\x89HCE";
 
+/// A glTF or GLB asset's JSON and buffers: where hce finds a baked container. Asset loading,
+/// `hce inspect` and `hce subdivide` all go through it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GltfSource {
+    /// Whether it came from a GLB (else a `.gltf`).
+    pub glb: bool,
+    pub json: Value,
+    /// Every buffer, in `buffers` order.
+    pub buffers: Vec<Vec<u8>>,
+}
+
+impl GltfSource {
+    /// Parses a `.gltf` or `.glb` and loads its buffers: the GLB's BIN chunk, `data:` URIs, and
+    /// other URIs through `resolve` ([`buffer_files`] for files beside it).
+    pub fn parse(
+        bytes: &[u8],
+        resolve: impl FnMut(&str) -> Result<Vec<u8>, String>,
+    ) -> Result<Self, GltfError> {
+        let glb = bytes.starts_with(b"glTF");
+        Self::load(hgltf::Asset::parse(bytes)?, glb, resolve)
+    }
+
+    fn load(
+        asset: hgltf::Asset,
+        glb: bool,
+        resolve: impl FnMut(&str) -> Result<Vec<u8>, String>,
+    ) -> Result<Self, GltfError> {
+        let buffers = asset.buffers(resolve)?;
+        Ok(Self {
+            glb,
+            json: asset.json,
+            buffers,
+        })
+    }
+
+    /// Reads a `.gltf` or `.glb` file that uses the extension, with its buffers (external ones
+    /// through [`buffer_files`]); `None`, without loading any buffer, when it does not use it.
+    pub fn open_baked(path: &Path) -> Result<Option<Self>, AssetError> {
+        let shown = || path.display().to_string();
+        let gltf_err = |error| AssetError::Gltf {
+            path: shown(),
+            error,
+        };
+        let bytes = read_file(path).map_err(|error| AssetError::Io {
+            path: shown(),
+            error,
+        })?;
+        let asset = hgltf::Asset::parse(&bytes).map_err(gltf_err)?;
+        if hgltf::root_link(&asset.json).map_err(gltf_err)?.is_none() {
+            return Ok(None);
+        }
+        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Self::load(asset, bytes.starts_with(b"glTF"), buffer_files(&dir))
+            .map(Some)
+            .map_err(gltf_err)
+    }
+
+    /// The container bytes: the buffer view the root `EXT_hce_baked_lighting` object names
+    /// (SPEC.md 3.2), checked to lie inside its buffer; `None` when the asset does not use the
+    /// extension.
+    pub fn container(&self) -> Result<Option<&[u8]>, GltfError> {
+        hgltf::container_bytes(&self.json, &self.buffers)
+    }
+}
+
+/// Loads the external buffer files of an asset in `dir`: URIs relative to it, percent-decoded,
+/// inside the folder only (`hce_meshio::gltf_guard::UriScope::Folder`: a baked asset may come
+/// from anywhere), regular files only, and each file once, so that many buffers naming one big
+/// file do not multiply memory.
+pub fn buffer_files(dir: &Path) -> impl FnMut(&str) -> Result<Vec<u8>, String> {
+    let dir = dir.to_path_buf();
+    let mut seen = HashSet::new();
+    move |uri| {
+        let file = gltf_guard::uri_path(&dir, uri, UriScope::Folder)?;
+        let key = std::fs::canonicalize(&file).unwrap_or_else(|_| file.clone());
+        if !seen.insert(key) {
+            return Err(
+                "another buffer already uses this file; each buffer file is loaded once".into(),
+            );
+        }
+        gltf_guard::read_regular_file(&file)
+    }
+}
+
 impl Asset {
     /// Opens a `.glb`, `.gltf` or `.hce` file with the default (strict) options.
     pub fn open(path: impl AsRef<Path>) -> Result<Self, AssetError> {
@@ -320,22 +416,6 @@ impl Asset {
         let is_gltf_ext = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("gltf"));
-        let mut seen = HashSet::new();
-        let resolve = |uri: &str| -> Result<Vec<u8>, String> {
-            // A URI must not reach outside the asset's folder.
-            if uri.contains("..") || uri.contains(':') || uri.starts_with('/') {
-                return Err("only relative paths inside the asset's folder are followed".into());
-            }
-            let file = dir.join(uri);
-            // Each file once: many buffers naming one big file must not multiply memory.
-            let key = std::fs::canonicalize(&file).unwrap_or_else(|_| file.clone());
-            if !seen.insert(key) {
-                return Err(
-                    "another buffer already uses this file; each buffer file is loaded once".into(),
-                );
-            }
-            std::fs::read(&file).map_err(|e| e.to_string())
-        };
         let format = if bytes.starts_with(b"glTF") {
             AssetFormat::Glb
         } else if bytes.starts_with(HCE_IDENTIFIER) {
@@ -351,11 +431,12 @@ impl Asset {
         } else {
             return Err(AssetError::UnknownFormat { path: shown });
         };
-        Self::from_bytes(path, format, &bytes, resolve, options)
+        Self::from_bytes(path, format, &bytes, buffer_files(&dir), options)
     }
 
     /// Builds an asset from bytes already in memory; `resolve` loads a `.gltf`'s external
-    /// buffers by URI. `path` only names the asset in messages.
+    /// buffers by URI ([`buffer_files`] for files beside it). `path` only names the asset in
+    /// messages.
     pub fn from_bytes(
         path: &Path,
         format: AssetFormat,
@@ -363,14 +444,9 @@ impl Asset {
         resolve: impl FnMut(&str) -> Result<Vec<u8>, String>,
         options: &OpenOptions,
     ) -> Result<Self, AssetError> {
-        let shown = path.display().to_string();
-        let mut loader = Loader {
-            path: shown,
-            strict: options.strict,
-            warnings: Vec::new(),
-        };
-        let (metadata, objects, camera) = match format {
+        match format {
             AssetFormat::Hce => {
+                let loader = Loader::new(path, options);
                 let container = loader.container(bytes)?;
                 let objects = container
                     .objects
@@ -389,13 +465,42 @@ impl Asset {
                         )
                     })
                     .collect::<Result<Vec<_>, _>>()?;
-                (container.metadata, objects, None)
+                Ok(Asset {
+                    path: path.to_path_buf(),
+                    format,
+                    metadata: container.metadata,
+                    objects,
+                    camera: None,
+                    warnings: loader.warnings,
+                })
             }
-            AssetFormat::Glb | AssetFormat::Gltf => loader.gltf(bytes, resolve)?,
-        };
+            AssetFormat::Glb | AssetFormat::Gltf => {
+                let source =
+                    GltfSource::parse(bytes, resolve).map_err(|error| AssetError::Gltf {
+                        path: path.display().to_string(),
+                        error,
+                    })?;
+                Self::from_gltf(path, &source, options)
+            }
+        }
+    }
+
+    /// Builds an asset from a glTF or GLB already parsed with its buffers (for a caller that
+    /// also needs them, as `hce subdivide` does to write the refined scene).
+    pub fn from_gltf(
+        path: &Path,
+        source: &GltfSource,
+        options: &OpenOptions,
+    ) -> Result<Self, AssetError> {
+        let mut loader = Loader::new(path, options);
+        let (metadata, objects, camera) = loader.gltf(source)?;
         Ok(Asset {
             path: path.to_path_buf(),
-            format,
+            format: if source.glb {
+                AssetFormat::Glb
+            } else {
+                AssetFormat::Gltf
+            },
             metadata,
             objects,
             camera,
@@ -445,6 +550,14 @@ struct Loader {
 }
 
 impl Loader {
+    fn new(path: &Path, options: &OpenOptions) -> Self {
+        Loader {
+            path: path.display().to_string(),
+            strict: options.strict,
+            warnings: Vec::new(),
+        }
+    }
+
     fn gltf_err(&self, source: GltfError) -> AssetError {
         AssetError::Gltf {
             path: self.path.clone(),
@@ -539,20 +652,18 @@ impl Loader {
 
     fn gltf(
         &mut self,
-        bytes: &[u8],
-        resolve: impl FnMut(&str) -> Result<Vec<u8>, String>,
+        source: &GltfSource,
     ) -> Result<(Metadata, Vec<AssetObject>, Option<SceneCamera>), AssetError> {
-        let asset = hgltf::Asset::parse(bytes).map_err(|e| self.gltf_err(e))?;
-        let buffers = asset.buffers(resolve).map_err(|e| self.gltf_err(e))?;
-        let container_bytes = hgltf::container_bytes(&asset.json, &buffers)
+        let container_bytes = source
+            .container()
             .map_err(|e| self.gltf_err(e))?
             .ok_or_else(|| AssetError::NotBaked {
                 path: self.path.clone(),
             })?;
         let container = self.container(container_bytes)?;
-        let links = hgltf::primitive_links(&asset.json).map_err(|e| self.gltf_err(e))?;
-        let geometries = hgltf::linked_geometries(&asset.json, &buffers, &links);
-        drop(buffers);
+        let json = &source.json;
+        let links = hgltf::primitive_links(json).map_err(|e| self.gltf_err(e))?;
+        let geometries = hgltf::linked_geometries(json, &source.buffers, &links);
         let good = self.check_links(&container, &links, geometries)?;
 
         // Objects of each mesh, in first-primitive order, from the links that passed.
@@ -563,24 +674,26 @@ impl Loader {
                 list.push(l.object);
             }
         }
-        let walk = self.walk_scene(&asset.json)?;
+        let walk = scene_graph::walk(json).map_err(|e| AssetError::Scene {
+            path: self.path.clone(),
+            location: e.location,
+            message: e.message,
+        })?;
+        self.warnings.extend(walk.repeated_warnings());
         let mut instances: Vec<Vec<Instance>> = vec![Vec::new(); container.objects.len()];
         let mut camera = None;
-        for (node, world) in &walk {
-            let n = &asset.json["nodes"][*node];
+        for visit in &walk.visits {
+            let (node, world) = (visit.node, &visit.world);
+            let n = &json["nodes"][node];
             let name = n
                 .get("name")
                 .and_then(Value::as_str)
                 .map(str::to_owned)
                 .unwrap_or_else(|| format!("nodes[{node}]"));
-            if let Some(m) = n.get("mesh") {
-                let m = m
-                    .as_u64()
-                    .ok_or_else(|| self.scene_err(format!("nodes[{node}].mesh"), "not an index"))?
-                    as usize;
+            if let Some(m) = visit.mesh {
                 for &o in mesh_objects.get(&m).map(Vec::as_slice).unwrap_or(&[]) {
                     instances[o as usize].push(Instance {
-                        node: Some(*node),
+                        node: Some(node),
                         name: name.clone(),
                         transform: *world,
                     });
@@ -588,7 +701,7 @@ impl Loader {
             }
             if camera.is_none() {
                 if let Some(c) = n.get("camera") {
-                    camera = self.camera(&asset.json, *node, &name, c, world)?;
+                    camera = self.camera(json, node, &name, c, world)?;
                 }
             }
         }
@@ -688,140 +801,6 @@ impl Loader {
             }
         }
         Ok(good)
-    }
-
-    /// The nodes of the default scene with their world transforms, depth first in child
-    /// order (the order `hce bake` uses). A node reached twice is walked once, with a warning.
-    fn walk_scene(&mut self, json: &Value) -> Result<Vec<(usize, Mat4)>, AssetError> {
-        let nodes = match json.get("nodes") {
-            None => return Ok(Vec::new()),
-            Some(n) => n
-                .as_array()
-                .ok_or_else(|| self.scene_err("nodes", "not an array"))?,
-        };
-        let path = self.path.clone();
-        let scene_err = move |location: String, message: String| AssetError::Scene {
-            path: path.clone(),
-            location,
-            message,
-        };
-        let index_list = |v: &Value, at: &str| -> Result<Vec<usize>, AssetError> {
-            let list = v.as_array().ok_or_else(|| {
-                scene_err(at.to_owned(), "not an array of node indices".to_owned())
-            })?;
-            list.iter()
-                .enumerate()
-                .map(|(k, i)| {
-                    i.as_u64()
-                        .map(|i| i as usize)
-                        .filter(|&i| i < nodes.len())
-                        .ok_or_else(|| {
-                            scene_err(
-                                format!("{at}[{k}]"),
-                                format!("{i} is not a node index (the file has {})", nodes.len()),
-                            )
-                        })
-                })
-                .collect()
-        };
-        let scenes = json.get("scenes").and_then(Value::as_array);
-        let scene = json
-            .get("scene")
-            .and_then(Value::as_u64)
-            .map(|s| s as usize)
-            .or(scenes.filter(|s| !s.is_empty()).map(|_| 0));
-        let roots = match (scene, scenes) {
-            (Some(s), Some(list)) => {
-                let sc = list
-                    .get(s)
-                    .ok_or_else(|| self.scene_err("scene", format!("scene {s} does not exist")))?;
-                match sc.get("nodes") {
-                    Some(n) => index_list(n, &format!("scenes[{s}].nodes"))?,
-                    None => Vec::new(),
-                }
-            }
-            (Some(s), None) => {
-                return Err(self.scene_err("scene", format!("scene {s} does not exist")))
-            }
-            (None, _) => {
-                let mut is_child = vec![false; nodes.len()];
-                for (i, n) in nodes.iter().enumerate() {
-                    if let Some(c) = n.get("children") {
-                        for c in index_list(c, &format!("nodes[{i}].children"))? {
-                            is_child[c] = true;
-                        }
-                    }
-                }
-                (0..nodes.len()).filter(|&i| !is_child[i]).collect()
-            }
-        };
-        let mut visited = vec![false; nodes.len()];
-        let mut out = Vec::new();
-        let mut stack: Vec<(usize, Mat4)> = roots
-            .into_iter()
-            .rev()
-            .map(|n| (n, Mat4::IDENTITY))
-            .collect();
-        while let Some((node, parent)) = stack.pop() {
-            if std::mem::replace(&mut visited[node], true) {
-                self.warnings.push(format!(
-                    "nodes[{node}] is reached twice in the hierarchy; the second instance is ignored"
-                ));
-                continue;
-            }
-            let world = parent * self.local_transform(&nodes[node], node)?;
-            out.push((node, world));
-            if let Some(c) = nodes[node].get("children") {
-                for c in index_list(c, &format!("nodes[{node}].children"))?
-                    .into_iter()
-                    .rev()
-                {
-                    stack.push((c, world));
-                }
-            }
-        }
-        Ok(out)
-    }
-
-    fn local_transform(&self, node: &Value, index: usize) -> Result<Mat4, AssetError> {
-        let numbers = |key: &str, len: usize| -> Result<Option<Vec<f32>>, AssetError> {
-            let Some(v) = node.get(key) else {
-                return Ok(None);
-            };
-            let at = format!("nodes[{index}].{key}");
-            let list: Option<Vec<f32>> = v.as_array().and_then(|a| {
-                a.iter()
-                    .map(|x| x.as_f64().map(|x| x as f32).filter(|x| x.is_finite()))
-                    .collect()
-            });
-            match list {
-                Some(l) if l.len() == len => Ok(Some(l)),
-                _ => Err(self.scene_err(at, format!("must be {len} finite numbers"))),
-            }
-        };
-        if let Some(m) = numbers("matrix", 16)? {
-            return Ok(Mat4::from_cols_slice(&m));
-        }
-        let t = numbers("translation", 3)?.unwrap_or(vec![0.0; 3]);
-        let s = numbers("scale", 3)?.unwrap_or(vec![1.0; 3]);
-        let r = match numbers("rotation", 4)? {
-            None => Quat::IDENTITY,
-            Some(q) => {
-                let q = Quat::from_xyzw(q[0], q[1], q[2], q[3]);
-                if q.length() < 1e-6 {
-                    return Err(self.scene_err(
-                        format!("nodes[{index}].rotation"),
-                        "is not a unit quaternion",
-                    ));
-                }
-                q.normalize()
-            }
-        };
-        Ok(Mat4::from_scale_rotation_translation(
-            Vec3::from_slice(&s),
-            r,
-            Vec3::from_slice(&t),
-        ))
     }
 
     /// The camera of a node, or `None` (with a warning) for cameras that cannot be used.

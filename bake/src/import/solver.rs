@@ -10,11 +10,20 @@ use std::sync::Arc;
 use super::{ImportedScene, SceneObject};
 use crate::scene::{self, Scene};
 
-impl ImportedScene {
+/// The solver's view of an imported scene.
+pub trait ToSolver {
     /// The solver's view of object `index`: world-space corners (winding restored where the node
     /// transform mirrors), per-triangle reflectance and emission from its material, no normal
     /// sets yet.
-    pub fn solver_object(&self, index: usize) -> scene::SceneObject {
+    fn solver_object(&self, index: usize) -> scene::SceneObject;
+
+    /// The whole scene as the solver takes it: every object (see
+    /// [`ToSolver::solver_object`]) and every punctual light.
+    fn solver_scene(&self) -> Scene;
+}
+
+impl ToSolver for ImportedScene {
+    fn solver_object(&self, index: usize) -> scene::SceneObject {
         let o: &SceneObject = &self.objects[index];
         let material = self.material_of(o);
         let flip = o.mirrored();
@@ -76,9 +85,7 @@ impl ImportedScene {
         }
     }
 
-    /// The whole scene as the solver takes it: every object (see [`Self::solver_object`]) and
-    /// every punctual light.
-    pub fn solver_scene(&self) -> Scene {
+    fn solver_scene(&self) -> Scene {
         Scene {
             objects: (0..self.objects.len())
                 .map(|i| self.solver_object(i))
@@ -103,7 +110,7 @@ impl ImportedScene {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{import_scene, ImportOptions};
+    use super::super::{import_scene, ImportOptions, ToSolver};
     use std::path::Path;
 
     #[test]

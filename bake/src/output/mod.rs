@@ -17,6 +17,8 @@ pub use from_obj::obj_to_gltf;
 
 use crate::import::{ImportedScene, SourceFormat};
 use hce_format::gltf::{embed_container, link_primitive, write_glb, Asset, PrimitiveLink};
+use hce_meshio::gltf_guard::read_uri;
+use hce_meshio::write_atomic;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 
@@ -41,7 +43,7 @@ pub enum OutputError {
     #[error("the container is unreadable: {0}")]
     Container(#[from] hce_format::ReadError),
     #[error(transparent)]
-    Write(#[from] hce_format::WriteError),
+    Write(#[from] hce_meshio::FileWriteError),
     #[error("{path}: the output must end in .glb or .gltf")]
     OutputExtension { path: PathBuf },
 }
@@ -77,7 +79,7 @@ impl BakedAsset {
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase);
         match ext.as_deref() {
-            Some("glb") => write_atomically(path, &self.to_glb()?),
+            Some("glb") => Ok(write_atomic(path, &self.to_glb()?)?),
             Some("gltf") => {
                 let bin_path = path.with_extension("bin");
                 let bin_name = bin_path
@@ -91,10 +93,10 @@ impl BakedAsset {
                 if let Some(b0) = json.get_mut("buffers").and_then(|b| b.get_mut(0)) {
                     b0["uri"] = json!(uri_escape(&bin_name));
                 }
-                write_atomically(&bin_path, &self.bin)?;
+                write_atomic(&bin_path, &self.bin)?;
                 let text = serde_json::to_vec_pretty(&json)
                     .map_err(|e| hce_format::gltf::GltfError::Json(e.to_string()))?;
-                write_atomically(path, &text)
+                Ok(write_atomic(path, &text)?)
             }
             _ => Err(OutputError::OutputExtension {
                 path: path.to_path_buf(),
@@ -112,12 +114,6 @@ fn uri_escape(name: &str) -> String {
             _ => format!("%{b:02X}"),
         })
         .collect()
-}
-
-/// Writes `bytes` to `path` through a temporary file in the same directory and a rename, so
-/// that readers never see a partial file.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    Ok(hce_format::write_atomically(path, bytes)?)
 }
 
 /// Bakes a scene into GLB bytes: see [`bake_gltf`].
@@ -316,7 +312,7 @@ fn load_source(path: &Path) -> Result<(Value, Vec<u8>), OutputError> {
         .parent()
         .unwrap_or_else(|| Path::new("."))
         .to_path_buf();
-    let buffers = asset.buffers(|uri| crate::import::read_uri(&base, uri))?;
+    let buffers = asset.buffers(|uri| read_uri(&base, uri))?;
     let mut json = asset.json;
     strip_extension(&mut json);
 
@@ -395,7 +391,7 @@ fn embed_images(
         } else {
             continue;
         };
-        let data = crate::import::read_uri(base, &uri)
+        let data = read_uri(base, &uri)
             .map_err(|e| source_error(path, format!("images[{i}] {uri:?}: {e}")))?;
         bin.resize(bin.len().next_multiple_of(4), 0);
         let offset = bin.len();

@@ -29,7 +29,8 @@ use hce_format::{Object, ObjectKind};
 use serde_json::{json, Map, Value};
 
 use hce_geometry::refine::{face_normal, unit_or_up, RefinedObject};
-use hce_meshio::export::{base64, write_atomic, ExportError};
+use hce_meshio::export::base64;
+use hce_meshio::{write_atomic, FileWriteError};
 use hce_runtime::asset::{Asset, AssetFormat};
 
 const ARRAY_BUFFER: u32 = 34962;
@@ -49,7 +50,7 @@ pub enum SceneExportError {
     #[error("{location}: {message}")]
     Gltf { location: String, message: String },
     #[error(transparent)]
-    Export(#[from] ExportError),
+    Write(#[from] FileWriteError),
 }
 
 /// Vertex data of one object as written: positions, normals and radiosity per output vertex,

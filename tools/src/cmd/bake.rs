@@ -124,7 +124,7 @@ fn exit_code(e: &PipelineError) -> i32 {
         PipelineError::OutputExtension { .. } | PipelineError::Levels(_) => 2,
         PipelineError::Bake(hce_bake::BakeError::InvalidParameter(_)) => 2,
         PipelineError::Import(ImportError::Io { .. }) => 4,
-        PipelineError::Write(_) => 4,
+        PipelineError::Write(_) | PipelineError::FileWrite(_) => 4,
         PipelineError::Output(hce_bake::output::OutputError::Write(_)) => 4,
         PipelineError::Import(_) | PipelineError::Bake(_) | PipelineError::Object { .. } => 3,
         PipelineError::Output(_) => 1,

@@ -154,7 +154,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
     let baked = dir.join(format!("{stem}-baked.glb"));
 
     let t = Instant::now();
-    hce_format::write_atomically(&input, scene.bytes())
+    hce_meshio::write_atomic(&input, scene.bytes())
         .with_context(|| format!("writing the sample to {}", input.display()))?;
     step(t, format_args!("sample scene: {}", input.display()));
 

@@ -4,10 +4,11 @@
 //! SPEC.md Appendix E.
 
 use clap::Args;
-use hce_format::gltf::{self, Asset};
+use hce_format::gltf;
 use hce_format::{
     read_layout, read_with, rgb9e5, triangle_trees, Container, ObjectKind, ReadOptions,
 };
+use hce_runtime::asset::{buffer_files, GltfSource};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -77,14 +78,11 @@ pub fn load(path: &Path) -> Result<Loaded, LoadError> {
         });
     }
     let invalid = |e: gltf::GltfError| LoadError::Invalid(format!("{}: {e}", path.display()));
-    let asset = Asset::parse(&bytes).map_err(invalid)?;
-    let format = if asset.bin.is_some() || bytes.starts_with(b"glTF") {
-        "glb"
-    } else {
-        "gltf"
-    };
-    let buffers = load_buffers(path, &asset).map_err(invalid)?;
-    let container = gltf::container_bytes(&asset.json, &buffers)
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let source = GltfSource::parse(&bytes, buffer_files(&dir)).map_err(invalid)?;
+    let format = if source.glb { "glb" } else { "gltf" };
+    let container = source
+        .container()
         .map_err(invalid)?
         .ok_or_else(|| {
             LoadError::Invalid(format!(
@@ -95,8 +93,8 @@ pub fn load(path: &Path) -> Result<Loaded, LoadError> {
         })?
         .to_vec();
     // Malformed links are left out here; `hce validate` reports each of them.
-    let (links, _) = gltf::scan_primitive_links(&asset.json);
-    let geometries = gltf::linked_geometries(&asset.json, &buffers, &links);
+    let (links, _) = gltf::scan_primitive_links(&source.json);
+    let geometries = gltf::linked_geometries(&source.json, &source.buffers, &links);
     let primitives = links
         .into_iter()
         .zip(geometries)
@@ -109,29 +107,6 @@ pub fn load(path: &Path) -> Result<Loaded, LoadError> {
         format,
         container,
         primitives,
-    })
-}
-
-/// Loads a parsed asset's buffers: the BIN chunk, `data:` URIs, and files beside `path` named by
-/// plain relative URIs (never `..`, absolute paths or other schemes), each file once.
-pub fn load_buffers(path: &Path, asset: &Asset) -> Result<Vec<Vec<u8>>, gltf::GltfError> {
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let mut seen = std::collections::HashSet::new();
-    asset.buffers(|uri| {
-        // Only plain relative file names: a URI must not reach outside the asset's folder.
-        if uri.contains("..") || uri.contains(':') || uri.starts_with('/') {
-            return Err("only relative paths inside the asset's folder are followed".into());
-        }
-        // Each file is loaded once: many buffers naming one big file would otherwise
-        // multiply memory by the number of buffers.
-        let file = dir.join(uri);
-        let key = std::fs::canonicalize(&file).unwrap_or_else(|_| file.clone());
-        if !seen.insert(key) {
-            return Err(
-                "another buffer already uses this file; hce loads each buffer file once".into(),
-            );
-        }
-        std::fs::read(&file).map_err(|e| e.to_string())
     })
 }
 

@@ -30,7 +30,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::{DMat4, DVec3, DVec4, Mat3, Mat4, Vec3};
-use hce_bake::import::{import_scene, ImportOptions};
+use hce_bake::import::{import_scene, ImportOptions, ToSolver};
 use hce_bake::reference::PathTracer;
 use hce_bake::{Scene, SceneObject};
 use hce_format::ObjectKind;

@@ -156,58 +156,39 @@ pub fn output_format(path: &Path) -> Result<Format> {
     }
 }
 
-/// Writes through a temporary file in the same directory, then renames, so a reader never sees
-/// a half-written image.
-fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path.file_name().context("output path has no file name")?;
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("tmp");
-    let tmp = dir.join(format!(
-        ".{}.{}.tmp.{ext}",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
-    let result = write(&tmp).and_then(|()| {
-        std::fs::rename(&tmp, path)
-            .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))
-    });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
-}
-
-/// Writes 8-bit sRGB RGBA to a PNG, tagged sRGB.
+/// Writes 8-bit sRGB RGBA to a PNG, tagged sRGB, through `hce_meshio::write_atomic_with`.
 pub fn write_png(path: &Path, width: u32, height: u32, rgba8: &[u8]) -> Result<()> {
-    write_atomically(path, |tmp| {
-        let file =
-            std::fs::File::create(tmp).with_context(|| format!("creating {}", tmp.display()))?;
-        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+    hce_meshio::write_atomic_with(path, |w| {
+        let mut enc = png::Encoder::new(w, width, height);
         enc.set_color(png::ColorType::Rgba);
         enc.set_depth(png::BitDepth::Eight);
         enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-        let mut writer = enc.write_header()?;
-        writer.write_image_data(rgba8)?;
-        writer.finish()?;
-        Ok(())
+        let mut writer = enc.write_header().map_err(std::io::Error::other)?;
+        writer
+            .write_image_data(rgba8)
+            .map_err(std::io::Error::other)?;
+        writer.finish().map_err(std::io::Error::other)
     })
     .with_context(|| format!("writing {}", path.display()))
 }
 
-/// Writes linear RGBA f32 (rows top to bottom) to an OpenEXR file.
+/// Writes linear RGBA f32 (rows top to bottom) to an OpenEXR file, encoded in memory (the
+/// encoder seeks) and written through `hce_meshio::write_atomic`.
 pub fn write_exr(path: &Path, width: u32, height: u32, rgba: &[f32]) -> Result<()> {
+    use exr::prelude::{Image, SpecificChannels, Vec2, WritableImage};
     let w = width as usize;
-    write_atomically(path, |tmp| {
-        exr::prelude::write_rgba_file(tmp, w, height as usize, |x, y| {
-            let p = &rgba[4 * (y * w + x)..4 * (y * w + x) + 4];
-            (p[0], p[1], p[2], p[3])
-        })
+    let channels = SpecificChannels::rgba(|Vec2(x, y): Vec2<usize>| {
+        let p = &rgba[4 * (y * w + x)..4 * (y * w + x) + 4];
+        (p[0], p[1], p[2], p[3])
+    });
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    Image::from_channels((w, height as usize), channels)
+        .write()
+        .to_buffered(&mut bytes)
         .map_err(|e| anyhow::anyhow!("{e}"))
-    })
-    .with_context(|| format!("writing {}", path.display()))
+        .with_context(|| format!("encoding {}", path.display()))?;
+    hce_meshio::write_atomic(path, bytes.get_ref())
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 #[cfg(not(feature = "gpu"))]

@@ -2,7 +2,8 @@
 //! CPU (the reference the GPU kernel and the baker share), writing OBJ, glTF or GLB.
 //!
 //! A baked input (`.hce`, or `.glb`/`.gltf` carrying `EXT_hce_baked_lighting`) is loaded with
-//! [`hce_runtime::asset::Asset::open`] and each object refined as the runtime refines it
+//! [`hce_runtime::asset::Asset::open`] (or, for glTF, read once through
+//! [`hce_runtime::asset::GltfSource`] and loaded with `Asset::from_gltf`) and each object refined as the runtime refines it
 //! ([`hce_geometry::refine::refine_object`]: Loop for multiresolution objects, linear
 //! 1-to-4 for flat ones, colours from [`hce_geometry::colour::apply_baked_colours`]); the scene
 //! is written back whole ([`hce_bake::output::refined_scene::write_refined_scene`]), or with
@@ -17,7 +18,7 @@ use hce_bake::output::refined_scene::write_refined_scene;
 use hce_format::ObjectKind;
 use hce_geometry::refine::{refine_object_with, RefinedObject};
 use hce_geometry::topology::{Creases, NonManifold, TopologyConfig};
-use hce_runtime::asset::{Asset, AssetFormat};
+use hce_runtime::asset::{Asset, GltfSource, OpenOptions};
 
 #[derive(Args)]
 #[command(
@@ -70,8 +71,8 @@ pub fn run(mut args: SubdivideArgs) -> Result<()> {
     if let Some(level) = super::renamed_flag(args.levels_old.take(), "--levels", "--level") {
         args.level = level;
     }
-    if is_baked(&args.input)? {
-        return run_baked(&args);
+    if let Some(baked) = baked_input(&args.input)? {
+        return run_baked(&args, baked);
     }
     let t0 = Instant::now();
     let input = hce_meshio::load_mesh(&args.input)?;
@@ -130,30 +131,29 @@ pub fn run(mut args: SubdivideArgs) -> Result<()> {
     Ok(())
 }
 
-/// Whether the input is baked: a `.hce`, or a glTF that uses the extension.
-fn is_baked(path: &Path) -> Result<bool> {
+/// A baked input: a `.hce` container, or a glTF/GLB that uses the extension, read with its
+/// buffers (which the refined scene is written from).
+enum Baked {
+    Hce,
+    Gltf(GltfSource),
+}
+
+/// The input if it is baked; `None` for a plain mesh.
+fn baked_input(path: &Path) -> Result<Option<Baked>> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("hce") => Ok(true),
-        Some("glb") | Some("gltf") => {
-            let bytes =
-                std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
-            let asset = hce_format::gltf::Asset::parse(&bytes)
-                .with_context(|| format!("{}: not a valid glTF asset", path.display()))?;
-            Ok(hce_format::gltf::root_link(&asset.json)
-                .with_context(|| format!("{}: bad EXT_hce_baked_lighting", path.display()))?
-                .is_some())
-        }
-        _ => Ok(false),
-    }
+    Ok(match ext.as_deref() {
+        Some("hce") => Some(Baked::Hce),
+        Some("glb") | Some("gltf") => GltfSource::open_baked(path)?.map(Baked::Gltf),
+        _ => None,
+    })
 }
 
 /// Refines every object of a baked asset as the runtime does and writes the scene (or, with
 /// `--merge` or an OBJ output, one merged mesh).
-fn run_baked(args: &SubdivideArgs) -> Result<()> {
+fn run_baked(args: &SubdivideArgs, input: Baked) -> Result<()> {
     if args.creases != Creases::None || args.weld_tolerance != 0.0 || args.refuse_nonmanifold {
         eprintln!(
             "note: {} is baked; --creases, --weld-tolerance and --refuse-nonmanifold are \
@@ -162,7 +162,13 @@ fn run_baked(args: &SubdivideArgs) -> Result<()> {
         );
     }
     let t0 = Instant::now();
-    let asset = Asset::open(&args.input)?;
+    let (asset, gltf) = match input {
+        Baked::Hce => (Asset::open(&args.input)?, None),
+        Baked::Gltf(source) => (
+            Asset::from_gltf(&args.input, &source, &OpenOptions::default())?,
+            Some(source),
+        ),
+    };
     for w in &asset.warnings {
         eprintln!("warning: {w}");
     }
@@ -206,22 +212,10 @@ fn run_baked(args: &SubdivideArgs) -> Result<()> {
         }
         write_merged(args, &refined)?;
     } else {
-        let gltf = match asset.format {
-            AssetFormat::Hce => None,
-            AssetFormat::Glb | AssetFormat::Gltf => {
-                let bytes = std::fs::read(&args.input)
-                    .with_context(|| format!("{}: cannot read", args.input.display()))?;
-                let parsed = hce_format::gltf::Asset::parse(&bytes)
-                    .with_context(|| format!("{}: not a valid glTF asset", args.input.display()))?;
-                let buffers = super::inspect::load_buffers(&args.input, &parsed)
-                    .with_context(|| format!("{}: cannot load buffers", args.input.display()))?;
-                Some((parsed.json, buffers))
-            }
-        };
         write_refined_scene(
             &args.output,
             &asset,
-            gltf.as_ref().map(|(j, b)| (j, b.as_slice())),
+            gltf.as_ref().map(|g| (&g.json, g.buffers.as_slice())),
             &refined,
         )
         .with_context(|| format!("{}: cannot write", args.output.display()))?;

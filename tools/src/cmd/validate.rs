@@ -3,10 +3,11 @@
 //! triangle ranges inside their object and geometry hashes that still match the mesh.
 //! Prints one line per problem; the exit status says valid (0), invalid (3) or unreadable (4).
 
-use super::inspect::{load_buffers, LoadError, EXIT_INVALID};
+use super::inspect::{LoadError, EXIT_INVALID};
 use clap::Args;
 use hce_format::{gltf, validate_bytes};
-use std::path::PathBuf;
+use hce_runtime::asset::{buffer_files, GltfSource};
+use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
 pub struct ValidateArgs {
@@ -28,9 +29,9 @@ pub fn problems(args: &ValidateArgs) -> Result<Vec<String>, LoadError> {
             .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"));
     let problems = if is_gltf {
         let invalid = |e: gltf::GltfError| LoadError::Invalid(format!("{}: {e}", path.display()));
-        let asset = gltf::Asset::parse(&bytes).map_err(invalid)?;
-        let buffers = load_buffers(path, &asset).map_err(invalid)?;
-        gltf::validate_asset(&asset.json, &buffers)
+        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let source = GltfSource::parse(&bytes, buffer_files(&dir)).map_err(invalid)?;
+        gltf::validate_asset(&source.json, &source.buffers)
     } else {
         validate_bytes(&bytes)
     };

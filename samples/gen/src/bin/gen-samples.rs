@@ -13,7 +13,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 
 /// Writes `bytes` to `path` through a temporary file in the same folder and a rename, so that a
-/// reader never sees a half-written sample.
+/// reader never sees a half-written sample. (The one atomic writer of the tools is
+/// `hce_meshio::write_atomic`; this crate keeps its own because it depends on no hce crate: the
+/// samples are generated independently of the code they test.)
 fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     let dir = path.parent().unwrap_or(Path::new("."));
     let name = path

@@ -2,9 +2,10 @@
 //! primitive, materials (baseColorFactor and baseColorTexture, emissiveFactor with
 //! KHR_materials_emissive_strength), KHR_lights_punctual lights and the first camera.
 //!
-//! Buffers are loaded one by one so that a missing or short buffer only drops the primitives
-//! that read from it; every accessor is bounds-checked before the `gltf` crate's reader touches
-//! it, because that reader slices without checking.
+//! The file is opened through [`crate::gltf_guard::open`], whose buffers are loaded one by one
+//! so that a missing or short buffer only drops the primitives that read from it; every
+//! accessor is bounds-checked before the `gltf` crate's reader touches it, because that reader
+//! slices without checking. Nodes are placed by [`crate::scene_graph::walk`].
 
 use super::{
     ImportError, ImportOptions, ImportedScene, LightKind, Material, Projection, PunctualLight,
@@ -17,10 +18,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
-pub(crate) use hce_meshio::gltf_guard::read_uri;
-use hce_meshio::gltf_guard::{
-    check_accessor, load_buffers, precheck, read_uri_from, AccessorUse as Use,
-};
+use crate::gltf_guard::{check_accessor, panic_free, read_uri_from, AccessorUse as Use, OpenError};
+use crate::scene_graph::walk;
 
 /// Extensions whose content this reader uses (the rest are reported as ignored).
 const SUPPORTED_EXTENSIONS: &[&str] = &["KHR_lights_punctual", "KHR_materials_emissive_strength"];
@@ -46,24 +45,10 @@ pub(super) fn import_bytes(
     bytes: &[u8],
     options: &ImportOptions,
 ) -> Result<ImportedScene, ImportError> {
-    precheck(bytes).map_err(|message| ImportError::Invalid {
-        path: path.to_path_buf(),
-        message,
-    })?;
-    // The checks here and in `check_accessor` cover every panic of the `gltf` crate we know of;
-    // this catches the ones we do not, so that a bad file is an error, never a crash.
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        import_checked(path, base, bytes, options)
-    }))
-    .unwrap_or_else(|panic| {
-        let what = panic
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .unwrap_or_default();
+    panic_free(|| import_checked(path, base, bytes, options)).unwrap_or_else(|message| {
         Err(ImportError::Invalid {
             path: path.to_path_buf(),
-            message: format!("the glTF reader failed on this file ({what})"),
+            message,
         })
     })
 }
@@ -79,11 +64,19 @@ fn import_checked(
     } else {
         SourceFormat::Gltf
     };
-    let ::gltf::Gltf { document, blob } =
-        ::gltf::Gltf::from_slice(bytes).map_err(|source| ImportError::Gltf {
+    let invalid = |message: String| ImportError::Invalid {
+        path: path.to_path_buf(),
+        message,
+    };
+    let gltf = crate::gltf_guard::open(bytes, base).map_err(|e| match e {
+        OpenError::Invalid(message) => invalid(message),
+        OpenError::Gltf(source) => ImportError::Gltf {
             path: path.to_path_buf(),
             source,
-        })?;
+        },
+    })?;
+    let document = &gltf.document;
+    let buffers = &gltf.buffers;
     let mut warnings = Vec::new();
 
     for ext in document.extensions_used() {
@@ -95,9 +88,8 @@ fn import_checked(
             warnings.push(format!("extension {ext} is not supported and is ignored"));
         }
     }
-
-    let buffers = load_buffers(&document, base, blob, &mut warnings);
-    let materials = read_materials(&document, base, &buffers, &mut warnings);
+    warnings.extend(gltf.buffer_problems.iter().cloned());
+    let materials = read_materials(document, base, buffers, &mut warnings);
 
     let mut scene = ImportedScene {
         path: path.to_path_buf(),
@@ -110,50 +102,25 @@ fn import_checked(
         summary: String::new(),
     };
 
-    // Roots of the default scene (or the first), or of every parentless node when there is none.
-    let roots: Vec<::gltf::Node> = match document.default_scene().or(document.scenes().next()) {
-        Some(s) => s.nodes().collect(),
-        None => {
-            let mut is_child = vec![false; document.nodes().len()];
-            for n in document.nodes() {
-                for c in n.children() {
-                    is_child[c.index()] = true;
-                }
-            }
-            document.nodes().filter(|n| !is_child[n.index()]).collect()
-        }
-    };
-    // Depth-first in child order, with an explicit stack and a visited set: a malformed file
-    // with a cycle or a shared child is reported, not followed forever.
-    let mut visited = vec![false; document.nodes().len()];
-    let mut stack: Vec<(::gltf::Node, Mat4)> = roots
-        .into_iter()
-        .rev()
-        .map(|n| (n, Mat4::IDENTITY))
-        .collect();
-    while let Some((node, parent)) = stack.pop() {
-        if std::mem::replace(&mut visited[node.index()], true) {
-            warnings.push(format!(
-                "nodes[{}] is reached twice in the hierarchy; the second instance is ignored",
-                node.index()
-            ));
-            continue;
-        }
-        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
-        let world = parent * local;
+    let walk = walk(&gltf.json).map_err(|e| invalid(e.to_string()))?;
+    warnings.extend(walk.repeated_warnings());
+    let nodes: Vec<::gltf::Node> = document.nodes().collect();
+    for visit in &walk.visits {
+        let node = &nodes[visit.node];
+        let world = visit.world;
         if let Some(mesh) = node.mesh() {
             read_mesh_instance(
-                &node,
+                node,
                 &mesh,
                 world,
-                &buffers,
+                buffers,
                 options,
                 &mut scene,
                 &mut warnings,
             );
         }
         if let Some(light) = node.light() {
-            scene.lights.push(light_of(&node, &light, world));
+            scene.lights.push(light_of(node, &light, world));
         }
         if let (Some(cam), None) = (node.camera(), &scene.camera) {
             scene.camera = Some(SceneCamera {
@@ -175,10 +142,6 @@ fn import_checked(
                     },
                 },
             });
-        }
-        let children: Vec<_> = node.children().collect();
-        for c in children.into_iter().rev() {
-            stack.push((c, world));
         }
     }
     scene.warnings = warnings;

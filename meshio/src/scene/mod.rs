@@ -1,6 +1,9 @@
-//! Scene input: glTF 2.0 (`.gltf`, `.glb`) and Wavefront OBJ with MTL, read into one flat list of
-//! objects (one per node instance and triangle primitive), materials, punctual lights and the
-//! camera, in a deterministic order.
+//! Scene input for the baker (`hce bake`, `hce reference`): glTF 2.0 (`.gltf`, `.glb`) and
+//! Wavefront OBJ with MTL, read into one flat list of objects (one per node instance and
+//! triangle primitive), materials, punctual lights and the camera, in a deterministic order.
+//! glTF goes through the guards of [`crate::gltf_guard`] and the node walk of
+//! [`crate::scene_graph`], as every glTF reader of hce does; `hce_bake::import` turns the result
+//! into the solver's world-space scene.
 //!
 //! Unsupported content (points, lines, non-triangle primitives, missing buffers, unknown
 //! extensions) becomes a warning naming it; only a file that cannot be read at all, or a scene
@@ -8,10 +11,8 @@
 
 mod gltf;
 mod obj;
-mod solver;
 mod texture;
 
-pub(crate) use gltf::read_uri;
 pub use texture::{srgb_to_linear, Texture, WrapMode};
 
 use glam::Mat4;
@@ -238,8 +239,20 @@ impl Material {
     }
 }
 
-/// The kind of a KHR_lights_punctual light (the solver's own type).
-pub use crate::scene::LightKind;
+/// The kind of a punctual light (KHR_lights_punctual); the baker's solver takes it as is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    /// Emits `intensity` candela in every direction from `position`.
+    Point,
+    /// As a point light inside a cone around `direction`; angles in radians from the axis,
+    /// with glTF's smooth falloff between them.
+    Spot {
+        inner_cone_angle: f32,
+        outer_cone_angle: f32,
+    },
+    /// Parallel light travelling along `direction`; `intensity` in lux.
+    Directional,
+}
 
 /// A punctual light placed in world space. Units are those of KHR_lights_punctual: candela for
 /// point and spot lights, lux for directional lights.
