@@ -827,41 +827,11 @@ fn fit<T: Clone>(v: &mut Vec<T>, len: usize, zero: T) {
         // Free the old buffer first: peak memory stays one output.
         *v = Vec::new();
         *v = vec![zero; len];
-        advise_huge_pages(v);
+        crate::os::advise_huge_pages(v);
     } else {
         v.resize(len, zero);
     }
 }
-
-/// Asks Linux to back fresh, untouched output memory with transparent huge pages where the
-/// system allows them only on request (`/sys/kernel/mm/transparent_hugepage/enabled` set to
-/// `madvise`, the common default). First-touch page faults otherwise cost more than the whole
-/// subdivision: 106 MB of bunny level-3 output is 26,000 faults of 4 KiB, measured at
-/// 150-240 ms on the development VM, against under 30 ms with 2 MiB pages. Elsewhere, or when
-/// the kernel declines, nothing changes.
-#[cfg(target_os = "linux")]
-fn advise_huge_pages<T>(v: &mut [T]) {
-    const HUGE: usize = 2 << 20;
-    let bytes = std::mem::size_of_val(v);
-    if bytes < 2 * HUGE {
-        return;
-    }
-    let start = v.as_mut_ptr() as usize;
-    let first = start.next_multiple_of(HUGE);
-    let end = (start + bytes) / HUGE * HUGE;
-    if end > first {
-        // SAFETY: the range lies inside `v`'s allocation, which this function borrows
-        // mutably. MADV_HUGEPAGE only changes how the kernel backs these pages; their
-        // contents, addresses and validity are unchanged, and the result is ignored because
-        // a refusal leaves the memory as it was.
-        unsafe {
-            libc::madvise(first as *mut libc::c_void, end - first, libc::MADV_HUGEPAGE);
-        }
-    }
-}
-
-#[cfg(not(target_os = "linux"))]
-fn advise_huge_pages<T>(_: &mut [T]) {}
 
 /// [`subdivide`] into the buffers of `out`, reusing their allocations: a viewer refining every
 /// frame (or a benchmark) then pays no page faults for fresh output memory. `out` is

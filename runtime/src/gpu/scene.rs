@@ -21,8 +21,9 @@
 //!
 //! ```no_run
 //! use hce_runtime::asset::Asset;
-//! use hce_runtime::gpu::scene::{GpuScene, LevelChoice, SceneOptions};
-//! use hce_runtime::gpu::{Camera, ContextOptions, GpuContext, LodParams};
+//! use hce_runtime::gpu::{
+//!     Camera, ContextOptions, GpuContext, GpuScene, LevelChoice, LodParams, SceneOptions,
+//! };
 //!
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let asset = Asset::open("baked.glb")?;
@@ -140,7 +141,9 @@ enum Refiner {
     },
 }
 
-struct SceneObject {
+/// One object of the scene on the GPU: what the level choice needs, its instances and its
+/// refiner.
+struct GpuObject {
     name: String,
     kind: ObjectKind,
     coarse_triangles: u64,
@@ -195,7 +198,7 @@ pub struct ObjectMesh {
 
 /// An asset's GPU resources. See the module documentation.
 pub struct GpuScene {
-    objects: Vec<SceneObject>,
+    objects: Vec<GpuObject>,
     flat: Option<FlatKernel>,
     loop_kernel: Option<LoopKernel>,
     flat_max_level: u32,
@@ -278,7 +281,7 @@ impl GpuScene {
                     }
                 }
             };
-            objects.push(SceneObject {
+            objects.push(GpuObject {
                 name: o.name().to_owned(),
                 kind: o.kind(),
                 coarse_triangles: o.object.triangles.len() as u64,

@@ -302,8 +302,7 @@ fn run_baked(
     asset: &hce_runtime::asset::Asset,
     camera: hce_runtime::gpu::CameraChoice,
 ) -> Result<()> {
-    use hce_runtime::gpu::scene::CameraSource;
-    use hce_runtime::gpu::{render_asset, AssetRenderOptions};
+    use hce_runtime::gpu::{render_asset, AssetRenderOptions, CameraSource};
 
     let (width, height) = parse_size(&args.size)?;
     for w in &asset.warnings {
@@ -365,8 +364,8 @@ fn run_baked(
 #[cfg(feature = "gpu")]
 fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Result<()> {
     use hce_runtime::gpu::{
-        choose_level, framing::auto_scene_camera, render::bounds, render_gpu_mesh, CameraChoice,
-        FlatKernel, Framing, GpuMesh, LodParams, RenderParams,
+        auto_scene_camera, choose_level, mesh_bounds, render_gpu_mesh, CameraChoice, FlatKernel,
+        Framing, GpuMesh, LodParams, RenderParams,
     };
 
     use hce_meshio::plain as plain_mesh;
@@ -390,7 +389,7 @@ fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Resul
     }
     let ctx = open_context(args.software)?;
 
-    let (lo, hi) = bounds(&object.mesh.positions).context("mesh has no finite positions")?;
+    let (lo, hi) = mesh_bounds(&object.mesh.positions).context("mesh has no finite positions")?;
     let aspect = width as f32 / height as f32;
     let view = match camera {
         CameraChoice::Explicit(c) => c,
