@@ -94,8 +94,10 @@ use hce_format::{
 };
 use rayon::prelude::*;
 
-/// Highest supported subdivision level.
-pub const MAX_LEVEL: u32 = 6;
+/// Deepest Loop subdivision level: of this CPU reference and of the GPU Loop kernel alike, which
+/// check the same bound (`4^6` fine triangles per coarse one; a level-6 patch already takes
+/// 105 KiB of GPU scratch). Flat refinement goes deeper, to [`crate::decode::MAX_PATH_LEVEL`].
+pub const MAX_LOOP_LEVEL: u32 = 6;
 
 /// A point of the patch. `Vec3A` keeps x, y, z in one SIMD register; its `+`, `-` and `*`
 /// are the per-component `f32` operations of the documented order (no fused multiply-add), so
@@ -158,7 +160,7 @@ pub fn correction_factor(n: usize) -> f32 {
 /// Errors of subdivision.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum SubdivError {
-    #[error("subdivision level {0} is out of range; use 0..={MAX_LEVEL}")]
+    #[error("subdivision level {0} is out of range; use 0..={MAX_LOOP_LEVEL}")]
     Level(u32),
     #[error("control mesh tables are inconsistent: {0}")]
     Tables(String),
@@ -851,7 +853,7 @@ pub fn subdivide_into(
 }
 
 fn subdivide_checked(mesh: &ControlMesh, level: u32, out: &mut Refined) -> Result<(), SubdivError> {
-    if level > MAX_LEVEL {
+    if level > MAX_LOOP_LEVEL {
         return Err(SubdivError::Level(level));
     }
     let prep = prepare(mesh)?;

@@ -7,15 +7,15 @@
 
 use std::sync::Arc;
 
-use super::{ImportedScene, SceneObject};
+use super::{ImportedObject, ImportedScene};
 use crate::scene::{self, Scene};
 
 impl ImportedScene {
     /// The solver's view of object `index`: world-space corners (winding restored where the node
     /// transform mirrors), per-triangle reflectance and emission from its material, no normal
     /// sets yet.
-    pub fn solver_object(&self, index: usize) -> scene::SceneObject {
-        let o: &SceneObject = &self.objects[index];
+    pub fn solver_object(&self, index: usize) -> scene::SolverObject {
+        let o: &ImportedObject = &self.objects[index];
         let material = self.material_of(o);
         let flip = o.mirrored();
         let triangles: Vec<[u32; 3]> = o
@@ -64,7 +64,7 @@ impl ImportedScene {
         } else {
             Vec::new()
         };
-        scene::SceneObject {
+        scene::SolverObject {
             name: o.name.clone(),
             multires: o.multires,
             positions: o.world_positions.clone(),

@@ -12,7 +12,7 @@ use super::util::{
 };
 use super::wgsl::TREE_WGSL;
 use super::{GpuContext, GpuError};
-use hce_geometry::decode::MAX_RENDER_LEVEL;
+use hce_geometry::decode::MAX_PATH_LEVEL;
 use hce_geometry::tables::validate_tables;
 
 pub use hce_geometry::decode::DecodedColour;
@@ -32,7 +32,7 @@ pub struct ColourQuery {
 
 /// Decodes `queries` against `object`'s tables on the GPU. The tables are validated first
 /// ([`validate_tables`]) and every query is checked (triangle in range,
-/// `level <= MAX_RENDER_LEVEL`, `path < 4^level`), so nothing out of bounds reaches the kernel.
+/// `level <= MAX_PATH_LEVEL`, `path < 4^level`), so nothing out of bounds reaches the kernel.
 pub fn decode_colours(
     ctx: &GpuContext,
     object: &Object,
@@ -47,10 +47,10 @@ pub fn decode_colours(
         if q.triangle as usize >= object.triangles.len() {
             return Err(bad(format!("triangle {} out of range", q.triangle)));
         }
-        if q.level > MAX_RENDER_LEVEL {
+        if q.level > MAX_PATH_LEVEL {
             return Err(GpuError::LevelTooHigh {
                 level: q.level,
-                max: MAX_RENDER_LEVEL,
+                max: MAX_PATH_LEVEL,
             });
         }
         if u64::from(q.path) >= 1u64 << (2 * q.level) {

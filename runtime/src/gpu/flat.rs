@@ -15,7 +15,7 @@ use super::util::{
 };
 use super::wgsl::refinement_source;
 use super::{GpuContext, GpuError};
-use hce_geometry::decode::MAX_RENDER_LEVEL;
+use hce_geometry::decode::MAX_PATH_LEVEL;
 use hce_geometry::flat::{FlatTopology, RefinedMesh};
 use hce_geometry::lighting::Reconstruction;
 use hce_geometry::tables::validate_tables;
@@ -382,10 +382,10 @@ impl FlatKernel {
 
 /// Output vertex and triangle counts at `level`, checked to fit 32-bit indices.
 fn counts(object: &FlatObject, level: u32) -> Result<(u32, u32), GpuError> {
-    if level > MAX_RENDER_LEVEL {
+    if level > MAX_PATH_LEVEL {
         return Err(GpuError::LevelTooHigh {
             level,
-            max: MAX_RENDER_LEVEL,
+            max: MAX_PATH_LEVEL,
         });
     }
     let v = object.topology.refined_vertex_count(level);

@@ -49,7 +49,7 @@ use super::wgsl::refinement_source;
 use super::{AdapterKind, GpuContext, GpuError};
 use hce_geometry::flat::{FlatTopology, RefinedMesh};
 use hce_geometry::lighting::Reconstruction;
-use hce_geometry::subdivide::{prepare, MAX_LEVEL};
+use hce_geometry::subdivide::{prepare, MAX_LOOP_LEVEL};
 use hce_geometry::tables::validate_tables;
 
 /// Upper bound of the scratch buffer (bytes): the number of coarse triangles refined at once is
@@ -786,10 +786,10 @@ fn scratch_shape(
 /// Output vertex and triangle counts at `level`, checked to fit 32-bit indices as
 /// [`hce_geometry::subdivide`] checks them.
 fn counts(object: &LoopObject, level: u32) -> Result<(u32, u32), GpuError> {
-    if level > MAX_LEVEL {
+    if level > MAX_LOOP_LEVEL {
         return Err(GpuError::LevelTooHigh {
             level,
-            max: MAX_LEVEL,
+            max: MAX_LOOP_LEVEL,
         });
     }
     let m = 1u64 << level;

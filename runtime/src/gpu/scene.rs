@@ -69,11 +69,11 @@ use hce_geometry::subdivide::{subdivide_into, Refined};
 /// How multiresolution objects are refined.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum MultiresPath {
-    /// The GPU Loop kernel ([`LoopKernel`], levels up to [`hce_geometry::subdivide::MAX_LEVEL`]).
+    /// The GPU Loop kernel ([`LoopKernel`], levels up to [`hce_geometry::subdivide::MAX_LOOP_LEVEL`]).
     #[default]
     Gpu,
     /// CPU Loop subdivision and CPU colour application, uploaded as buffers (levels up to
-    /// [`hce_geometry::subdivide::MAX_LEVEL`]). The reference for checking the GPU kernel.
+    /// [`hce_geometry::subdivide::MAX_LOOP_LEVEL`]). The reference for checking the GPU kernel.
     CpuReference,
 }
 
@@ -417,10 +417,10 @@ impl GpuScene {
                 if out.as_ref().is_some_and(|b| b.level == level) {
                     return Ok(());
                 }
-                if level > hce_geometry::subdivide::MAX_LEVEL {
+                if level > hce_geometry::subdivide::MAX_LOOP_LEVEL {
                     return Err(GpuError::LevelTooHigh {
                         level,
-                        max: hce_geometry::subdivide::MAX_LEVEL,
+                        max: hce_geometry::subdivide::MAX_LOOP_LEVEL,
                     });
                 }
                 subdivide_into(&object.mesh, level, scratch).map_err(|e| invalid(&name, e))?;

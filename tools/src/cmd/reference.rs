@@ -32,7 +32,7 @@ use clap::Args;
 use glam::{DMat4, DVec3, DVec4, Mat3, Mat4, Vec3};
 use hce_bake::import::{import_scene, ImportOptions};
 use hce_bake::reference::PathTracer;
-use hce_bake::{Scene, SceneObject};
+use hce_bake::{Scene, SolverObject};
 use hce_format::ObjectKind;
 use hce_runtime::asset::{Asset, AssetError};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -96,11 +96,11 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
         }
     }
     let (width, height) = parse_size(&args.size)?;
-    if args.level > hce_geometry::subdivide::MAX_LEVEL {
+    if args.level > hce_geometry::subdivide::MAX_LOOP_LEVEL {
         bail!(
             "--level {} is out of range; use 0..={}",
             args.level,
-            hce_geometry::subdivide::MAX_LEVEL
+            hce_geometry::subdivide::MAX_LOOP_LEVEL
         );
     }
     if args.samples == 0 {
@@ -389,7 +389,7 @@ fn build_scene(
                 triangles: n,
             });
             normals.push(vertex_normals);
-            scene.objects.push(SceneObject {
+            scene.objects.push(SolverObject {
                 name: object.name.clone(),
                 multires,
                 positions,

@@ -308,8 +308,9 @@ fn run_baked(
     for w in &asset.warnings {
         eprintln!("warning: {w}");
     }
-    if args.level.is_some_and(|l| l > 15) {
-        bail!("--level must be 0 to 15");
+    let max = hce_geometry::decode::MAX_PATH_LEVEL;
+    if args.level.is_some_and(|l| l > max) {
+        bail!("--level must be 0 to {max}");
     }
     let ctx = open_context(args.software)?;
     let result = render_asset(
@@ -409,7 +410,7 @@ fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Resul
     let level = match args.level {
         Some(level) => {
             let out = f << (2 * level.min(31));
-            if level > 15 || out > args.max_triangles {
+            if level > hce_geometry::decode::MAX_PATH_LEVEL || out > args.max_triangles {
                 bail!(
                     "--level {level} would make {out} triangles from {f}; the limit is {} \
                      (raise --max-triangles or lower --level)",
