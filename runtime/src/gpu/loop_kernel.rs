@@ -45,7 +45,7 @@ use super::util::{
     check_size, dispatch_size, read_back, records_words, storage_init, storage_output, PassTimer,
     WORKGROUP,
 };
-use super::wgsl::refinement_source;
+use super::wgsl::{loop_source, loop_workgroup_source};
 use super::{AdapterKind, GpuContext, GpuError};
 use hce_geometry::flat::{FlatTopology, RefinedMesh};
 use hce_geometry::lighting::Reconstruction;
@@ -272,7 +272,7 @@ impl LoopKernel {
     }
 
     pub fn with_scheme(ctx: &GpuContext, scheme: PatchScheme) -> Self {
-        let source = refinement_source(include_str!("loop.wgsl"));
+        let source = loop_source();
         let module = ctx
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -363,12 +363,7 @@ impl LoopKernel {
         cache
             .entry(shape)
             .or_insert_with(|| {
-                let source = refinement_source(&format!(
-                    "{}\n{}\n{}",
-                    include_str!("loop.wgsl"),
-                    shape.header(),
-                    include_str!("loop_workgroup.wgsl")
-                ));
+                let source = loop_workgroup_source(&shape.header());
                 let module = ctx
                     .device
                     .create_shader_module(wgpu::ShaderModuleDescriptor {
