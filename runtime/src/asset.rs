@@ -3,7 +3,7 @@
 //! instances (glTF node world transforms), bounds and the scene's camera.
 //!
 //! This module has no GPU dependency (it builds with `--no-default-features`); the GPU resources
-//! of a loaded asset are [`crate::gpu::scene`]'s business.
+//! of a loaded asset are [`crate::gpu::GpuScene`]'s business.
 //!
 //! # What is checked
 //!

@@ -213,6 +213,8 @@ pub struct LoopObject {
 
 /// Output buffers of a refinement: drawable as they are (`positions`, `normals` and `colours` as
 /// vertex buffers, `indices` as an index buffer), in the numbering of [`hce_geometry::subdivide`].
+///
+/// [`hce_geometry::subdivide`]: mod@hce_geometry::subdivide
 pub struct LoopOutput {
     pub level: u32,
     pub vertex_count: u32,
@@ -393,6 +395,8 @@ impl LoopKernel {
     /// Validates `object` (adjacency tables as [`hce_geometry::subdivide`] reads them, edge and
     /// vertex incidence, HCE records, trees, normals and colours) and uploads it. A malformed
     /// table is an error here, never an out-of-bounds read on the GPU.
+    ///
+    /// [`hce_geometry::subdivide`]: mod@hce_geometry::subdivide
     pub fn upload(&self, ctx: &GpuContext, object: &Object) -> Result<LoopObject, GpuError> {
         self.upload_with(ctx, object, Reconstruction::default())
     }

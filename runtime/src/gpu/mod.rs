@@ -16,6 +16,8 @@
 //! and [`hce_geometry::flat`] for decoding and flat refinement, [`hce_geometry::subdivide`] and
 //! [`hce_geometry::colour`] for the Loop kernel.
 //!
+//! [`hce_geometry::subdivide`]: mod@hce_geometry::subdivide
+//!
 //! The method is Concheiro et al., "Synthesis of multiresolution scenes with global illumination
 //! on a GPU" (GRAPP 2012): colours are chosen per subtriangle by walking the coarse triangle's
 //! breadth-first HCE tree and taking the representative normal closest to the subtriangle's.
