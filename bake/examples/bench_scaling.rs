@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use glam::Vec3;
-use hce_bake::{bake, BakeParams, LightKind, PunctualLight, Scene, SceneObject};
+use hce_bake::{bake, BakeParams, LightKind, PunctualLight, Scene, SolverObject};
 
 /// An `n × n` grid of quads over the parallelogram `o, o+u, o+u+v, o+v`, facing `u × v`.
 fn grid(o: Vec3, u: Vec3, v: Vec3, n: u32, pos: &mut Vec<[f32; 3]>, tris: &mut Vec<[u32; 3]>) {
@@ -57,7 +57,7 @@ fn sphere(c: Vec3, r: f32, rings: u32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
 
 /// Gives every triangle of `obj` a set of `count` normals: its own and tilted copies (what a
 /// bumpy multiresolution surface produces), so that the cost of enrichment shows.
-fn synthetic_normal_sets(obj: &mut SceneObject, count: usize) {
+fn synthetic_normal_sets(obj: &mut SolverObject, count: usize) {
     obj.normal_sets = (0..obj.triangles.len())
         .map(|t| {
             let [a, b, c] = obj.corners(t);
@@ -91,9 +91,9 @@ fn room(target: usize, normals: usize) -> Scene {
     grid(x, z, y, wall_n, &mut pos, &mut tris);
     grid(Vec3::ZERO, z, x, wall_n, &mut pos, &mut tris);
     grid(y, x, z, wall_n, &mut pos, &mut tris);
-    let walls = SceneObject::new("room", pos, tris, [0.6; 3]);
+    let walls = SolverObject::new("room", pos, tris, [0.6; 3]);
     let (sp, st) = sphere(Vec3::new(2.0, 2.0, 1.2), 1.0, rings);
-    let mut ball = SceneObject::new("ball", sp, st, [0.7, 0.5, 0.3]);
+    let mut ball = SolverObject::new("ball", sp, st, [0.7, 0.5, 0.3]);
     ball.multires = true;
     if normals > 1 {
         synthetic_normal_sets(&mut ball, normals);

@@ -8,8 +8,8 @@
 use glam::Vec3;
 
 // Elements are nodes of the HCE tree, so no element is deeper than the format's
-// `hce_format::MAX_DEPTH`; [`ElemKey::id`] packs paths of two bits per level into 28 bits.
-const _: () = assert!(2 * hce_format::MAX_DEPTH <= 28);
+// `hce_format::MAX_TREE_DEPTH`; [`ElemKey::id`] packs paths of two bits per level into 28 bits.
+const _: () = assert!(2 * hce_format::MAX_TREE_DEPTH <= 28);
 
 /// Splits a triangle 1-to-4 in the model's child order.
 pub fn split(t: [Vec3; 3]) -> [[Vec3; 3]; 4] {

@@ -8,7 +8,7 @@
 //! significant first into 32-bit words; colours are node-major then normal, in RGB9E5.
 //!
 //! The bits are written by the format's tree codec ([`hce_format::BitWriter`]), which refuses a
-//! tree the validator would reject (incomplete, or deeper than [`hce_format::MAX_DEPTH`]).
+//! tree the validator would reject (incomplete, or deeper than [`hce_format::MAX_TREE_DEPTH`]).
 
 use hce_format::{rgb9e5, BitWriter, Object, TriangleRecord};
 
@@ -192,8 +192,8 @@ mod tests {
         assert!(o.bits.is_empty() && o.bit_len == 0 && o.triangles.is_empty());
         // A tree deeper than the format allows is refused before it reaches the file.
         let mut deep = vec![true];
-        for d in 1..=hce_format::MAX_DEPTH + 1 {
-            deep.extend([d <= hce_format::MAX_DEPTH, false, false, false]);
+        for d in 1..=hce_format::MAX_TREE_DEPTH + 1 {
+            deep.extend([d <= hce_format::MAX_TREE_DEPTH, false, false, false]);
         }
         let e = encode_object(&mut o, &[tri(deep, 1)]).unwrap_err();
         assert!(

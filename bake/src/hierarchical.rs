@@ -31,7 +31,7 @@
 use std::time::Instant;
 
 use glam::Vec3;
-use hce_format::MAX_DEPTH;
+use hce_format::MAX_TREE_DEPTH;
 use rayon::prelude::*;
 
 use crate::cluster::{ClusterChild, ClusterTree};
@@ -53,7 +53,7 @@ pub struct BakeParams {
     pub bf_epsilon: f32,
     /// Elements are not split below this fraction of the total scene area. Default 1e-5.
     pub min_area_fraction: f32,
-    /// Deepest element level below a coarse triangle, at most [`hce_format::MAX_DEPTH`] (the
+    /// Deepest element level below a coarse triangle, at most [`hce_format::MAX_TREE_DEPTH`] (the
     /// element tree is the HCE tree). Default 4.
     pub max_level: u32,
     /// Jittered rays per link (and per element and light) for visibility; 0 disables
@@ -252,7 +252,7 @@ impl Ctx<'_> {
     }
 
     fn splittable(&self, k: ElemKey, area: f32) -> bool {
-        k.level < self.params.max_level.min(MAX_DEPTH) && area * 0.25 >= self.min_area
+        k.level < self.params.max_level.min(MAX_TREE_DEPTH) && area * 0.25 >= self.min_area
     }
 
     fn reflectance(&self, k: ElemKey) -> Vec3 {
@@ -1035,9 +1035,9 @@ pub fn bake_with_progress(
     progress: Progress<'_>,
 ) -> Result<BakeResult, BakeError> {
     scene.validate()?;
-    if params.max_level > MAX_DEPTH {
+    if params.max_level > MAX_TREE_DEPTH {
         return Err(BakeError::InvalidParameter(format!(
-            "max_level {} exceeds {MAX_DEPTH}, the deepest HCE tree a file may hold (SPEC.md B.2)",
+            "max_level {} exceeds {MAX_TREE_DEPTH}, the deepest HCE tree a file may hold (SPEC.md B.2)",
             params.max_level
         )));
     }

@@ -24,7 +24,7 @@ pub use hierarchical::{
     bake, bake_with_progress, BakeParams, BakeResult, BakeStats, ObjectSolution, Progress,
     TriangleSolution,
 };
-pub use scene::{LightKind, PunctualLight, Scene, SceneObject};
+pub use scene::{LightKind, PunctualLight, Scene, SolverObject};
 
 /// Most normals a triangle's set may hold (n0 included).
 pub const MAX_NORMALS_PER_TRIANGLE: usize = 64;

@@ -524,7 +524,7 @@ fn mirror_tree(ts: &TriangleSolution) -> TriangleSolution {
 }
 
 /// Per triangle: the light arriving, `(B - E) / ρ` from the root colour (white on emitters).
-fn incident_light(o: &crate::scene::SceneObject, sol: &[TriangleSolution]) -> Vec<[f32; 3]> {
+fn incident_light(o: &crate::scene::SolverObject, sol: &[TriangleSolution]) -> Vec<[f32; 3]> {
     sol.iter()
         .enumerate()
         .map(|(t, ts)| {

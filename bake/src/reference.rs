@@ -29,7 +29,7 @@
 //! irradiance `E` from one emitter sample (by area), every punctual light through a shadow ray,
 //! and one cosine-distributed bounce that continues the path (emission found by a bounce is not
 //! counted: the emitter samples already carry it). Paths end by Russian roulette on the
-//! reflectance, with a hard cap of [`MAX_DEPTH`] bounces so that nothing can loop forever.
+//! reflectance, with a hard cap of [`MAX_BOUNCES`] bounces so that nothing can loop forever.
 //!
 //! Deterministic: path `i` of a surface query draws its random numbers from its own generator,
 //! seeded by `(seed, i)`, every pixel of an image from one seeded by `(seed, pixel)`, and sums
@@ -50,7 +50,7 @@ use crate::scene::{LightKind, Scene};
 
 /// Bounces after which a path stops whatever its weight (0.95^64 < 4 %; with Cornell box
 /// reflectances the truncated energy is far below the noise).
-pub const MAX_DEPTH: u32 = 64;
+pub const MAX_BOUNCES: u32 = 64;
 
 /// Paths per parallel chunk (the unit of work and of the fixed-order sum).
 const CHUNK: u64 = 1024;
@@ -463,7 +463,7 @@ impl<'a> PathTracer<'a> {
         let mut total = DVec3::ZERO;
         let mut weight = DVec3::ONE;
         let (mut at, mut x, mut uv) = (at, x, uv);
-        for _ in 0..MAX_DEPTH {
+        for _ in 0..MAX_BOUNCES {
             let t = &self.tris[at];
             weight *= t.rho;
             if weight.max_element() <= 0.0 {
@@ -660,7 +660,7 @@ impl<'a> PathTracer<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{PunctualLight, SceneObject};
+    use crate::scene::{PunctualLight, SolverObject};
 
     fn quad(o: [f32; 3], u: [f32; 3], v: [f32; 3]) -> ([[f32; 3]; 4], [[u32; 3]; 2]) {
         let p = |a: f32, b: f32| [0, 1, 2].map(|k| o[k] + a * u[k] + b * v[k]);
@@ -689,7 +689,7 @@ mod tests {
             tris.extend(t.map(|t| t.map(|i| i + b)));
         }
         let scene = Scene {
-            objects: vec![SceneObject::new("box", pos, tris, [0.5; 3]).with_emission([1.0; 3])],
+            objects: vec![SolverObject::new("box", pos, tris, [0.5; 3]).with_emission([1.0; 3])],
             lights: Vec::new(),
         };
         let pt = PathTracer::new(&scene);
@@ -711,7 +711,7 @@ mod tests {
         // 8 cd, 2 m above a small patch of reflectance 0.5: L = 0.5 · 2 / π.
         let (p, t) = quad([-0.01, -0.01, 0.0], [0.02, 0.0, 0.0], [0.0, 0.02, 0.0]);
         let scene = Scene {
-            objects: vec![SceneObject::new("patch", p.to_vec(), t.to_vec(), [0.5; 3])],
+            objects: vec![SolverObject::new("patch", p.to_vec(), t.to_vec(), [0.5; 3])],
             lights: vec![PunctualLight {
                 name: "l".into(),
                 kind: LightKind::Point,
@@ -818,7 +818,7 @@ mod tests {
         // every vertex normal tilted by 60° about x, the cosine halves.
         let (p, t) = quad([-0.01, -0.01, 0.0], [0.02, 0.0, 0.0], [0.0, 0.02, 0.0]);
         let scene = Scene {
-            objects: vec![SceneObject::new("patch", p.to_vec(), t.to_vec(), [0.5; 3])],
+            objects: vec![SolverObject::new("patch", p.to_vec(), t.to_vec(), [0.5; 3])],
             lights: vec![PunctualLight {
                 name: "l".into(),
                 kind: LightKind::Point,

@@ -19,9 +19,11 @@ use crate::BakeError;
 /// the element covers).
 pub type ReflectanceFn = dyn Fn(usize, [[f32; 3]; 3]) -> [f32; 3] + Send + Sync;
 
-/// One object: a triangle mesh in world space with per-triangle materials.
+/// One object as the solver (and the reference path tracer) sees it: a triangle mesh in world
+/// space with per-triangle materials. An imported file's objects become these through
+/// [`crate::import::ImportedScene::solver_object`].
 #[derive(Clone)]
-pub struct SceneObject {
+pub struct SolverObject {
     pub name: String,
     /// Multiresolution objects get a normal set per coarse triangle and one radiosity per
     /// normal; flat objects get one colour per element.
@@ -42,9 +44,9 @@ pub struct SceneObject {
     pub normal_sets: Vec<Vec<[f32; 3]>>,
 }
 
-impl std::fmt::Debug for SceneObject {
+impl std::fmt::Debug for SolverObject {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("SceneObject")
+        f.debug_struct("SolverObject")
             .field("name", &self.name)
             .field("multires", &self.multires)
             .field("vertices", &self.positions.len())
@@ -54,7 +56,7 @@ impl std::fmt::Debug for SceneObject {
     }
 }
 
-impl SceneObject {
+impl SolverObject {
     /// A flat object with one reflectance for every triangle and no emission.
     pub fn new(
         name: impl Into<String>,
@@ -63,7 +65,7 @@ impl SceneObject {
         reflectance: [f32; 3],
     ) -> Self {
         let n = triangles.len();
-        SceneObject {
+        SolverObject {
             name: name.into(),
             multires: false,
             positions,
@@ -127,7 +129,7 @@ pub struct PunctualLight {
 /// Everything the solver needs.
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
-    pub objects: Vec<SceneObject>,
+    pub objects: Vec<SolverObject>,
     pub lights: Vec<PunctualLight>,
 }
 
@@ -257,8 +259,8 @@ impl Scene {
 mod tests {
     use super::*;
 
-    fn tri() -> SceneObject {
-        SceneObject::new(
+    fn tri() -> SolverObject {
+        SolverObject::new(
             "t",
             vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
             vec![[0, 1, 2]],

@@ -21,7 +21,7 @@ use glam::{Quat, Vec3};
 use hce_bake::import::{import_scene, ImportOptions, ToSolver};
 use hce_bake::normal_sets::NormalSetParams;
 use hce_bake::pipeline::{bake_file, PipelineOptions};
-use hce_bake::{bake, BakeParams, SceneObject};
+use hce_bake::{bake, BakeParams, SolverObject};
 use hce_format::{rgb9e5, Object, ObjectKind};
 use hce_geometry::colour::apply_baked_colours;
 use hce_geometry::{subdivide, Creases, Refined};
@@ -310,7 +310,7 @@ fn enrichment_on_loop_subdivision_beats_one_normal_per_triangle() {
         .iter()
         .position(|o| o.name == "bumpy")
         .unwrap();
-    scene.objects[bi] = SceneObject::new(
+    scene.objects[bi] = SolverObject::new(
         "fine",
         refined.positions.clone(),
         refined.indices.clone(),

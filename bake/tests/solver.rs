@@ -5,7 +5,7 @@ use glam::Vec3;
 use hce_bake::element::{ElemKey, Rng};
 use hce_bake::encode::encode_object;
 use hce_bake::visibility::Occluders;
-use hce_bake::{bake, BakeParams, BakeResult, LightKind, PunctualLight, Scene, SceneObject};
+use hce_bake::{bake, BakeParams, BakeResult, LightKind, PunctualLight, Scene, SolverObject};
 
 /// Two triangles of the parallelogram `o, o+u, o+u+v, o+v`, facing `u × v`.
 fn quad(o: Vec3, u: Vec3, v: Vec3) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
@@ -13,7 +13,7 @@ fn quad(o: Vec3, u: Vec3, v: Vec3) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
     (p, vec![[0, 1, 2], [0, 2, 3]])
 }
 
-fn object(name: &str, parts: &[(Vec3, Vec3, Vec3)], rho: [f32; 3]) -> SceneObject {
+fn object(name: &str, parts: &[(Vec3, Vec3, Vec3)], rho: [f32; 3]) -> SolverObject {
     let (mut pos, mut tris) = (Vec::new(), Vec::new());
     for &(o, u, v) in parts {
         let (p, t) = quad(o, u, v);
@@ -21,7 +21,7 @@ fn object(name: &str, parts: &[(Vec3, Vec3, Vec3)], rho: [f32; 3]) -> SceneObjec
         pos.extend(p);
         tris.extend(t.iter().map(|t| t.map(|i| i + base)));
     }
-    SceneObject::new(name, pos, tris, rho)
+    SolverObject::new(name, pos, tris, rho)
 }
 
 /// The inside of the unit cube, every face facing inwards.
@@ -265,7 +265,7 @@ fn a_scene_without_light_is_an_error() {
 }
 
 /// `n × n` grid of quads over a parallelogram (exercises the cluster hierarchy).
-fn grid_object(name: &str, o: Vec3, u: Vec3, v: Vec3, n: u32, rho: [f32; 3]) -> SceneObject {
+fn grid_object(name: &str, o: Vec3, u: Vec3, v: Vec3, n: u32, rho: [f32; 3]) -> SolverObject {
     let mut parts = Vec::new();
     for j in 0..n {
         for i in 0..n {
@@ -337,7 +337,7 @@ fn bump(p: Vec3) -> f32 {
     0.2 * (3.0 * p.x).sin() * (2.0 * p.y).cos()
 }
 
-fn sun_and_wall() -> (SceneObject, PunctualLight) {
+fn sun_and_wall() -> (SolverObject, PunctualLight) {
     let wall = object(
         "wall",
         &[(Vec3::new(-0.5, 0.0, -0.5), Vec3::Y * 4.0, Vec3::Z * 3.0)],
@@ -414,7 +414,7 @@ fn enrichment_rms(max_normals: usize, levels: u32) -> f32 {
         objects: vec![coarse, wall.clone()],
         lights: vec![sun.clone()],
     };
-    let mut fine_obj = SceneObject::new("fine", Vec::new(), Vec::new(), [0.8; 3]);
+    let mut fine_obj = SolverObject::new("fine", Vec::new(), Vec::new(), [0.8; 3]);
     for subs in &fine {
         for s in subs {
             let b = fine_obj.positions.len() as u32;
@@ -516,12 +516,13 @@ fn max_level_is_bounded_by_the_format_tree_depth() {
         lights: Vec::new(),
     };
     let p = BakeParams {
-        max_level: hce_format::MAX_DEPTH + 1,
+        max_level: hce_format::MAX_TREE_DEPTH + 1,
         ..Default::default()
     };
     let e = bake(&scene, &p).unwrap_err().to_string();
     assert!(
-        e.contains("max_level 13") && e.contains(&format!("exceeds {}", hce_format::MAX_DEPTH)),
+        e.contains("max_level 13")
+            && e.contains(&format!("exceeds {}", hce_format::MAX_TREE_DEPTH)),
         "{e}"
     );
 }

@@ -308,7 +308,7 @@ pub fn grid(n: u32, max_depth: u32) -> Container {
     let mut colours = Vec::new();
     for t in 0..mesh.triangle_count() {
         // Subdivide node k while its depth is below the triangle's depth budget and k is even.
-        let depth = (t as u32) % (max_depth.min(crate::MAX_DEPTH) + 1);
+        let depth = (t as u32) % (max_depth.min(crate::MAX_TREE_DEPTH) + 1);
         let mut flags = Vec::new();
         let mut level = vec![true];
         for d in 0..=depth {

@@ -25,6 +25,6 @@ pub use error::{ReadError, WriteError};
 pub use layout::{read_layout, Layout, SectionEntry, SectionType, MAJOR_VERSION, MINOR_VERSION};
 pub use model::*;
 pub use read::{read, read_with, ReadOptions};
-pub use tree::{triangle_trees, BitWriter, Tree, TreeError, TreeShape, MAX_DEPTH};
+pub use tree::{triangle_trees, BitWriter, Tree, TreeError, TreeShape, MAX_TREE_DEPTH};
 pub use validate::{validate, validate_bytes, Problem};
 pub use write::write;

@@ -10,17 +10,17 @@
 
 /// A node of this depth is always a leaf (SPEC.md B.2): the deepest tree a file may hold, so the
 /// deepest element level a baker may write.
-pub const MAX_DEPTH: u32 = 12;
+pub const MAX_TREE_DEPTH: u32 = 12;
 
-/// Largest node count of a tree of depth at most [`MAX_DEPTH`]: `(4^13 - 1) / 3`.
-pub const MAX_NODES: u32 = ((1u64 << (2 * (MAX_DEPTH + 1))) / 3) as u32;
+/// Largest node count of a tree of depth at most [`MAX_TREE_DEPTH`]: `(4^13 - 1) / 3`.
+pub const MAX_NODES: u32 = ((1u64 << (2 * (MAX_TREE_DEPTH + 1))) / 3) as u32;
 
 /// Why a tree cannot be decoded or encoded.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum TreeError {
     #[error("bitstream ends inside node {node} (bit {bit} of {bit_len}) (SPEC.md B.2)")]
     Truncated { node: u32, bit: u64, bit_len: u64 },
-    #[error("node {node} at depth {depth} is subdivided; the maximum depth is {max} (SPEC.md B.2)", max = MAX_DEPTH)]
+    #[error("node {node} at depth {depth} is subdivided; the maximum depth is {max} (SPEC.md B.2)", max = MAX_TREE_DEPTH)]
     TooDeep { node: u32, depth: u32 },
     #[error("tree overlaps the tree starting at bit {limit}; trees of different triangles must not overlap (SPEC.md A.9)")]
     Overlap { limit: u64 },
@@ -69,7 +69,7 @@ pub fn decode_shape(bits: &[u32], limit: u64, start: u64) -> Result<TreeShape, T
             });
         }
         if bit(bits, i) {
-            if depth >= MAX_DEPTH {
+            if depth >= MAX_TREE_DEPTH {
                 return Err(TreeError::TooDeep {
                     node: k as u32,
                     depth,
@@ -286,7 +286,7 @@ impl BitWriter {
     }
 
     /// Appends one triangle's tree given its breadth-first subdivided flags and returns its
-    /// `bits_start`. Flags that are not one complete tree of depth at most [`MAX_DEPTH`] are
+    /// `bits_start`. Flags that are not one complete tree of depth at most [`MAX_TREE_DEPTH`] are
     /// refused ([`TreeError::Incomplete`], [`TreeError::TooDeep`]) and nothing is written.
     pub fn push_tree(&mut self, subdivided: &[bool]) -> Result<u64, TreeError> {
         check_flags(subdivided)?;
@@ -395,14 +395,14 @@ mod tests {
     #[test]
     fn the_writer_refuses_what_the_validator_rejects() {
         let mut w = BitWriter::new();
-        assert_eq!(w.push_tree(&chain(MAX_DEPTH)), Ok(0));
+        assert_eq!(w.push_tree(&chain(MAX_TREE_DEPTH)), Ok(0));
         let len = w.bit_len();
-        assert_eq!(len, 1 + 4 * u64::from(MAX_DEPTH));
+        assert_eq!(len, 1 + 4 * u64::from(MAX_TREE_DEPTH));
         assert_eq!(
-            w.push_tree(&chain(MAX_DEPTH + 1)),
+            w.push_tree(&chain(MAX_TREE_DEPTH + 1)),
             Err(TreeError::TooDeep {
-                node: 1 + 4 * (MAX_DEPTH - 1),
-                depth: MAX_DEPTH
+                node: 1 + 4 * (MAX_TREE_DEPTH - 1),
+                depth: MAX_TREE_DEPTH
             })
         );
         assert_eq!(
@@ -415,7 +415,10 @@ mod tests {
         // A refused tree writes nothing.
         assert_eq!(w.bit_len(), len);
         let (words, bit_len) = w.finish();
-        assert_eq!(Tree::new(&words, bit_len, 0).unwrap().depth(), MAX_DEPTH);
+        assert_eq!(
+            Tree::new(&words, bit_len, 0).unwrap().depth(),
+            MAX_TREE_DEPTH
+        );
     }
 
     #[test]

@@ -16,10 +16,11 @@
 
 use hce_format::{rgb9e5, Object, Tree, TriangleRecord};
 
-/// Deepest refinement level the kernels accept (and so the deepest level a colour query may
-/// walk to; trees themselves stop at [`hce_format::MAX_DEPTH`]): paths must fit in 32 bits
-/// (`4^15 < 2^32`), and fine-triangle numbers `t · 4^L` in the output must too.
-pub const MAX_RENDER_LEVEL: u32 = 15;
+/// Deepest level a subtriangle path can name: `L` child indices of two bits each in a `u32`, with
+/// `4^L` computable in 32 bits (`4^15 = 2^30`). It bounds the GPU flat kernel's levels and the
+/// levels of colour queries; Loop subdivision stops earlier, at
+/// [`crate::subdivide::MAX_LOOP_LEVEL`], and trees themselves at [`hce_format::MAX_TREE_DEPTH`].
+pub const MAX_PATH_LEVEL: u32 = 15;
 
 /// The breadth-first node reached from the root along `path` (`depth` child indices, first
 /// most significant), stopping early at a leaf: the twin of `tree_node` in `hce_tree.wgsl`,

@@ -15,16 +15,31 @@
 //! * [`lighting`], [`colour`]: the reconstruction of baked lighting on a refined mesh
 //!   (SPEC.md, Appendix G).
 //! * [`refine`]: one object refined as the runtime draws it (Loop or flat, coloured).
+//!
+//! No `unsafe` outside `os` (one `madvise` hint, argued there): the crate denies `unsafe_code`
+//! and every other module forbids it.
+#![deny(unsafe_code)]
 
+#[forbid(unsafe_code)]
 pub mod colour;
+#[forbid(unsafe_code)]
 pub mod decode;
+#[forbid(unsafe_code)]
 pub mod flat;
+#[forbid(unsafe_code)]
 pub mod lattice;
+#[forbid(unsafe_code)]
 pub mod lighting;
+mod os;
+#[forbid(unsafe_code)]
 pub mod refine;
+#[forbid(unsafe_code)]
 pub mod subdivide;
+#[forbid(unsafe_code)]
 pub mod tables;
+#[forbid(unsafe_code)]
 pub mod topology;
+#[forbid(unsafe_code)]
 pub mod weld;
 
 pub use lattice::subtriangle_cells;

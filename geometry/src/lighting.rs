@@ -41,7 +41,7 @@ use hce_format::{rgb9e5, Object, ObjectKind, Tree, TreeError, NO_NEIGHBOUR, SPOK
 use crate::lattice::{site, LatticeTriangle, Site};
 
 /// Denominator of the lattice in which leaf corners are identified: the finest split a tree can
-/// have (`hce_format::MAX_DEPTH` = 12).
+/// have (`hce_format::MAX_TREE_DEPTH` = 12).
 const TREE_LATTICE_BITS: u32 = 12;
 const TREE_LATTICE: i32 = 1 << TREE_LATTICE_BITS;
 

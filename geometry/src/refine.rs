@@ -42,10 +42,10 @@ pub fn refine_object_with(
 
 /// The flat kernel's CPU twin, as a [`Refined`] (normals: per vertex, area-weighted).
 fn refine_linear(object: &Object, level: u32) -> Result<Refined, String> {
-    if level > crate::subdivide::MAX_LEVEL {
+    if level > crate::subdivide::MAX_LOOP_LEVEL {
         return Err(format!(
             "level {level} is out of range; use 0..={}",
-            crate::subdivide::MAX_LEVEL
+            crate::subdivide::MAX_LOOP_LEVEL
         ));
     }
     let topo = FlatTopology::new(&object.name, &object.mesh).map_err(|e| e.to_string())?;

@@ -100,8 +100,10 @@ use rayon::prelude::*;
 use crate::lattice::{subtriangle_cells, Numbering};
 use crate::tables::check_loop_tables;
 
-/// Highest supported subdivision level.
-pub const MAX_LEVEL: u32 = 6;
+/// Deepest Loop subdivision level: of this CPU reference and of the GPU Loop kernel alike, which
+/// check the same bound (`4^6` fine triangles per coarse one; a level-6 patch already takes
+/// 105 KiB of GPU scratch). Flat refinement goes deeper, to [`crate::decode::MAX_PATH_LEVEL`].
+pub const MAX_LOOP_LEVEL: u32 = 6;
 
 /// A point of the patch. `Vec3A` keeps x, y, z in one SIMD register; its `+`, `-` and `*`
 /// are the per-component `f32` operations of the documented order (no fused multiply-add), so
@@ -164,7 +166,7 @@ pub fn correction_factor(n: usize) -> f32 {
 /// Errors of subdivision.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum SubdivError {
-    #[error("subdivision level {0} is out of range; use 0..={MAX_LEVEL}")]
+    #[error("subdivision level {0} is out of range; use 0..={MAX_LOOP_LEVEL}")]
     Level(u32),
     #[error("control mesh tables are inconsistent: {0}")]
     Tables(String),
@@ -654,41 +656,11 @@ fn fit<T: Clone>(v: &mut Vec<T>, len: usize, zero: T) {
         // Free the old buffer first: peak memory stays one output.
         *v = Vec::new();
         *v = vec![zero; len];
-        advise_huge_pages(v);
+        crate::os::advise_huge_pages(v);
     } else {
         v.resize(len, zero);
     }
 }
-
-/// Asks Linux to back fresh, untouched output memory with transparent huge pages where the
-/// system allows them only on request (`/sys/kernel/mm/transparent_hugepage/enabled` set to
-/// `madvise`, the common default). First-touch page faults otherwise cost more than the whole
-/// subdivision: 106 MB of bunny level-3 output is 26,000 faults of 4 KiB, measured at
-/// 150-240 ms on the development VM, against under 30 ms with 2 MiB pages. Elsewhere, or when
-/// the kernel declines, nothing changes.
-#[cfg(target_os = "linux")]
-fn advise_huge_pages<T>(v: &mut [T]) {
-    const HUGE: usize = 2 << 20;
-    let bytes = std::mem::size_of_val(v);
-    if bytes < 2 * HUGE {
-        return;
-    }
-    let start = v.as_mut_ptr() as usize;
-    let first = start.next_multiple_of(HUGE);
-    let end = (start + bytes) / HUGE * HUGE;
-    if end > first {
-        // SAFETY: the range lies inside `v`'s allocation, which this function borrows
-        // mutably. MADV_HUGEPAGE only changes how the kernel backs these pages; their
-        // contents, addresses and validity are unchanged, and the result is ignored because
-        // a refusal leaves the memory as it was.
-        unsafe {
-            libc::madvise(first as *mut libc::c_void, end - first, libc::MADV_HUGEPAGE);
-        }
-    }
-}
-
-#[cfg(not(target_os = "linux"))]
-fn advise_huge_pages<T>(_: &mut [T]) {}
 
 /// [`subdivide`] into the buffers of `out`, reusing their allocations: a viewer refining every
 /// frame (or a benchmark) then pays no page faults for fresh output memory. `out` is
@@ -708,7 +680,7 @@ pub fn subdivide_into(
 }
 
 fn subdivide_checked(mesh: &ControlMesh, level: u32, out: &mut Refined) -> Result<(), SubdivError> {
-    if level > MAX_LEVEL {
+    if level > MAX_LOOP_LEVEL {
         return Err(SubdivError::Level(level));
     }
     let prep = prepare(mesh)?;

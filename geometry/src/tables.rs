@@ -277,7 +277,7 @@ fn check_loop_triangle(mesh: &ControlMesh, t: usize) -> Result<(), String> {
 /// Checks everything the colour kernels index, so that a malformed table is an error here and
 /// never an out-of-bounds read on the GPU: record ranges into normals and colours, every tree's
 /// bits inside `bit_len`, trees decodable by the format's codec (so no deeper than
-/// [`hce_format::MAX_DEPTH`]), word counts consistent. Work is bounded by `bit_len` (trees
+/// [`hce_format::MAX_TREE_DEPTH`]), word counts consistent. Work is bounded by `bit_len` (trees
 /// together may not claim more nodes than there are bits).
 pub fn validate_tables(object: &Object) -> Result<TreeSummary, InvalidObject> {
     let err = |reason: String| InvalidObject {

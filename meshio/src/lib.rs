@@ -18,6 +18,7 @@
 //! Feature `export` (default): `export`, OBJ/glTF/GLB writers of refined meshes.
 //!
 //! Hostile files get an error, never a panic, a hang or an unbounded allocation.
+#![forbid(unsafe_code)]
 
 pub mod atomic;
 pub mod gltf_guard;

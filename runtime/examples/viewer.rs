@@ -10,8 +10,10 @@
 #[cfg(feature = "gpu")]
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     use hce_runtime::asset::Asset;
-    use hce_runtime::gpu::scene::{GpuScene, LevelChoice, SceneOptions};
-    use hce_runtime::gpu::{ContextOptions, GpuContext, LodParams, RenderParams};
+    use hce_runtime::gpu::{
+        Camera, ContextOptions, GpuContext, GpuScene, LevelChoice, LodParams, RenderParams,
+        SceneOptions,
+    };
 
     let path = std::env::args()
         .nth(1)
@@ -25,7 +27,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // Walk towards the middle of the scene from outside it: levels rise as objects get closer.
     let bounds = asset.bounds().ok_or("the asset has nothing to draw")?;
     let (centre, radius) = (bounds.centre(), bounds.radius());
-    let mut camera = hce_runtime::gpu::Camera {
+    let mut camera = Camera {
         eye: [centre[0], centre[1], centre[2] + 2.0 * radius],
         target: centre,
         fov_y_degrees: 45.0,

@@ -3,7 +3,7 @@
 //! instances (glTF node world transforms), bounds and the scene's camera.
 //!
 //! This module has no GPU dependency (it builds with `--no-default-features`); the GPU resources
-//! of a loaded asset are [`crate::gpu::scene`]'s business.
+//! of a loaded asset are [`crate::gpu::GpuScene`]'s business.
 //!
 //! # What is checked
 //!
@@ -297,11 +297,8 @@ fn read_file(path: &Path) -> Result<FileBytes, std::io::Error> {
     let file = std::fs::File::open(path)?;
     let len = file.metadata()?.len();
     if len >= MMAP_THRESHOLD {
-        // SAFETY: the map is read-only and lives only while the asset is parsed; everything
-        // kept is copied out of it. Another process truncating the file during that window
-        // could fault the read, the usual caveat of memory-mapped input, accepted here for
-        // large files because reading them would double their memory for no benefit.
-        let map = unsafe { memmap2::Mmap::map(&file)? };
+        // Large files are mapped rather than read (see `crate::mmap` for the safety argument).
+        let map = crate::mmap::map_read_only(&file)?;
         Ok(FileBytes::Mapped(map))
     } else {
         let mut v = Vec::with_capacity(len as usize);

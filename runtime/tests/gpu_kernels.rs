@@ -11,9 +11,10 @@ use hce_geometry::lighting::Reconstruction;
 use hce_geometry::Refined;
 use hce_geometry::{decode, tables};
 use hce_runtime::gpu::testing::{
-    context_or_skip, grid, octahedron, random_object, RandomTrees, SplitMix,
+    context_or_skip, decode_colours, grid, octahedron, random_object, ColourQuery, RandomTrees,
+    SplitMix,
 };
-use hce_runtime::gpu::{decode_colours, refine_flat, refine_flat_with, ColourQuery};
+use hce_runtime::gpu::{refine_flat, refine_flat_with};
 
 fn test_objects() -> Vec<hce_format::Object> {
     let (p, t) = octahedron();

@@ -1,4 +1,4 @@
-//! The Loop subdivision kernel (`hce_runtime::gpu::loop_kernel`) against its CPU reference,
+//! The Loop subdivision kernel (`hce_runtime::gpu::LoopKernel`) against its CPU reference,
 //! `hce_geometry::subdivide` followed by `hce_geometry::colour::apply_baked_colours`: indices
 //! identical, positions within 1e-5 of the bounding-box diagonal, normals close, vertex colours
 //! within 1e-3 relative, on built-in meshes (valences 3 to 9, boundaries, creases) and on the

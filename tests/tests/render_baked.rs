@@ -129,9 +129,9 @@ fn damaged_baked_files_are_errors_not_panics() {
 
 mod gpu {
     use super::*;
-    use hce_runtime::gpu::scene::{GpuScene, MultiresPath, SceneOptions};
     use hce_runtime::gpu::testing::context_or_skip;
     use hce_runtime::gpu::{render_asset, AssetRenderOptions, Camera, CameraChoice};
+    use hce_runtime::gpu::{GpuScene, MultiresPath, SceneOptions};
 
     /// Both paths of multiresolution objects: the GPU Loop kernel (the default) must give the
     /// CPU reference's positions, indices and normals to the bit on this scene and its colours

@@ -1,5 +1,6 @@
 //! `hce`: bake, inspect, validate, subdivide, render and demo assets with baked global illumination;
 //! path-trace references and compare images with them.
+#![forbid(unsafe_code)]
 
 use clap::{Parser, Subcommand};
 

@@ -7,7 +7,7 @@
 
 use std::sync::Arc;
 
-use super::{ImportedScene, SceneObject};
+use super::{ImportedObject, ImportedScene};
 use crate::scene::{self, Scene};
 
 /// The solver's view of an imported scene.
@@ -15,7 +15,7 @@ pub trait ToSolver {
     /// The solver's view of object `index`: world-space corners (winding restored where the node
     /// transform mirrors), per-triangle reflectance and emission from its material, no normal
     /// sets yet.
-    fn solver_object(&self, index: usize) -> scene::SceneObject;
+    fn solver_object(&self, index: usize) -> scene::SolverObject;
 
     /// The whole scene as the solver takes it: every object (see
     /// [`ToSolver::solver_object`]) and every punctual light.
@@ -23,8 +23,8 @@ pub trait ToSolver {
 }
 
 impl ToSolver for ImportedScene {
-    fn solver_object(&self, index: usize) -> scene::SceneObject {
-        let o: &SceneObject = &self.objects[index];
+    fn solver_object(&self, index: usize) -> scene::SolverObject {
+        let o: &ImportedObject = &self.objects[index];
         let material = self.material_of(o);
         let flip = o.mirrored();
         let triangles: Vec<[u32; 3]> = o
@@ -73,7 +73,7 @@ impl ToSolver for ImportedScene {
         } else {
             Vec::new()
         };
-        scene::SceneObject {
+        scene::SolverObject {
             name: o.name.clone(),
             multires: o.multires,
             positions: o.world_positions.clone(),

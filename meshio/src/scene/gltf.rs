@@ -8,8 +8,8 @@
 //! slices without checking. Nodes are placed by [`crate::scene_graph::walk`].
 
 use super::{
-    ImportError, ImportOptions, ImportedScene, LightKind, Material, Projection, PunctualLight,
-    SceneCamera, SceneObject, SourceFormat, Texture, WrapMode,
+    ImportError, ImportOptions, ImportedObject, ImportedScene, LightKind, Material, Projection,
+    PunctualLight, SceneCamera, SourceFormat, Texture, WrapMode,
 };
 use ::gltf::khr_lights_punctual::Kind;
 use ::gltf::mesh::Mode;
@@ -286,7 +286,7 @@ fn read_mesh_instance(
         } else {
             base_name
         };
-        scene.objects.push(SceneObject {
+        scene.objects.push(ImportedObject {
             name,
             node: Some(node.index()),
             node_name: node.name().map(str::to_owned),

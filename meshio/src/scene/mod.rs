@@ -118,9 +118,11 @@ pub enum SourceFormat {
     Obj,
 }
 
-/// One object: one triangle primitive of one mesh as placed by one node.
+/// One imported object: one triangle primitive of one mesh as placed by one node, in the form the
+/// output writer needs (glTF indices, object-space data); the solver's view of it is a
+/// [`crate::scene::SolverObject`].
 #[derive(Clone, Debug)]
-pub struct SceneObject {
+pub struct ImportedObject {
     /// The node's name (else the mesh's, else `node<N>`), with `#<primitive>` appended when
     /// the mesh has several primitives; stable across runs, not necessarily unique.
     pub name: String,
@@ -150,7 +152,7 @@ pub struct SceneObject {
     pub multires: bool,
 }
 
-impl SceneObject {
+impl ImportedObject {
     pub fn triangle_count(&self) -> usize {
         self.indices.len() / 3
     }
@@ -304,7 +306,7 @@ pub struct SceneCamera {
 pub struct ImportedScene {
     pub path: PathBuf,
     pub format: SourceFormat,
-    pub objects: Vec<SceneObject>,
+    pub objects: Vec<ImportedObject>,
     pub materials: Vec<Material>,
     pub lights: Vec<PunctualLight>,
     pub camera: Option<SceneCamera>,
@@ -316,7 +318,7 @@ pub struct ImportedScene {
 
 impl ImportedScene {
     /// The material of an object (the glTF default material when it has none).
-    pub fn material_of(&self, object: &SceneObject) -> &Material {
+    pub fn material_of(&self, object: &ImportedObject) -> &Material {
         static DEFAULT: LazyLock<Material> = LazyLock::new(Material::default);
         object
             .material
@@ -325,7 +327,10 @@ impl ImportedScene {
     }
 
     pub fn triangle_count(&self) -> usize {
-        self.objects.iter().map(SceneObject::triangle_count).sum()
+        self.objects
+            .iter()
+            .map(ImportedObject::triangle_count)
+            .sum()
     }
 
     /// The geometry hash of the whole scene: every object's world-space corners in object order.

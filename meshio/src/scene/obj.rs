@@ -3,7 +3,7 @@
 //! are taken as metres in world space.
 
 use super::{
-    ImportError, ImportOptions, ImportedScene, Material, SceneObject, SourceFormat, Texture,
+    ImportError, ImportOptions, ImportedObject, ImportedScene, Material, SourceFormat, Texture,
 };
 use glam::Mat4;
 use std::cell::RefCell;
@@ -192,7 +192,7 @@ fn finish(
                 .collect()
         });
         let material = mesh.material_id.filter(|&m| m < materials.len());
-        objects.push(SceneObject {
+        objects.push(ImportedObject {
             name: model.name.clone(),
             node: None,
             node_name: None,

@@ -1,4 +1,4 @@
-//! Kernel throughput measurement for `hce bench-gpu`: per level, coarse and output triangles,
+//! Kernel throughput measurement for `hce bench-gpu` (feature `bench`): per level, coarse and output triangles,
 //! kernel time (GPU timestamps where the adapter has them, wall time around submit-and-wait
 //! otherwise, and labelled so), output triangles per second and bytes written per second.
 
@@ -48,19 +48,9 @@ impl BenchRow {
 }
 
 /// Times the flat refinement kernel (three dispatches: positions, faces with HCE decoding,
-/// vertex colours) on `object` at each level, `repeats` times after one warm-up, reusing the
-/// output buffers as a viewer would.
+/// vertex colours) on `object` at each level with the colour reconstruction `reconstruction`,
+/// `repeats` times after one warm-up, reusing the output buffers as a viewer would.
 pub fn bench_flat(
-    ctx: &GpuContext,
-    object: &Object,
-    levels: &[u32],
-    repeats: u32,
-) -> Result<Vec<BenchRow>, GpuError> {
-    bench_flat_with(ctx, object, levels, repeats, Reconstruction::default())
-}
-
-/// [`bench_flat`] with the colour reconstruction chosen, to compare both in one run.
-pub fn bench_flat_with(
     ctx: &GpuContext,
     object: &Object,
     levels: &[u32],
@@ -94,26 +84,10 @@ pub fn bench_flat_with(
 /// Times the Loop subdivision kernel (three dispatches: per-triangle patches with positions and
 /// normals, faces with HCE decoding, vertex colours) on `object`, whose control mesh must carry
 /// its adjacency tables, at each level, `repeats` times after one warm-up, reusing the output
-/// buffers as a viewer would. Bytes written count the outputs, not the patches' scratch.
+/// buffers as a viewer would. Step 1 runs with `scheme` (`PatchScheme::Auto` as a viewer gets
+/// it, or one forced to compare the workgroup and scratch kernels) and colours with
+/// `reconstruction`. Bytes written count the outputs, not the patches' scratch.
 pub fn bench_loop(
-    ctx: &GpuContext,
-    object: &Object,
-    levels: &[u32],
-    repeats: u32,
-) -> Result<Vec<BenchRow>, GpuError> {
-    bench_loop_with(
-        ctx,
-        object,
-        levels,
-        repeats,
-        PatchScheme::Auto,
-        Reconstruction::default(),
-    )
-}
-
-/// [`bench_loop`] with step 1 forced to `scheme` and the colour reconstruction chosen, to
-/// compare the workgroup and scratch kernels, or the two reconstructions, in one run.
-pub fn bench_loop_with(
     ctx: &GpuContext,
     object: &Object,
     levels: &[u32],

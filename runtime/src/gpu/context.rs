@@ -108,7 +108,7 @@ fn rank(device_type: wgpu::DeviceType) -> u32 {
 }
 
 /// The message a user without any adapter needs: what to install.
-pub fn no_adapter_hint() -> &'static str {
+fn no_adapter_hint() -> &'static str {
     if cfg!(target_os = "linux") {
         "no Vulkan adapter found; install a GPU driver, or Mesa's software Vulkan \
          (Debian/Ubuntu: `apt-get install mesa-vulkan-drivers libvulkan1`)"
@@ -177,7 +177,7 @@ impl GpuContext {
     }
 
     /// Wraps a device and queue the caller already owns (a viewer's own renderer), so that
-    /// the kernels and [`super::scene::GpuScene`] work on it. The handles are shared, not
+    /// the kernels and [`super::GpuScene`] work on it. The handles are shared, not
     /// copied: work submitted here goes to the caller's queue. Kernel timing is on when the
     /// device was created with `TIMESTAMP_QUERY`.
     pub fn from_existing(

@@ -1,34 +1,21 @@
 //! Batch HCE colour decoding on the GPU (`decode.wgsl` + `hce_tree.wgsl`): for each query (coarse
 //! triangle, level, path, subtriangle normal) the tree node, chosen normal and linear colour.
 //!
-//! The flat and Loop kernels decode inline; this entry point lets the decoding be checked against
-//! [`decode::decode_colour`](super::decode::decode_colour) in isolation.
+//! The flat and Loop kernels decode inline; this entry point (feature `testing`, re-exported by
+//! [`super::testing`]) lets the decoding be checked against its CPU twin,
+//! [`hce_geometry::decode::decode_colour`], in isolation.
 
 use hce_format::Object;
 
-use super::util::{check_size, dispatch_size, read_back, storage_init, storage_output};
+use super::util::{
+    check_size, dispatch_size, read_back, records_words, storage_init, storage_output,
+};
+use super::wgsl::TREE_WGSL;
 use super::{GpuContext, GpuError};
-use hce_geometry::decode::MAX_RENDER_LEVEL;
+use hce_geometry::decode::MAX_PATH_LEVEL;
 use hce_geometry::tables::validate_tables;
 
 pub use hce_geometry::decode::DecodedColour;
-
-/// WGSL of the shared tree-walking functions, prepended to kernels that colour subtriangles.
-pub const TREE_WGSL: &str = include_str!("hce_tree.wgsl");
-/// The smooth reconstruction of baked lighting (`hce_light.wgsl`), prepended after
-/// [`TREE_WGSL`] by the kernels that colour vertices.
-pub const LIGHT_WGSL: &str = include_str!("hce_light.wgsl");
-/// The 1-to-4 lattice and output vertex numbering of a refined triangle (`hce_lattice.wgsl`),
-/// prepended after [`LIGHT_WGSL`] by the refinement kernels (flat and Loop).
-pub const LATTICE_WGSL: &str = include_str!("hce_lattice.wgsl");
-/// The vertex-colour gather of the refinement kernels (`hce_gather.wgsl`), prepended after
-/// [`LATTICE_WGSL`].
-pub const GATHER_WGSL: &str = include_str!("hce_gather.wgsl");
-
-/// The shared modules of a refinement kernel, in dependency order, followed by `kernel`.
-pub fn refinement_source(kernel: &str) -> String {
-    format!("{TREE_WGSL}\n{LIGHT_WGSL}\n{LATTICE_WGSL}\n{GATHER_WGSL}\n{kernel}")
-}
 
 /// One subtriangle to colour. 32 bytes, the layout of `Query` in `decode.wgsl`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -45,7 +32,7 @@ pub struct ColourQuery {
 
 /// Decodes `queries` against `object`'s tables on the GPU. The tables are validated first
 /// ([`validate_tables`]) and every query is checked (triangle in range,
-/// `level <= MAX_RENDER_LEVEL`, `path < 4^level`), so nothing out of bounds reaches the kernel.
+/// `level <= MAX_PATH_LEVEL`, `path < 4^level`), so nothing out of bounds reaches the kernel.
 pub fn decode_colours(
     ctx: &GpuContext,
     object: &Object,
@@ -60,10 +47,10 @@ pub fn decode_colours(
         if q.triangle as usize >= object.triangles.len() {
             return Err(bad(format!("triangle {} out of range", q.triangle)));
         }
-        if q.level > MAX_RENDER_LEVEL {
+        if q.level > MAX_PATH_LEVEL {
             return Err(GpuError::LevelTooHigh {
                 level: q.level,
-                max: MAX_RENDER_LEVEL,
+                max: MAX_PATH_LEVEL,
             });
         }
         if u64::from(q.path) >= 1u64 << (2 * q.level) {
@@ -128,13 +115,4 @@ pub fn decode_colours(
     }
     ctx.queue.submit([encoder.finish()]);
     read_back(ctx, &results, queries.len())
-}
-
-/// The triangle records as the `array<TriRecord>` words the kernels read.
-pub(crate) fn records_words(object: &Object) -> Vec<u32> {
-    object
-        .triangles
-        .iter()
-        .flat_map(|r| [r.bits_start, r.colour_start, r.normal_start, r.normal_count])
-        .collect()
 }

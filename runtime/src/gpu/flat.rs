@@ -10,10 +10,12 @@
 
 use hce_format::Object;
 
-use super::decode::{records_words, refinement_source};
-use super::util::{check_size, dispatch_size, read_back, storage_init, storage_output, PassTimer};
+use super::util::{
+    check_size, dispatch_size, read_back, records_words, storage_init, storage_output, PassTimer,
+};
+use super::wgsl::refinement_source;
 use super::{GpuContext, GpuError};
-use hce_geometry::decode::MAX_RENDER_LEVEL;
+use hce_geometry::decode::MAX_PATH_LEVEL;
 use hce_geometry::flat::{FlatTopology, RefinedMesh};
 use hce_geometry::lighting::Reconstruction;
 use hce_geometry::tables::validate_tables;
@@ -51,8 +53,7 @@ pub struct FlatKernel {
 
 /// An object's tables on the GPU, validated.
 pub struct FlatObject {
-    pub name: String,
-    pub topology: FlatTopology,
+    pub(crate) topology: FlatTopology,
     coarse_positions: wgpu::Buffer,
     topo: wgpu::Buffer,
     section_offsets: [u32; 7],
@@ -62,7 +63,7 @@ pub struct FlatObject {
     colours: wgpu::Buffer,
     /// How vertex colours are reconstructed, and the lighting table the smooth reconstruction
     /// reads (one unused word for the nearest-normal rule).
-    pub reconstruction: Reconstruction,
+    reconstruction: Reconstruction,
     light: wgpu::Buffer,
 }
 
@@ -97,7 +98,8 @@ impl FlatOutput {
     }
 
     /// Bytes the kernel writes for this output.
-    pub fn bytes_written(&self) -> u64 {
+    #[cfg_attr(not(feature = "bench"), allow(dead_code))]
+    pub(crate) fn bytes_written(&self) -> u64 {
         u64::from(self.vertex_count) * (12 + 16) + u64::from(self.triangle_count) * (12 + 16)
     }
 }
@@ -223,7 +225,6 @@ impl FlatKernel {
         Ok(FlatObject {
             reconstruction,
             light: storage_init(ctx, "lighting table", &light),
-            name: object.name.clone(),
             coarse_positions: storage_init(ctx, "coarse positions", &object.mesh.positions),
             topo: storage_init(ctx, "topology", &packed),
             section_offsets,
@@ -236,7 +237,7 @@ impl FlatKernel {
     }
 
     /// Output buffers sized for `level`, checked against the device limits.
-    pub fn allocate(
+    fn allocate(
         &self,
         ctx: &GpuContext,
         object: &FlatObject,
@@ -381,10 +382,10 @@ impl FlatKernel {
 
 /// Output vertex and triangle counts at `level`, checked to fit 32-bit indices.
 fn counts(object: &FlatObject, level: u32) -> Result<(u32, u32), GpuError> {
-    if level > MAX_RENDER_LEVEL {
+    if level > MAX_PATH_LEVEL {
         return Err(GpuError::LevelTooHigh {
             level,
-            max: MAX_RENDER_LEVEL,
+            max: MAX_PATH_LEVEL,
         });
     }
     let v = object.topology.refined_vertex_count(level);

@@ -28,7 +28,9 @@ pub struct LodParams {
     pub target_pixels_per_edge: f32,
     /// Lowest level chosen. Default 0.
     pub min_level: u32,
-    /// Highest level chosen. Default 5 (the kernels accept up to 15; memory grows as 4^L).
+    /// Highest level chosen. Default 5 (memory grows as 4^L; the Loop kernel accepts up to
+    /// [`hce_geometry::subdivide::MAX_LOOP_LEVEL`], the flat kernel up to
+    /// [`hce_geometry::decode::MAX_PATH_LEVEL`]).
     pub max_level: u32,
     /// Use this level whatever the view (`--level N`). Default `None`.
     pub force_level: Option<u32>,

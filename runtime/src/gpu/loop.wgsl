@@ -1,6 +1,6 @@
 // Loop subdivision of a multiresolution object to level L with HCE colours: a port of the CPU
-// reference in runtime/src/subdivide.rs (local patch, order of arithmetic, output numbering) and
-// of runtime/src/colour.rs (colour per subtriangle, area-weighted vertex colours).
+// reference in geometry/src/subdivide.rs (local patch, order of arithmetic, output numbering)
+// and of geometry/src/colour.rs (colour per subtriangle, area-weighted vertex colours).
 //
 // Three dispatches, each a pure gather or an owned write, so the result does not depend on
 // scheduling (no atomics):
@@ -10,7 +10,8 @@
 //                level spread over the invocations; patch_main, below, runs one invocation per
 //                coarse triangle (grid-stride over scratch slots) with the patch in a scratch
 //                region of a storage buffer. Both write the positions and normals of the output
-//                vertices each triangle owns.
+//                vertices each triangle owns; the normals are loop_normals.wgsl's, a template
+//                instantiated once per patch memory.
 //   faces_main   one invocation per fine triangle: its indices, area and HCE colour.
 //   colours_main one invocation per output vertex: area-weighted mean of the incident fine
 //                triangles, across coarse edges and vertices.
@@ -177,12 +178,13 @@ fn sq_set(base: u32, n: i32, i: i32, j: i32, p: vec3<f32>) {
     scratch_set(base + 3u * u32((i + 1) + (j + 1) * (n + 3)), p);
 }
 
-fn ring_at(base: u32, c: u32, s: u32) -> vec3<f32> {
-    return scratch_at(base + 3u * (c * params.ring_cap + s));
+// Point r of a ring set: ring point s of corner c is r = c * ring_cap + s.
+fn ring_at(base: u32, r: u32) -> vec3<f32> {
+    return scratch_at(base + 3u * r);
 }
 
-fn ring_set(base: u32, c: u32, s: u32, p: vec3<f32>) {
-    scratch_set(base + 3u * (c * params.ring_cap + s), p);
+fn ring_set(base: u32, r: u32, p: vec3<f32>) {
+    scratch_set(base + 3u * r, p);
 }
 
 // Lattice point of band point m of edge e (corners and edge points: hce_lattice.wgsl).
@@ -225,26 +227,27 @@ fn refine_step(sq: u32, nsq: u32, rg: u32, nrg: u32, corners: array<Corner, 3>, 
     var new_corner: array<vec3<f32>, 3>;
     for (var c = 0u; c < 3u; c++) {
         let cr = cs[c];
+        let ro = c * params.ring_cap;
         let lc = corner_lattice(n, c);
         let v = sq_at(sq, n, lc.x, lc.y);
         for (var s = 0u; s < cr.n; s++) {
-            let r = ring_at(rg, c, s);
+            let r = ring_at(rg, ro + s);
             var p: vec3<f32>;
             if (spoke_sharp(cr, s)) {
                 p = mid(v, r);
             } else {
-                p = odd_smooth(v, r, ring_at(rg, c, ring_prev(s, cr.n)), ring_at(rg, c, ring_next(s, cr.n)));
+                p = odd_smooth(v, r, ring_at(rg, ro + ring_prev(s, cr.n)), ring_at(rg, ro + ring_next(s, cr.n)));
             }
-            ring_set(nrg, c, s, p);
+            ring_set(nrg, ro + s, p);
         }
         if (cr.rule == RULE_CORNER) {
             new_corner[c] = v;
         } else if (cr.rule == RULE_CREASE) {
-            new_corner[c] = even_crease(v, ring_at(rg, c, cr.crease0), ring_at(rg, c, cr.crease1));
+            new_corner[c] = even_crease(v, ring_at(rg, ro + cr.crease0), ring_at(rg, ro + cr.crease1));
         } else {
             var s = vec3<f32>(0.0);
             for (var q = 0u; q < cr.n; q++) {
-                s = s + mid(v, ring_at(rg, c, q));
+                s = s + mid(v, ring_at(rg, ro + q));
             }
             new_corner[c] = even_smooth(v, s, w_of(cr.n), cf_of(cr.n));
         }
@@ -324,7 +327,7 @@ fn refine_step(sq: u32, nsq: u32, rg: u32, nrg: u32, corners: array<Corner, 3>, 
         let c1 = cs[(e + 1u) % 3u];
         var q = 0;
         var l = band_lattice(m2, e, q);
-        sq_set(nsq, m2, l.x, l.y, ring_at(nrg, e, (c0.k + c0.n - 1u) % c0.n));
+        sq_set(nsq, m2, l.x, l.y, ring_at(nrg, e * params.ring_cap + (c0.k + c0.n - 1u) % c0.n));
         q++;
         for (var m = 0; m < n; m++) {
             let bl = band_lattice(n, e, m);
@@ -347,9 +350,13 @@ fn refine_step(sq: u32, nsq: u32, rg: u32, nrg: u32, corners: array<Corner, 3>, 
             }
         }
         l = band_lattice(m2, e, q);
-        sq_set(nsq, m2, l.x, l.y, ring_at(nrg, (e + 1u) % 3u, (c1.k + 2u) % c1.n));
+        sq_set(nsq, m2, l.x, l.y, ring_at(nrg, ((e + 1u) % 3u) * params.ring_cap + (c1.k + 2u) % c1.n));
     }
 }
+
+// The vertex normals of the final level, `grid_normal` and `corner_normal`, are in
+// loop_normals.wgsl, written once for the scratch memory of this kernel and the workgroup memory
+// of loop_workgroup.wgsl; these are the parts that read no patch memory.
 
 // Whether lattice neighbour (a, b) of the patch exists (is not across a boundary edge).
 fn available(flags: u32, n: i32, a: i32, b: i32) -> bool {
@@ -358,52 +365,10 @@ fn available(flags: u32, n: i32, a: i32, b: i32) -> bool {
         && (a + b <= n || (flags & (INTERIOR << 1u)) != 0u);
 }
 
-// Area-weighted normal at lattice point (i, j), not a corner (`Patch::grid_normal`), from its
-// position v and its six neighbours p in counter-clockwise order, skipping faces across boundary
-// edges. Both patch kernels call it, each reading p from its own memory: points across a
-// boundary may be stale, but they only enter faces that are skipped.
-fn fan_normal(flags: u32, n: i32, i: i32, j: i32, v: vec3<f32>, p: array<vec3<f32>, 6>) -> vec3<f32> {
-    var d = grid_neighbours();
-    var q = p;
-    var s = vec3<f32>(0.0);
-    for (var k = 0u; k < 6u; k++) {
-        let k1 = (k + 1u) % 6u;
-        let d0 = d[k];
-        let d1 = d[k1];
-        if (available(flags, n, i + d0.x, j + d0.y) && available(flags, n, i + d1.x, j + d1.y)) {
-            s = s + cross3(q[k] - v, q[k1] - v);
-        }
-    }
-    return s;
-}
-
 // The six lattice neighbours of a grid point, counter-clockwise from (1, 0).
 fn grid_neighbours() -> array<vec2<i32>, 6> {
     return array<vec2<i32>, 6>(vec2<i32>(1, 0), vec2<i32>(0, 1), vec2<i32>(-1, 1),
                                vec2<i32>(-1, 0), vec2<i32>(0, -1), vec2<i32>(1, -1));
-}
-
-fn grid_normal(sq: u32, flags: u32, n: i32, i: i32, j: i32) -> vec3<f32> {
-    var d = grid_neighbours();
-    var p: array<vec3<f32>, 6>;
-    for (var k = 0u; k < 6u; k++) {
-        p[k] = sq_at(sq, n, i + d[k].x, j + d[k].y);
-    }
-    return fan_normal(flags, n, i, j, sq_at(sq, n, i, j), p);
-}
-
-fn corner_normal(sq: u32, rg: u32, cr: Corner, n: i32, c: u32) -> vec3<f32> {
-    let lc = corner_lattice(n, c);
-    let v = sq_at(sq, n, lc.x, lc.y);
-    var faces = cr.n;
-    if (!cr.closed) {
-        faces = cr.n - 1u;
-    }
-    var s = vec3<f32>(0.0);
-    for (var f = 0u; f < faces; f++) {
-        s = s + cross3(ring_at(rg, c, f) - v, ring_at(rg, c, ring_next(f, cr.n)) - v);
-    }
-    return s;
 }
 
 fn write_vertex(index: u32, p: vec3<f32>, nrm: vec3<f32>) {
@@ -439,14 +404,14 @@ fn patch_main(@builtin(global_invocation_id) gid: vec3<u32>,
             let lc = corner_lattice(1, c);
             sq_set(sq_a, 1, lc.x, lc.y, coarse_position(corner(t, c)));
             for (var s = 0u; s < cs[c].n; s++) {
-                ring_set(rg_a, c, s, coarse_position(topo[params.ring_off + cs[c].off + s]));
+                ring_set(rg_a, c * params.ring_cap + s, coarse_position(topo[params.ring_off + cs[c].off + s]));
             }
         }
         for (var e = 0u; e < 3u; e++) {
             if ((flags & (INTERIOR << e)) != 0u) {
                 let cr = cs[e];
                 let l = band_lattice(1, e, 0);
-                sq_set(sq_a, 1, l.x, l.y, ring_at(rg_a, e, (cr.k + cr.n - 1u) % cr.n));
+                sq_set(sq_a, 1, l.x, l.y, ring_at(rg_a, e * params.ring_cap + (cr.k + cr.n - 1u) % cr.n));
             }
         }
         // Ping-pong between the two squares and ring sets.
@@ -470,7 +435,7 @@ fn patch_main(@builtin(global_invocation_id) gid: vec3<u32>,
             if ((flags & (OWNS_VERTEX << c)) != 0u) {
                 let lc = corner_lattice(mm, c);
                 write_vertex(corner(t, c), sq_at(sq, mm, lc.x, lc.y),
-                             normalize_or_z(corner_normal(sq, rg, cs[c], mm, c)));
+                             normalize_or_z(corner_normal(sq, rg, cs[c], c * params.ring_cap, mm, c)));
             }
         }
         for (var e = 0u; e < 3u; e++) {

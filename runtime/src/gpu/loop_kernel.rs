@@ -40,20 +40,21 @@
 
 use hce_format::Object;
 
-use super::decode::{records_words, refinement_source};
 use super::flat::KernelTiming;
 use super::util::{
-    check_size, dispatch_size, read_back, storage_init, storage_output, PassTimer, WORKGROUP,
+    check_size, dispatch_size, read_back, records_words, storage_init, storage_output, PassTimer,
+    WORKGROUP,
 };
+use super::wgsl::{loop_source, loop_workgroup_source};
 use super::{AdapterKind, GpuContext, GpuError};
 use hce_geometry::flat::{FlatTopology, RefinedMesh};
 use hce_geometry::lighting::Reconstruction;
-use hce_geometry::subdivide::{prepare, MAX_LEVEL};
+use hce_geometry::subdivide::{prepare, MAX_LOOP_LEVEL};
 use hce_geometry::tables::validate_tables;
 
 /// Upper bound of the scratch buffer (bytes): the number of coarse triangles refined at once is
 /// this divided by one triangle's patch size (or the device's storage-binding limit, if lower).
-pub const SCRATCH_BUDGET: u64 = 256 << 20;
+const SCRATCH_BUDGET: u64 = 256 << 20;
 
 /// The kernel's uniform block (`Params` in `loop.wgsl`).
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
@@ -189,12 +190,11 @@ pub struct LoopKernel {
 /// An object's tables on the GPU, validated: every index the kernel reads was checked by
 /// [`LoopKernel::upload`].
 pub struct LoopObject {
-    pub name: String,
-    pub vertex_count: u32,
-    pub edge_count: u32,
-    pub triangle_count: u32,
+    vertex_count: u32,
+    edge_count: u32,
+    pub(crate) triangle_count: u32,
     /// Largest valence (ring length) of the control mesh: the ring capacity of a scratch slot.
-    pub max_valence: u32,
+    max_valence: u32,
     /// Largest sum of the valences of a triangle's three corners, rounded up to a multiple of 8
     /// (fewer kernel variants): the ring capacity of a workgroup patch.
     ring_points: u32,
@@ -207,12 +207,14 @@ pub struct LoopObject {
     colours: wgpu::Buffer,
     /// How vertex colours are reconstructed, and the lighting table the smooth reconstruction
     /// reads (one unused word for the nearest-normal rule).
-    pub reconstruction: Reconstruction,
+    reconstruction: Reconstruction,
     light: wgpu::Buffer,
 }
 
 /// Output buffers of a refinement: drawable as they are (`positions`, `normals` and `colours` as
 /// vertex buffers, `indices` as an index buffer), in the numbering of [`hce_geometry::subdivide`].
+///
+/// [`hce_geometry::subdivide`]: mod@hce_geometry::subdivide
 pub struct LoopOutput {
     pub level: u32,
     pub vertex_count: u32,
@@ -229,15 +231,6 @@ pub struct LoopOutput {
     pub faces: wgpu::Buffer,
     /// The patches of the coarse triangles in flight (kernel-private).
     scratch: wgpu::Buffer,
-}
-
-/// A refined mesh read back from the GPU: [`RefinedMesh`] (positions, vertex and face colours,
-/// indices) plus the vertex normals.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct LoopMesh {
-    pub mesh: RefinedMesh,
-    /// Unit `x, y, z` per vertex.
-    pub normals: Vec<f32>,
 }
 
 impl LoopOutput {
@@ -261,7 +254,8 @@ impl LoopOutput {
 
     /// Bytes the kernel writes to its outputs (positions, normals, colours, indices, face
     /// colours); the scratch traffic of the patches is not counted.
-    pub fn bytes_written(&self) -> u64 {
+    #[cfg_attr(not(feature = "bench"), allow(dead_code))]
+    pub(crate) fn bytes_written(&self) -> u64 {
         u64::from(self.vertex_count) * (12 + 12 + 16) + u64::from(self.triangle_count) * (12 + 16)
     }
 }
@@ -280,7 +274,7 @@ impl LoopKernel {
     }
 
     pub fn with_scheme(ctx: &GpuContext, scheme: PatchScheme) -> Self {
-        let source = refinement_source(include_str!("loop.wgsl"));
+        let source = loop_source();
         let module = ctx
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -371,12 +365,7 @@ impl LoopKernel {
         cache
             .entry(shape)
             .or_insert_with(|| {
-                let source = refinement_source(&format!(
-                    "{}\n{}\n{}",
-                    include_str!("loop.wgsl"),
-                    shape.header(),
-                    include_str!("loop_workgroup.wgsl")
-                ));
+                let source = loop_workgroup_source(&shape.header());
                 let module = ctx
                     .device
                     .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -406,6 +395,8 @@ impl LoopKernel {
     /// Validates `object` (adjacency tables as [`hce_geometry::subdivide`] reads them, edge and
     /// vertex incidence, HCE records, trees, normals and colours) and uploads it. A malformed
     /// table is an error here, never an out-of-bounds read on the GPU.
+    ///
+    /// [`hce_geometry::subdivide`]: mod@hce_geometry::subdivide
     pub fn upload(&self, ctx: &GpuContext, object: &Object) -> Result<LoopObject, GpuError> {
         self.upload_with(ctx, object, Reconstruction::default())
     }
@@ -506,7 +497,6 @@ impl LoopKernel {
         let light = super::util::lighting_words(object, reconstruction)?;
         check_size(ctx, "lighting table", light.len() as u64 * 4)?;
         Ok(LoopObject {
-            name: object.name.clone(),
             vertex_count: topology.vertex_count,
             edge_count: topology.edge_count,
             triangle_count: topology.triangle_count,
@@ -525,7 +515,7 @@ impl LoopKernel {
     }
 
     /// Output buffers (and scratch) sized for `level`, checked against the device limits.
-    pub fn allocate(
+    fn allocate(
         &self,
         ctx: &GpuContext,
         object: &LoopObject,
@@ -795,10 +785,10 @@ fn scratch_shape(
 /// Output vertex and triangle counts at `level`, checked to fit 32-bit indices as
 /// [`hce_geometry::subdivide`] checks them.
 fn counts(object: &LoopObject, level: u32) -> Result<(u32, u32), GpuError> {
-    if level > MAX_LEVEL {
+    if level > MAX_LOOP_LEVEL {
         return Err(GpuError::LevelTooHigh {
             level,
-            max: MAX_LEVEL,
+            max: MAX_LOOP_LEVEL,
         });
     }
     let m = 1u64 << level;
@@ -819,20 +809,6 @@ fn counts(object: &LoopObject, level: u32) -> Result<(u32, u32), GpuError> {
         u32::try_from(v).map_err(|_| too_large("refined vertex count", v))?,
         f as u32,
     ))
-}
-
-/// One-shot convenience: upload `object`, Loop-refine it to `level` with its colours and read
-/// the mesh and normals back.
-pub fn refine_loop(ctx: &GpuContext, object: &Object, level: u32) -> Result<LoopMesh, GpuError> {
-    let kernel = LoopKernel::new(ctx);
-    let uploaded = kernel.upload(ctx, object)?;
-    let mut out = None;
-    kernel.refine_into(ctx, &uploaded, level, &mut out, false)?;
-    let out = out.expect("refine_into allocates");
-    Ok(LoopMesh {
-        mesh: out.read_back(ctx)?,
-        normals: out.read_back_normals(ctx)?,
-    })
 }
 
 #[cfg(test)]

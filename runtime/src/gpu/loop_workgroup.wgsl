@@ -17,6 +17,14 @@
 // A square holds lattice points i >= -1, j >= -1, i + j <= n + 1 (the triangle, its three bands
 // and a little slack) in rows of increasing j: about half the padded square of patch_main, which
 // is what lets level 5 (666 + 210 points, 10.3 KiB) fit the 16 KiB WebGPU guarantees.
+//
+// The normals of the final level are loop_normals.wgsl's, instantiated for workgroup memory
+// (`wg_grid_normal`, `wg_corner_normal` over `wg_sq_at` and `wg_ring_at`). The stencils of the
+// Loop steps stay in two forms: here one function per point, which any lane can evaluate alone;
+// in patch_main one serial pass per level, which reuses values across points (a corner's
+// position for its whole ring, the new corners for the grid). Both apply the same rules of
+// loop.wgsl (`mid`, `odd_smooth`, `even_crease`, `even_smooth`, with `keep`), and
+// tests/gpu_loop.rs checks that the two kernels agree bit for bit.
 
 const WG_LANES: u32 = 64u / WG_TRIS;
 const WG_SLOT: u32 = WG_SQ_A + WG_SQ_B + 2u * WG_RING;
@@ -29,12 +37,12 @@ fn wg_index(n: i32, i: i32, j: i32) -> u32 {
     return u32(jj * (n + 4) - (jj * (jj - 1)) / 2 + (i + 1));
 }
 
-fn wsq_at(base: u32, n: i32, i: i32, j: i32) -> vec3<f32> {
+fn wg_sq_at(base: u32, n: i32, i: i32, j: i32) -> vec3<f32> {
     let k = base + 3u * wg_index(n, i, j);
     return vec3<f32>(wg_patch[k], wg_patch[k + 1u], wg_patch[k + 2u]);
 }
 
-fn wsq_set(base: u32, n: i32, i: i32, j: i32, p: vec3<f32>) {
+fn wg_sq_set(base: u32, n: i32, i: i32, j: i32, p: vec3<f32>) {
     let k = base + 3u * wg_index(n, i, j);
     wg_patch[k] = p.x;
     wg_patch[k + 1u] = p.y;
@@ -42,12 +50,12 @@ fn wsq_set(base: u32, n: i32, i: i32, j: i32, p: vec3<f32>) {
 }
 
 // Point r of a ring set (ring points of corner c start at the sum of the valences before it).
-fn wring_at(base: u32, r: u32) -> vec3<f32> {
+fn wg_ring_at(base: u32, r: u32) -> vec3<f32> {
     let k = base + 3u * r;
     return vec3<f32>(wg_patch[k], wg_patch[k + 1u], wg_patch[k + 2u]);
 }
 
-fn wring_set(base: u32, r: u32, p: vec3<f32>) {
+fn wg_ring_set(base: u32, r: u32, p: vec3<f32>) {
     let k = base + 3u * r;
     wg_patch[k] = p.x;
     wg_patch[k + 1u] = p.y;
@@ -141,13 +149,13 @@ fn wg_ring_point(sq: u32, rg: u32, tri: WgTri, n: i32, c: u32, s: u32) -> vec3<f
     let cr = wcorner(tri, c);
     let ro = wro(tri, c);
     let lc = corner_lattice(n, c);
-    let v = wsq_at(sq, n, lc.x, lc.y);
-    let r = wring_at(rg, ro + s);
+    let v = wg_sq_at(sq, n, lc.x, lc.y);
+    let r = wg_ring_at(rg, ro + s);
     if (spoke_sharp(cr, s)) {
         return mid(v, r);
     }
-    return odd_smooth(v, r, wring_at(rg, ro + ring_prev(s, cr.n)),
-                      wring_at(rg, ro + ring_next(s, cr.n)));
+    return odd_smooth(v, r, wg_ring_at(rg, ro + ring_prev(s, cr.n)),
+                      wg_ring_at(rg, ro + ring_next(s, cr.n)));
 }
 
 // New position of corner c by its vertex rule, from the previous level.
@@ -155,16 +163,16 @@ fn wg_corner_point(sq: u32, rg: u32, tri: WgTri, n: i32, c: u32) -> vec3<f32> {
     let cr = wcorner(tri, c);
     let ro = wro(tri, c);
     let lc = corner_lattice(n, c);
-    let v = wsq_at(sq, n, lc.x, lc.y);
+    let v = wg_sq_at(sq, n, lc.x, lc.y);
     if (cr.rule == RULE_CORNER) {
         return v;
     }
     if (cr.rule == RULE_CREASE) {
-        return even_crease(v, wring_at(rg, ro + cr.crease0), wring_at(rg, ro + cr.crease1));
+        return even_crease(v, wg_ring_at(rg, ro + cr.crease0), wg_ring_at(rg, ro + cr.crease1));
     }
     var s = vec3<f32>(0.0);
     for (var q = 0u; q < cr.n; q++) {
-        s = s + mid(v, wring_at(rg, ro + q));
+        s = s + mid(v, wg_ring_at(rg, ro + q));
     }
     return even_smooth(v, s, w_of(cr.n), cf_of(cr.n));
 }
@@ -180,22 +188,22 @@ fn wg_even_point(sq: u32, rg: u32, tri: WgTri, n: i32, i: i32, j: i32) -> vec3<f
     if (i == 0 && j == n) {
         return wg_corner_point(sq, rg, tri, n, 2u);
     }
-    let v = wsq_at(sq, n, i, j);
+    let v = wg_sq_at(sq, n, i, j);
     if (j == 0 && (tri.flags & (SHARP << 0u)) != 0u) {
-        return even_crease(v, wsq_at(sq, n, i - 1, j), wsq_at(sq, n, i + 1, j));
+        return even_crease(v, wg_sq_at(sq, n, i - 1, j), wg_sq_at(sq, n, i + 1, j));
     }
     if (i + j == n && (tri.flags & (SHARP << 1u)) != 0u) {
-        return even_crease(v, wsq_at(sq, n, i + 1, j - 1), wsq_at(sq, n, i - 1, j + 1));
+        return even_crease(v, wg_sq_at(sq, n, i + 1, j - 1), wg_sq_at(sq, n, i - 1, j + 1));
     }
     if (i == 0 && (tri.flags & (SHARP << 2u)) != 0u) {
-        return even_crease(v, wsq_at(sq, n, i, j - 1), wsq_at(sq, n, i, j + 1));
+        return even_crease(v, wg_sq_at(sq, n, i, j - 1), wg_sq_at(sq, n, i, j + 1));
     }
-    var s = mid(v, wsq_at(sq, n, i + 1, j));
-    s = s + mid(v, wsq_at(sq, n, i, j + 1));
-    s = s + mid(v, wsq_at(sq, n, i - 1, j + 1));
-    s = s + mid(v, wsq_at(sq, n, i - 1, j));
-    s = s + mid(v, wsq_at(sq, n, i, j - 1));
-    s = s + mid(v, wsq_at(sq, n, i + 1, j - 1));
+    var s = mid(v, wg_sq_at(sq, n, i + 1, j));
+    s = s + mid(v, wg_sq_at(sq, n, i, j + 1));
+    s = s + mid(v, wg_sq_at(sq, n, i - 1, j + 1));
+    s = s + mid(v, wg_sq_at(sq, n, i - 1, j));
+    s = s + mid(v, wg_sq_at(sq, n, i, j - 1));
+    s = s + mid(v, wg_sq_at(sq, n, i + 1, j - 1));
     return even_smooth(v, s, w_of(6u), cf_of(6u));
 }
 
@@ -212,17 +220,17 @@ fn wg_band_point(sq: u32, rg: u32, tri: WgTri, n: i32, e: u32, q: i32) -> vec3<f
     }
     let m = q / 2;
     let bl = band_lattice(n, e, m);
-    let band_m = wsq_at(sq, n, bl.x, bl.y);
+    let band_m = wg_sq_at(sq, n, bl.x, bl.y);
     let em = edge_lattice(n, e, m);
     let em1 = edge_lattice(n, e, m + 1);
     if ((q & 1) == 0) {
         let bp = band_lattice(n, e, m - 1);
-        return odd_smooth(wsq_at(sq, n, em.x, em.y), band_m, wsq_at(sq, n, em1.x, em1.y),
-                          wsq_at(sq, n, bp.x, bp.y));
+        return odd_smooth(wg_sq_at(sq, n, em.x, em.y), band_m, wg_sq_at(sq, n, em1.x, em1.y),
+                          wg_sq_at(sq, n, bp.x, bp.y));
     }
     let bn = band_lattice(n, e, m + 1);
-    return odd_smooth(wsq_at(sq, n, em1.x, em1.y), band_m, wsq_at(sq, n, em.x, em.y),
-                      wsq_at(sq, n, bn.x, bn.y));
+    return odd_smooth(wg_sq_at(sq, n, em1.x, em1.y), band_m, wg_sq_at(sq, n, em.x, em.y),
+                      wg_sq_at(sq, n, bn.x, bn.y));
 }
 
 // One level, n segments to 2n, this lane's share of it: the even points, the three kinds of odd
@@ -232,7 +240,7 @@ fn wg_step(sq: u32, nsq: u32, rg: u32, nrg: u32, tri: WgTri, n: i32, lane: u32) 
     let m2 = 2 * n;
     for (var idx = lane; idx < tri_count(n); idx += WG_LANES) {
         let p = fold(n, idx);
-        wsq_set(nsq, m2, 2 * p.x, 2 * p.y, wg_even_point(sq, rg, tri, n, p.x, p.y));
+        wg_sq_set(nsq, m2, 2 * p.x, 2 * p.y, wg_even_point(sq, rg, tri, n, p.x, p.y));
     }
     let sharp0 = (tri.flags & (SHARP << 0u)) != 0u;
     let sharp1 = (tri.flags & (SHARP << 1u)) != 0u;
@@ -242,45 +250,45 @@ fn wg_step(sq: u32, nsq: u32, rg: u32, nrg: u32, tri: WgTri, n: i32, lane: u32) 
         let p = fold(n - 1, idx);
         let i = p.x;
         let j = p.y;
-        let a = wsq_at(sq, n, i, j);
-        let b = wsq_at(sq, n, i + 1, j);
+        let a = wg_sq_at(sq, n, i, j);
+        let b = wg_sq_at(sq, n, i + 1, j);
         var r: vec3<f32>;
         if (j == 0 && sharp0) {
             r = mid(a, b);
         } else {
-            r = odd_smooth(a, b, wsq_at(sq, n, i, j + 1), wsq_at(sq, n, i + 1, j - 1));
+            r = odd_smooth(a, b, wg_sq_at(sq, n, i, j + 1), wg_sq_at(sq, n, i + 1, j - 1));
         }
-        wsq_set(nsq, m2, 2 * i + 1, 2 * j, r);
+        wg_sq_set(nsq, m2, 2 * i + 1, 2 * j, r);
     }
     // (2i, 2j + 1): between (i, j) and (i, j + 1).
     for (var idx = lane; idx < tri_count(n - 1); idx += WG_LANES) {
         let p = fold(n - 1, idx);
         let i = p.x;
         let j = p.y;
-        let a = wsq_at(sq, n, i, j);
-        let b = wsq_at(sq, n, i, j + 1);
+        let a = wg_sq_at(sq, n, i, j);
+        let b = wg_sq_at(sq, n, i, j + 1);
         var r: vec3<f32>;
         if (i == 0 && sharp2) {
             r = mid(a, b);
         } else {
-            r = odd_smooth(a, b, wsq_at(sq, n, i + 1, j), wsq_at(sq, n, i - 1, j + 1));
+            r = odd_smooth(a, b, wg_sq_at(sq, n, i + 1, j), wg_sq_at(sq, n, i - 1, j + 1));
         }
-        wsq_set(nsq, m2, 2 * i, 2 * j + 1, r);
+        wg_sq_set(nsq, m2, 2 * i, 2 * j + 1, r);
     }
     // (2i + 1, 2j + 1): between (i + 1, j) and (i, j + 1).
     for (var idx = lane; idx < tri_count(n - 1); idx += WG_LANES) {
         let p = fold(n - 1, idx);
         let i = p.x;
         let j = p.y;
-        let a = wsq_at(sq, n, i + 1, j);
-        let b = wsq_at(sq, n, i, j + 1);
+        let a = wg_sq_at(sq, n, i + 1, j);
+        let b = wg_sq_at(sq, n, i, j + 1);
         var r: vec3<f32>;
         if (i + j + 1 == n && sharp1) {
             r = mid(a, b);
         } else {
-            r = odd_smooth(a, b, wsq_at(sq, n, i, j), wsq_at(sq, n, i + 1, j + 1));
+            r = odd_smooth(a, b, wg_sq_at(sq, n, i, j), wg_sq_at(sq, n, i + 1, j + 1));
         }
-        wsq_set(nsq, m2, 2 * i + 1, 2 * j + 1, r);
+        wg_sq_set(nsq, m2, 2 * i + 1, 2 * j + 1, r);
     }
     // Bands of the edges that have a neighbour.
     let per_band = u32(m2);
@@ -289,41 +297,14 @@ fn wg_step(sq: u32, nsq: u32, rg: u32, nrg: u32, tri: WgTri, n: i32, lane: u32) 
         let q = i32(idx % per_band);
         if ((tri.flags & (INTERIOR << e)) != 0u) {
             let l = band_lattice(m2, e, q);
-            wsq_set(nsq, m2, l.x, l.y, wg_band_point(sq, rg, tri, n, e, q));
+            wg_sq_set(nsq, m2, l.x, l.y, wg_band_point(sq, rg, tri, n, e, q));
         }
     }
     // Rings.
     for (var r = lane; r < tri.rings; r += WG_LANES) {
         let c = wring_corner(tri, r);
-        wring_set(nrg, r, wg_ring_point(sq, rg, tri, n, c, r - wro(tri, c)));
+        wg_ring_set(nrg, r, wg_ring_point(sq, rg, tri, n, c, r - wro(tri, c)));
     }
-}
-
-// Area-weighted normal at lattice point (i, j) of the final level, not a corner: `fan_normal`
-// of loop.wgsl over the neighbours in workgroup memory.
-fn wg_grid_normal(sq: u32, flags: u32, n: i32, i: i32, j: i32) -> vec3<f32> {
-    var d = grid_neighbours();
-    var p: array<vec3<f32>, 6>;
-    for (var k = 0u; k < 6u; k++) {
-        p[k] = wsq_at(sq, n, i + d[k].x, j + d[k].y);
-    }
-    return fan_normal(flags, n, i, j, wsq_at(sq, n, i, j), p);
-}
-
-fn wg_corner_normal(sq: u32, rg: u32, tri: WgTri, n: i32, c: u32) -> vec3<f32> {
-    let cr = wcorner(tri, c);
-    let ro = wro(tri, c);
-    let lc = corner_lattice(n, c);
-    let v = wsq_at(sq, n, lc.x, lc.y);
-    var faces = cr.n;
-    if (!cr.closed) {
-        faces = cr.n - 1u;
-    }
-    var s = vec3<f32>(0.0);
-    for (var f = 0u; f < faces; f++) {
-        s = s + cross3(wring_at(rg, ro + f) - v, wring_at(rg, ro + ring_next(f, cr.n)) - v);
-    }
-    return s;
 }
 
 @compute @workgroup_size(64)
@@ -356,14 +337,14 @@ fn patch_wg_main(@builtin(local_invocation_index) lid: u32,
         for (var idx = lane; idx < 6u + tri.rings; idx += WG_LANES) {
             if (idx < 3u) {
                 let lc = corner_lattice(1, idx);
-                wsq_set(sq, 1, lc.x, lc.y, coarse_position(corner(t, idx)));
+                wg_sq_set(sq, 1, lc.x, lc.y, coarse_position(corner(t, idx)));
             } else if (idx < 6u) {
                 let e = idx - 3u;
                 if ((tri.flags & (INTERIOR << e)) != 0u) {
                     let k = topo[params.corner_spokes_off + 3u * t + e];
                     let s = (k + n[e] - 1u) % n[e];
                     let l = band_lattice(1, e, 0);
-                    wsq_set(sq, 1, l.x, l.y, coarse_position(ring_vertex(t, e, s)));
+                    wg_sq_set(sq, 1, l.x, l.y, coarse_position(ring_vertex(t, e, s)));
                 }
             } else {
                 let r = idx - 6u;
@@ -373,7 +354,7 @@ fn patch_wg_main(@builtin(local_invocation_index) lid: u32,
                 } else if (r >= ro.y) {
                     c = 1u;
                 }
-                wring_set(rg, r, coarse_position(ring_vertex(t, c, r - ro[c])));
+                wg_ring_set(rg, r, coarse_position(ring_vertex(t, c, r - ro[c])));
             }
         }
     }
@@ -400,8 +381,8 @@ fn patch_wg_main(@builtin(local_invocation_index) lid: u32,
             if (idx < 3u) {
                 if ((tri.flags & (OWNS_VERTEX << idx)) != 0u) {
                     let lc = corner_lattice(mm, idx);
-                    write_vertex(corner(t, idx), wsq_at(sq, mm, lc.x, lc.y),
-                                 normalize_or_z(wg_corner_normal(sq, rg, tri, mm, idx)));
+                    write_vertex(corner(t, idx), wg_sq_at(sq, mm, lc.x, lc.y),
+                                 normalize_or_z(wg_corner_normal(sq, rg, wcorner(tri, idx), wro(tri, idx), mm, idx)));
                 }
             } else if (idx < 3u + 3u * per_edge) {
                 let e = (idx - 3u) / per_edge;
@@ -409,7 +390,7 @@ fn patch_wg_main(@builtin(local_invocation_index) lid: u32,
                 if ((tri.flags & (OWNS_EDGE << e)) != 0u) {
                     let ebase = params.coarse_vertices + topo[params.edges_off + 3u * t + e] * per_edge;
                     let l = edge_lattice(mm, e, k);
-                    write_vertex(ebase + u32(k - 1), wsq_at(sq, mm, l.x, l.y),
+                    write_vertex(ebase + u32(k - 1), wg_sq_at(sq, mm, l.x, l.y),
                                  normalize_or_z(wg_grid_normal(sq, tri.flags, mm, l.x, l.y)));
                 }
             } else {
@@ -418,7 +399,7 @@ fn patch_wg_main(@builtin(local_invocation_index) lid: u32,
                 let j = p.y + 1;
                 let jm = u32(j - 1);
                 let row = jm * (params.m - 1u) - jm * (jm + 1u) / 2u;
-                write_vertex(interior + row + u32(i - 1), wsq_at(sq, mm, i, j),
+                write_vertex(interior + row + u32(i - 1), wg_sq_at(sq, mm, i, j),
                              normalize_or_z(wg_grid_normal(sq, tri.flags, mm, i, j)));
             }
         }

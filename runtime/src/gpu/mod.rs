@@ -1,42 +1,59 @@
-//! The GPU side of the runtime (feature `gpu`): a wgpu context that prefers a hardware adapter
-//! and falls back to a software one, compute kernels that decode HCE colours, refine flat
-//! objects ([`flat`]) and Loop-subdivide multiresolution objects with their colours
-//! ([`loop_kernel`]), a level-of-detail rule, a headless renderer, and [`scene::GpuScene`], the
-//! GPU resources of a loaded [`crate::asset::Asset`].
+//! The GPU side of the runtime (feature `gpu`), in three layers, each usable on its own:
 //!
-//! Every kernel has a plain-Rust twin that follows the same steps in the same order, so that
-//! tests can compare GPU output with it value by value: [`cpu_reference`] for decoding and flat
-//! refinement, [`hce_geometry::subdivide`] and [`hce_geometry::colour`] for the Loop kernel.
+//! * a scene: [`GpuScene`], the GPU resources of a loaded [`crate::asset::Asset`] (per object
+//!   its level, chosen by [`choose_level`] from a [`Camera`] or fixed, its refined buffers
+//!   reused from frame to frame, one [`SceneDraw`] per instance), and [`render_asset`], which
+//!   draws one headless;
+//! * the kernels of one object: [`LoopKernel`] (Loop subdivision of multiresolution objects
+//!   with their colours) and [`FlatKernel`] (flat objects and plain meshes), each `new` once
+//!   per device, `upload` once per object, `refine_into` per level change;
+//! * a device: [`GpuContext`], which prefers a hardware adapter, falls back to a software one
+//!   and says which, or wraps the caller's own device ([`GpuContext::from_existing`]); and a
+//!   headless renderer ([`render_mesh`], [`render_gpu_mesh`]) for images and thumbnails.
+//!
+//! Every kernel has a plain-Rust twin in `hce-geometry` that follows the same steps in the same
+//! order, so that tests can compare GPU output with it value by value: [`hce_geometry::decode`]
+//! and [`hce_geometry::flat`] for decoding and flat refinement, [`hce_geometry::subdivide`] and
+//! [`hce_geometry::colour`] for the Loop kernel.
+//!
+//! [`hce_geometry::subdivide`]: mod@hce_geometry::subdivide
 //!
 //! The method is Concheiro et al., "Synthesis of multiresolution scenes with global illumination
 //! on a GPU" (GRAPP 2012): colours are chosen per subtriangle by walking the coarse triangle's
 //! breadth-first HCE tree and taking the representative normal closest to the subtriangle's.
 
+// The modules are private: what a viewer, `hce render` and `hce reference` call is re-exported
+// below, one flat list. Test and benchmark support sit behind the `testing` and `bench`
+// features.
+#[cfg(feature = "bench")]
 pub mod bench;
-pub mod context;
-pub mod decode;
-pub mod flat;
-pub mod framing;
-pub mod lod;
-pub mod loop_kernel;
-pub mod render;
-pub mod scene;
+mod context;
+#[cfg(feature = "testing")]
+mod decode;
+mod flat;
+mod framing;
+mod lod;
+mod loop_kernel;
+mod render;
+mod scene;
+#[cfg(feature = "testing")]
 pub mod testing;
 mod util;
+mod wgsl;
 
 pub use context::{AdapterDescription, AdapterKind, ContextOptions, GpuContext};
-pub use decode::{decode_colours, ColourQuery, DecodedColour};
 pub use flat::{refine_flat, refine_flat_with, FlatKernel, FlatObject, FlatOutput, KernelTiming};
+pub use framing::{auto_scene_camera, Placement};
 pub use hce_geometry::flat::RefinedMesh;
 pub use lod::{choose_level, Camera, LodParams};
-pub use loop_kernel::{refine_loop, LoopKernel, LoopMesh, LoopObject, LoopOutput, PatchScheme};
+pub use loop_kernel::{LoopKernel, LoopObject, LoopOutput, PatchScheme};
 pub use render::{
-    render_draws, render_gpu_mesh, render_mesh, tone_map_aces, Framing, GpuMesh, MeshDraw,
+    mesh_bounds, render_gpu_mesh, render_mesh, tone_map_aces, view_projection, Framing, GpuMesh,
     RenderParams, RenderedImage,
 };
 pub use scene::{
-    render_asset, AssetRender, AssetRenderOptions, CameraChoice, GpuScene, LevelChoice,
-    MultiresPath, SceneOptions,
+    render_asset, resolve_camera, AssetRender, AssetRenderOptions, CameraChoice, CameraSource,
+    GpuScene, LevelChoice, MultiresPath, ObjectBuffers, ObjectMesh, SceneDraw, SceneOptions,
 };
 
 /// Everything that can go wrong on the GPU path.

@@ -85,8 +85,9 @@ pub fn tone_map_aces(rgb: [f32; 3], ev: f32) -> [u8; 3] {
     })
 }
 
-/// Bounds of `x, y, z` triples; `None` when empty or not finite.
-pub fn bounds(positions: &[f32]) -> Option<([f32; 3], [f32; 3])> {
+/// Bounds of `x, y, z` triples (a mesh's positions, as [`render_mesh`] takes them); `None` when
+/// empty or not finite.
+pub fn mesh_bounds(positions: &[f32]) -> Option<([f32; 3], [f32; 3])> {
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
     for p in positions.chunks_exact(3) {
@@ -99,7 +100,7 @@ pub fn bounds(positions: &[f32]) -> Option<([f32; 3], [f32; 3])> {
 }
 
 /// The camera [`Framing::Auto`] uses for these bounds and aspect ratio (width / height).
-pub fn auto_camera(lo: [f32; 3], hi: [f32; 3], aspect: f32) -> Camera {
+pub(crate) fn auto_camera(lo: [f32; 3], hi: [f32; 3], aspect: f32) -> Camera {
     let fov = 40.0f32;
     let centre = (Vec3::from(lo) + Vec3::from(hi)) * 0.5;
     let radius = ((Vec3::from(hi) - Vec3::from(lo)).length() * 0.5).max(1e-6);
@@ -182,7 +183,7 @@ pub fn render_mesh(
             "index {bad} >= vertex count {v}"
         )));
     }
-    let bounds = bounds(positions)
+    let bounds = mesh_bounds(positions)
         .ok_or_else(|| GpuError::InvalidParams("mesh has no finite positions".into()))?;
     let make = |label, data: &[u8], usage| {
         use wgpu::util::DeviceExt;
@@ -244,7 +245,7 @@ pub fn render_gpu_mesh(
 
 /// One draw of a scene: a mesh on the GPU (`positions` f32 ×3, linear `colours` f32 ×4, `u32`
 /// indices) placed in the world by `transform` (object to world).
-pub struct MeshDraw<'a> {
+pub(crate) struct MeshDraw<'a> {
     pub positions: &'a wgpu::Buffer,
     pub colours: &'a wgpu::Buffer,
     pub indices: &'a wgpu::Buffer,
@@ -254,7 +255,7 @@ pub struct MeshDraw<'a> {
 
 /// Draws several placed meshes into one image and reads it back. `bounds` (world space) place
 /// the near and far planes and, with [`Framing::Auto`], the camera.
-pub fn render_draws(
+pub(crate) fn render_draws(
     ctx: &GpuContext,
     draws: &[MeshDraw<'_>],
     bounds: ([f32; 3], [f32; 3]),

@@ -21,8 +21,9 @@
 //!
 //! ```no_run
 //! use hce_runtime::asset::Asset;
-//! use hce_runtime::gpu::scene::{GpuScene, LevelChoice, SceneOptions};
-//! use hce_runtime::gpu::{Camera, ContextOptions, GpuContext, LodParams};
+//! use hce_runtime::gpu::{
+//!     Camera, ContextOptions, GpuContext, GpuScene, LevelChoice, LodParams, SceneOptions,
+//! };
 //!
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let asset = Asset::open("baked.glb")?;
@@ -68,11 +69,11 @@ use hce_geometry::subdivide::{subdivide_into, Refined};
 /// How multiresolution objects are refined.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum MultiresPath {
-    /// The GPU Loop kernel ([`LoopKernel`], levels up to [`hce_geometry::subdivide::MAX_LEVEL`]).
+    /// The GPU Loop kernel ([`LoopKernel`], levels up to [`hce_geometry::subdivide::MAX_LOOP_LEVEL`]).
     #[default]
     Gpu,
     /// CPU Loop subdivision and CPU colour application, uploaded as buffers (levels up to
-    /// [`hce_geometry::subdivide::MAX_LEVEL`]). The reference for checking the GPU kernel.
+    /// [`hce_geometry::subdivide::MAX_LOOP_LEVEL`]). The reference for checking the GPU kernel.
     CpuReference,
 }
 
@@ -140,7 +141,9 @@ enum Refiner {
     },
 }
 
-struct SceneObject {
+/// One object of the scene on the GPU: what the level choice needs, its instances and its
+/// refiner.
+struct GpuObject {
     name: String,
     kind: ObjectKind,
     coarse_triangles: u64,
@@ -195,7 +198,7 @@ pub struct ObjectMesh {
 
 /// An asset's GPU resources. See the module documentation.
 pub struct GpuScene {
-    objects: Vec<SceneObject>,
+    objects: Vec<GpuObject>,
     flat: Option<FlatKernel>,
     loop_kernel: Option<LoopKernel>,
     flat_max_level: u32,
@@ -278,7 +281,7 @@ impl GpuScene {
                     }
                 }
             };
-            objects.push(SceneObject {
+            objects.push(GpuObject {
                 name: o.name().to_owned(),
                 kind: o.kind(),
                 coarse_triangles: o.object.triangles.len() as u64,
@@ -414,10 +417,10 @@ impl GpuScene {
                 if out.as_ref().is_some_and(|b| b.level == level) {
                     return Ok(());
                 }
-                if level > hce_geometry::subdivide::MAX_LEVEL {
+                if level > hce_geometry::subdivide::MAX_LOOP_LEVEL {
                     return Err(GpuError::LevelTooHigh {
                         level,
-                        max: hce_geometry::subdivide::MAX_LEVEL,
+                        max: hce_geometry::subdivide::MAX_LOOP_LEVEL,
                     });
                 }
                 subdivide_into(&object.mesh, level, scratch).map_err(|e| invalid(&name, e))?;

@@ -1,4 +1,6 @@
-//! Test support: a GPU context or a visible skip.
+//! Test support (feature `testing`): a GPU context or a visible skip, synthetic objects with
+//! random HCE trees (also the inputs of `hce bench-gpu`), and the colour-decoding kernel on its
+//! own ([`decode_colours`]), checked against its CPU twin by `tests/gpu_kernels.rs`.
 //!
 //! GPU tests must run in CI (Mesa lavapipe is enough) and must not silently pass when the
 //! runner lost its driver, so `HCE_REQUIRE_GPU=1` turns "no adapter" into a failure. Without it
@@ -6,11 +8,13 @@
 
 use super::{ContextOptions, GpuContext, GpuError};
 
+pub use super::decode::{decode_colours, ColourQuery, DecodedColour};
+
 /// The environment variable that makes a missing adapter a test failure.
-pub const REQUIRE_GPU_ENV: &str = "HCE_REQUIRE_GPU";
+const REQUIRE_GPU_ENV: &str = "HCE_REQUIRE_GPU";
 
 /// Whether `HCE_REQUIRE_GPU` asks for a GPU (`1`, `true` or `yes`).
-pub fn gpu_required() -> bool {
+fn gpu_required() -> bool {
     std::env::var(REQUIRE_GPU_ENV)
         .map(|v| matches!(v.trim(), "1" | "true" | "yes"))
         .unwrap_or(false)

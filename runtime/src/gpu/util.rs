@@ -224,3 +224,12 @@ pub fn lighting_words(
         limit: u64::from(u32::MAX) * 4,
     })
 }
+
+/// The triangle records as the `array<TriRecord>` words the kernels read.
+pub fn records_words(object: &hce_format::Object) -> Vec<u32> {
+    object
+        .triangles
+        .iter()
+        .flat_map(|r| [r.bits_start, r.colour_start, r.normal_start, r.normal_count])
+        .collect()
+}

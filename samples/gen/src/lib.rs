@@ -4,6 +4,7 @@
 //! samples) and a small glTF 2.0 binary writer. The `gen-samples` binary writes the three
 //! `.glb` files committed under `samples/`; `gen-samples room --mesh PATH -o OUT.glb` writes a
 //! test room around any OBJ ([`room`]).
+#![forbid(unsafe_code)]
 
 pub mod chess;
 pub mod cornell;

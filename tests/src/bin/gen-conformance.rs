@@ -1,5 +1,6 @@
 //! Rewrites `conformance/` (files and `manifest.json`) from the examples, the bundled Cornell
 //! box and their mutations: `cargo run -p hce-tests --bin gen-conformance`.
+#![forbid(unsafe_code)]
 
 use std::path::Path;
 

@@ -48,9 +48,7 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
     use anyhow::Context;
     use hce_geometry::lighting::Reconstruction;
     use hce_meshio::plain as plain_mesh;
-    use hce_runtime::gpu::bench::{
-        bench_flat_with, bench_loop_with, write_bandwidth, BenchRow, Timer,
-    };
+    use hce_runtime::gpu::bench::{bench_flat, bench_loop, write_bandwidth, BenchRow, Timer};
     use hce_runtime::gpu::testing::{grid, random_object, RandomTrees};
     use hce_runtime::gpu::PatchScheme;
     use hce_runtime::gpu::{ContextOptions, GpuContext};
@@ -151,7 +149,7 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
         };
         let mut all = Vec::new();
         for &(rname, reconstruction) in reconstructions {
-            let rows = bench_flat_with(&ctx, &object, &levels, args.repeats, reconstruction)?;
+            let rows = bench_flat(&ctx, &object, &levels, args.repeats, reconstruction)?;
             print(
                 &format!(
                     "flat refinement, {rname} colours (positions, faces + HCE decoding, vertex \
@@ -213,7 +211,7 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
             let mut all = Vec::new();
             for &(rname, reconstruction) in reconstructions {
                 let rows =
-                    bench_loop_with(&ctx, &object, &levels, args.repeats, scheme, reconstruction)?;
+                    bench_loop(&ctx, &object, &levels, args.repeats, scheme, reconstruction)?;
                 print(
                     &format!(
                         "Loop subdivision, {name} patches, {rname} colours (patches: positions + \

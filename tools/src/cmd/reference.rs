@@ -13,7 +13,7 @@
 //! ([`hce_bake::reference`]).
 //!
 //! The camera and the pixel grid are the renderer's: the same camera choice
-//! ([`hce_runtime::gpu::scene::resolve_camera`]) and one ray per pixel through its centre, from
+//! ([`hce_runtime::gpu::resolve_camera`]) and one ray per pixel through its centre, from
 //! the inverse of the renderer's own view-projection matrix, so each pixel looks at the point
 //! the rasteriser samples. A pixel holds the outgoing radiance `Le + ρ E / π` there, averaged
 //! over `--samples` paths: the units of the baked colours, which `hce render -o x.exr` writes
@@ -32,7 +32,7 @@ use clap::Args;
 use glam::{DMat4, DVec3, DVec4, Mat3, Mat4, Vec3};
 use hce_bake::import::{import_scene, ImportOptions, ToSolver};
 use hce_bake::reference::PathTracer;
-use hce_bake::{Scene, SceneObject};
+use hce_bake::{Scene, SolverObject};
 use hce_format::ObjectKind;
 use hce_runtime::asset::{Asset, AssetError};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -96,11 +96,11 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
         }
     }
     let (width, height) = parse_size(&args.size)?;
-    if args.level > hce_geometry::subdivide::MAX_LEVEL {
+    if args.level > hce_geometry::subdivide::MAX_LOOP_LEVEL {
         bail!(
             "--level {} is out of range; use 0..={}",
             args.level,
-            hce_geometry::subdivide::MAX_LEVEL
+            hce_geometry::subdivide::MAX_LOOP_LEVEL
         );
     }
     if args.samples == 0 {
@@ -120,10 +120,9 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
     let t0 = Instant::now();
     let (scene, placed, normals) = build_scene(&asset, &args.file, args.level)?;
     let aspect = width as f32 / height as f32;
-    let (camera, _) = hce_runtime::gpu::scene::resolve_camera(&asset, choice, aspect)?;
+    let (camera, _) = hce_runtime::gpu::resolve_camera(&asset, choice, aspect)?;
     let bounds = asset.bounds().context("the asset has nothing to draw")?;
-    let view_proj =
-        hce_runtime::gpu::render::view_projection(&camera, bounds.min, bounds.max, aspect);
+    let view_proj = hce_runtime::gpu::view_projection(&camera, bounds.min, bounds.max, aspect);
     let inv = view_proj.as_dmat4().inverse();
     let eye = Vec3::from(camera.eye).as_dvec3();
 
@@ -390,7 +389,7 @@ fn build_scene(
                 triangles: n,
             });
             normals.push(vertex_normals);
-            scene.objects.push(SceneObject {
+            scene.objects.push(SolverObject {
                 name: object.name.clone(),
                 multires,
                 positions,

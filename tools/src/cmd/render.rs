@@ -283,15 +283,15 @@ fn run_baked(
     asset: &hce_runtime::asset::Asset,
     camera: hce_runtime::gpu::CameraChoice,
 ) -> Result<()> {
-    use hce_runtime::gpu::scene::CameraSource;
-    use hce_runtime::gpu::{render_asset, AssetRenderOptions};
+    use hce_runtime::gpu::{render_asset, AssetRenderOptions, CameraSource};
 
     let (width, height) = parse_size(&args.size)?;
     for w in &asset.warnings {
         eprintln!("warning: {w}");
     }
-    if args.level.is_some_and(|l| l > 15) {
-        bail!("--level must be 0 to 15");
+    let max = hce_geometry::decode::MAX_PATH_LEVEL;
+    if args.level.is_some_and(|l| l > max) {
+        bail!("--level must be 0 to {max}");
     }
     let ctx = open_context(args.software)?;
     let result = render_asset(
@@ -346,8 +346,8 @@ fn run_baked(
 #[cfg(feature = "gpu")]
 fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Result<()> {
     use hce_runtime::gpu::{
-        choose_level, framing::auto_scene_camera, render::bounds, render_gpu_mesh, CameraChoice,
-        FlatKernel, Framing, GpuMesh, LodParams, RenderParams,
+        auto_scene_camera, choose_level, mesh_bounds, render_gpu_mesh, CameraChoice, FlatKernel,
+        Framing, GpuMesh, LodParams, RenderParams,
     };
 
     use hce_meshio::plain as plain_mesh;
@@ -371,7 +371,7 @@ fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Resul
     }
     let ctx = open_context(args.software)?;
 
-    let (lo, hi) = bounds(&object.mesh.positions).context("mesh has no finite positions")?;
+    let (lo, hi) = mesh_bounds(&object.mesh.positions).context("mesh has no finite positions")?;
     let aspect = width as f32 / height as f32;
     let view = match camera {
         CameraChoice::Explicit(c) => c,
@@ -391,7 +391,7 @@ fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Resul
     let level = match args.level {
         Some(level) => {
             let out = f << (2 * level.min(31));
-            if level > 15 || out > args.max_triangles {
+            if level > hce_geometry::decode::MAX_PATH_LEVEL || out > args.max_triangles {
                 bail!(
                     "--level {level} would make {out} triangles from {f}; the limit is {} \
                      (raise --max-triangles or lower --level)",

@@ -6,6 +6,7 @@
 //! `gen-samples room --mesh MESH.obj -o ROOM.glb [--name NAME] [--turn DEG]` writes instead a test room
 //! around one mesh ([`hce_samples::room`]): a closed room lit by a ceiling light, the mesh
 //! turned `DEG` degrees about +Y (default 0), scaled to fit, standing on the floor, multiresolution, and a camera looking at it.
+#![forbid(unsafe_code)]
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
