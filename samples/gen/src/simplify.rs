@@ -290,8 +290,10 @@ pub fn simplify(mesh: &Mesh, target: usize) -> Mesh {
             push(&s, &mut heap, keep, w);
         }
     }
-    let mut out = Mesh::default();
-    out.positions = s.pos;
+    let mut out = Mesh {
+        positions: s.pos,
+        ..Default::default()
+    };
     for (t, alive) in s.tris.iter().zip(&s.alive) {
         if *alive {
             out.triangle(*t, 0);
