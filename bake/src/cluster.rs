@@ -38,8 +38,11 @@ pub struct Cluster {
 
 impl Cluster {
     /// Estimated area of front faces seen from direction `w` (unit, from the viewer towards
-    /// the cluster reversed: the direction light leaves the cluster in). Exact for
-    /// axis-aligned geometry; an overestimate by at most √3 otherwise.
+    /// the cluster reversed: the direction light leaves the cluster in). The smaller of two
+    /// upper bounds: the per-axis sums (exact for axis-aligned geometry, at most √3 too large
+    /// otherwise), and the area times the largest cosine the normal cone allows (exact for a
+    /// planar cluster, and zero seen from behind it, where the per-axis sums still count the
+    /// axes along which its faces turn towards `w`).
     pub fn projected_area(&self, w: Vec3) -> f32 {
         let pick = |c: f32, i: usize| {
             if c >= 0.0 {
@@ -48,7 +51,14 @@ impl Cluster {
                 -c * self.proj[2 * i + 1]
             }
         };
-        (pick(w.x, 0) + pick(w.y, 1) + pick(w.z, 2)).min(self.area)
+        let axes = pick(w.x, 0) + pick(w.y, 1) + pick(w.z, 2);
+        let theta = self.cone_axis.dot(w).clamp(-1.0, 1.0).acos();
+        let cone = if self.cone_angle >= std::f32::consts::PI {
+            1.0
+        } else {
+            (theta - self.cone_angle).max(0.0).cos().max(0.0)
+        };
+        axes.min(self.area * cone)
     }
 
     /// Whether every point within `r_radius` of `r_centre` lies behind every triangle of the
@@ -140,6 +150,22 @@ impl ClusterTree {
         let cl = &self.clusters[c as usize];
         let p = self.position[root as usize];
         p >= cl.first && p < cl.first + cl.count
+    }
+
+    /// The clusters holding root triangle `root`, from the top of the hierarchy down.
+    pub fn ancestors(&self, root: u32) -> Vec<u32> {
+        let mut out = Vec::new();
+        let mut at = self.top;
+        while let ClusterChild::Cluster(c) = at {
+            out.push(c);
+            let [a, b] = self.clusters[c as usize].children;
+            at = match a {
+                ClusterChild::Cluster(x) if self.holds(x, root) => a,
+                ClusterChild::Root(x) if x == root => a,
+                _ => b,
+            };
+        }
+        out
     }
 
     /// Picks a triangle of cluster `c` with probability proportional to area (`u` in [0, 1)).
@@ -283,6 +309,33 @@ mod tests {
         assert_eq!(t.pick(top, 0.999), 9);
         assert_eq!(t.pick(top, 0.0), 0);
         assert!(t.holds(top, 3));
+        // Every root's ancestors start at the top, each holds it, and each is inside the last.
+        for root in 0..10 {
+            let up = t.ancestors(root);
+            assert_eq!(up[0], top);
+            assert!(up.iter().all(|&c| t.holds(c, root)));
+            assert!(up
+                .windows(2)
+                .all(|w| t.clusters[w[1] as usize].count < t.clusters[w[0] as usize].count));
+            // The last one splits into two children, one of which is the root itself.
+            let last = &t.clusters[*up.last().unwrap() as usize];
+            assert!(last.children.contains(&ClusterChild::Root(root)));
+        }
+        // A planar cluster tilted away from the viewer shows no front face, although its faces
+        // turn towards the viewer along one axis (the per-axis sums alone counted that).
+        let (s30, c30) = (0.5f32, 0.75f32.sqrt());
+        let tilted: Vec<[Vec3; 3]> = tris
+            .iter()
+            .map(|t| t.map(|v| Vec3::new(v.x, v.y * c30, -v.y * s30)))
+            .collect();
+        let tt = ClusterTree::build(&tilted);
+        let ClusterChild::Cluster(ttop) = tt.top else {
+            panic!("ten triangles make a cluster")
+        };
+        let tc = &tt.clusters[ttop as usize];
+        // Normal (0, 0.5, 0.87): seen along it, the whole area; from (0, 0.5, -0.87), behind.
+        assert!((tc.projected_area(Vec3::new(0.0, s30, c30)) - 27.5).abs() < 1e-3);
+        assert_eq!(tc.projected_area(Vec3::new(0.0, s30, -c30)), 0.0);
         // All triangles face +z: a receiver far below them is behind every one.
         assert!(c.faces_away_from(Vec3::new(50.0, 0.5, -100.0), 1.0));
         assert!(!c.faces_away_from(Vec3::new(50.0, 0.5, 100.0), 1.0));

@@ -7,8 +7,10 @@
 //! receiver area, as power) exceeds `bf_epsilon` times the scene's reference power. Two more
 //! rules bound a link's error rather than its power: for near pairs, a receiver over which
 //! the form factor varies is split, and a source whose radiance varies in the previous
-//! solution is split (that error weighed against the whole coarse receiver triangle, so that
-//! a finely split receiver cannot hide it; BENCHMARKS.md, Cornell box). The system is solved
+//! solution is split (that error weighed against every receiver that makes it: the whole
+//! coarse receiver triangle, so that a finely split receiver cannot hide it, BENCHMARKS.md,
+//! Cornell box; and the coarse triangles of the same object around it that see the source
+//! from about the same place, so that a finely tessellated object cannot either). The system is solved
 //! by gathering over links and push-pull, and links are refined again against the solution.
 //! Instead of linking every pair of input triangles up front, receivers start from
 //! the top of a cluster hierarchy ([`crate::cluster`], after Smits et al. 1994) and open
@@ -231,6 +233,11 @@ struct Ctx<'a> {
     params: &'a BakeParams,
     roots: Vec<Root>,
     clusters: ClusterTree,
+    /// Per scene object, a cluster hierarchy over its own triangles alone (indices local to
+    /// the object) and the index of its first root. The scene's hierarchy mixes a room's
+    /// large triangles with an object's small ones, so its clusters around a small receiver
+    /// hold only a sliver of the object; these give the receivers around one (`refine_root`).
+    object_clusters: Vec<(ClusterTree, u32)>,
     occ: Occluders,
     min_area: f32,
     /// Distances to a plane below this count as lying in it (rounding of coplanar
@@ -468,6 +475,17 @@ impl Ctx<'_> {
         };
         let mut stack = vec![(ElemKey::root(r), top)];
         let root = &self.roots[r as usize];
+        // Radius and area of the clusters of its own object holding this root, largest
+        // first: the receivers around it (see the source variation rule below).
+        let (own, first) = &self.object_clusters[root.object];
+        let neighbourhood: Vec<(f32, f32)> = own
+            .ancestors(r - first)
+            .iter()
+            .map(|&c| {
+                let c = &own.clusters[c as usize];
+                (c.radius(), c.area)
+            })
+            .collect();
         while let Some((recv, src)) = stack.pop() {
             let rt = self.elem_corners(recv);
             let r_area = root.area / 4f32.powi(recv.level as i32);
@@ -550,13 +568,29 @@ impl Ctx<'_> {
                     }
                     // The source's radiance varies (a lit wall with a shadow on it): a link
                     // gathers its average, and only a smaller source resolves that. The
-                    // estimate is the power the error would carry into the whole coarse
-                    // receiver triangle, not into this element: receivers are split finely
-                    // near sources (the rule above), and with their own small areas every
-                    // piece would pass while the error, the same in each, stayed.
+                    // estimate is the power the error would carry into every receiver that
+                    // makes the same error, not into this element alone: receivers are split
+                    // finely near sources (the rule above), and with their own small areas
+                    // every piece would pass while the error, the same in each, stayed. The
+                    // same holds across coarse triangles: the many small ones of a curved
+                    // object all gather the mean of a floor they see from about the same
+                    // place, although they mostly see its bright middle under the light
+                    // (weighed against one coarse triangle, the sides of the objects in
+                    // `gen-samples room` came out 5% too dark; `tests/small_receivers.rs`).
+                    // So the error is weighed against the largest cluster of the receiver's
+                    // own object around it whose radius is below `cluster_opening` times the
+                    // larger of the source's distance and radius (the receivers that see the
+                    // source from about the same place, as the opening criterion judges a
+                    // cluster of sources), or against the coarse triangle if that is larger.
                     if s_splittable {
                         let spread = self.src_spread(trees, spreads, sk);
-                        let svar = f_bound * spread * root.area * std::f32::consts::PI;
+                        let s_radius = st.iter().map(|v| (*v - sc).length()).fold(0.0, f32::max);
+                        let reach = self.params.cluster_opening * d2.sqrt().max(s_radius);
+                        let sharing = neighbourhood
+                            .iter()
+                            .find(|(radius, _)| *radius < reach)
+                            .map_or(root.area, |&(_, area)| area.max(root.area));
+                        let svar = f_bound * spread * sharing * std::f32::consts::PI;
                         if svar > eps_power {
                             for c in (0..4).rev() {
                                 stack.push((recv, Source::Elem(sk.child(c))));
@@ -1083,6 +1117,19 @@ pub fn bake_with_progress(
         scene,
         params,
         clusters: ClusterTree::build(&all_tris),
+        object_clusters: {
+            let mut first = 0usize;
+            scene
+                .objects
+                .iter()
+                .map(|o| {
+                    let n = o.triangles.len();
+                    let tree = ClusterTree::build(&all_tris[first..first + n]);
+                    first += n;
+                    (tree, (first - n) as u32)
+                })
+                .collect()
+        },
         occ: Occluders::new(all_tris.iter().copied()),
         min_area: (total_area * f64::from(params.min_area_fraction)) as f32,
         plane_eps: {

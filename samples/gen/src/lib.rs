@@ -15,6 +15,7 @@ pub mod room;
 pub mod scene;
 pub mod scenes;
 pub mod shapes;
+pub mod simplify;
 pub mod spoon;
 pub mod teapot;
 mod teapot_data;

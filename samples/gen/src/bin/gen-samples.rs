@@ -3,9 +3,12 @@
 //!
 //! Usage: `cargo run -p hce-samples --bin gen-samples [-- OUT_DIR]`
 //!
-//! `gen-samples room --mesh MESH.obj -o ROOM.glb [--name NAME] [--turn DEG]` writes instead a test room
-//! around one mesh ([`hce_samples::room`]): a closed room lit by a ceiling light, the mesh
-//! turned `DEG` degrees about +Y (default 0), scaled to fit, standing on the floor, multiresolution, and a camera looking at it.
+//! `gen-samples room --mesh MESH.obj -o ROOM.glb [--name NAME] [--turn DEG] [--triangles N]` writes
+//! instead a test room around one mesh ([`hce_samples::room`]): a closed room lit by a ceiling
+//! light, the mesh turned `DEG` degrees about +Y (default 0), scaled to fit, standing on the
+//! floor, multiresolution, and a camera looking at it. With `--triangles N` the mesh is first
+//! simplified to at most `N` triangles ([`hce_samples::simplify`]), so that a fine scan becomes
+//! the coarse control mesh a multiresolution object is meant to be.
 #![forbid(unsafe_code)]
 
 use std::io::Write;
@@ -43,10 +46,12 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     result
 }
 
-/// `room --mesh PATH -o OUT.glb [--name NAME] [--turn DEG]`.
+/// `room --mesh PATH -o OUT.glb [--name NAME] [--turn DEG] [--triangles N]`.
 fn room(args: &[String]) -> Result<()> {
-    let usage = "usage: gen-samples room --mesh MESH.obj -o ROOM.glb [--name NAME] [--turn DEG]";
+    let usage = "usage: gen-samples room --mesh MESH.obj -o ROOM.glb [--name NAME] [--turn DEG] \
+                 [--triangles N]";
     let (mut mesh, mut out, mut name, mut turn) = (None, None, None, 0.0);
+    let mut triangles: Option<usize> = None;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let value = it
@@ -63,6 +68,17 @@ fn room(args: &[String]) -> Result<()> {
                     .filter(|t| t.is_finite())
                     .with_context(|| format!("--turn takes degrees; {usage}"))?
             }
+            "--triangles" => {
+                triangles = Some(
+                    value?
+                        .parse::<usize>()
+                        .ok()
+                        .filter(|&n| n >= 4)
+                        .with_context(|| {
+                            format!("--triangles takes a count of 4 or more; {usage}")
+                        })?,
+                )
+            }
             _ => anyhow::bail!("unknown argument {a:?}; {usage}"),
         }
     }
@@ -77,13 +93,21 @@ fn room(args: &[String]) -> Result<()> {
     });
     let text = std::fs::read_to_string(&mesh_path)
         .with_context(|| format!("{}: cannot read", mesh_path.display()))?;
-    let mesh = hce_samples::room::parse_obj(&text)
+    let mut mesh = hce_samples::room::parse_obj(&text)
         .with_context(|| format!("{}: not a usable OBJ", mesh_path.display()))?;
+    let input_triangles = mesh.triangles.len();
+    if let Some(n) = triangles {
+        mesh = hce_samples::simplify::simplify(&mesh, n);
+    }
     let scene = hce_samples::room::room_with_mesh(&name, &mesh, turn);
     let bytes = hce_samples::glb::write_glb(&scene).context("cannot build the GLB")?;
     write_atomically(&out, &bytes)?;
+    let simplified = match triangles {
+        Some(_) => format!(", simplified from {input_triangles}"),
+        None => String::new(),
+    };
     println!(
-        "{}: {} bytes, {} triangles, '{name}' {} triangles (multires)",
+        "{}: {} bytes, {} triangles, '{name}' {} triangles (multires{simplified})",
         out.display(),
         bytes.len(),
         scene.triangle_count(),
