@@ -15,13 +15,13 @@
 use glam::Vec3;
 use hce_bake::element::ElemKey;
 use hce_bake::formfactor::{point_to_polygon, stratified_points};
-use hce_bake::{bake, BakeParams, Scene, SceneObject};
+use hce_bake::{bake, BakeParams, Scene, SolverObject};
 
 const RHO: f32 = 0.5;
 
 /// A UV sphere of `rings` rings and `2 rings` segments (`4 rings² − 4 rings` triangles),
 /// counter-clockwise seen from outside.
-fn ball(c: Vec3, r: f32, rings: u32) -> SceneObject {
+fn ball(c: Vec3, r: f32, rings: u32) -> SolverObject {
     let segs = rings * 2;
     let mut pos = Vec::new();
     let mut tris = Vec::new();
@@ -46,7 +46,7 @@ fn ball(c: Vec3, r: f32, rings: u32) -> SceneObject {
             }
         }
     }
-    let mut o = SceneObject::new("ball", pos, tris, [RHO; 3]);
+    let mut o = SolverObject::new("ball", pos, tris, [RHO; 3]);
     o.multires = true;
     o
 }
@@ -54,7 +54,7 @@ fn ball(c: Vec3, r: f32, rings: u32) -> SceneObject {
 fn scene() -> Scene {
     // An 8 m floor facing up, two triangles.
     let h = 4.0;
-    let floor = SceneObject::new(
+    let floor = SolverObject::new(
         "floor",
         vec![[-h, 0.0, -h], [-h, 0.0, h], [h, 0.0, h], [h, 0.0, -h]],
         vec![[0, 1, 2], [0, 2, 3]],
@@ -67,7 +67,7 @@ fn scene() -> Scene {
     let (s30, c30) = (0.5, 0.75f32.sqrt());
     // In the lamp's plane: along z, and along x tilted up by 30 degrees.
     let (u, w) = (Vec3::new(c30, s30, 0.0) * e, Vec3::Z * e);
-    let lamp = SceneObject::new(
+    let lamp = SolverObject::new(
         "lamp",
         [c - u - w, c - u + w, c + u + w, c + u - w]
             .map(|p| p.to_array())
