@@ -1,6 +1,6 @@
 // Vertex colours of a refined object: the area-weighted mean of the colours of the fine
-// triangles around each output vertex, across coarse edges and vertices (runtime/src/colour.rs,
-// cpu_reference.rs `incident_paths`), shared by flat.wgsl and loop.wgsl. A pure gather with one
+// triangles around each output vertex, across coarse edges and vertices (geometry/src/colour.rs,
+// geometry/src/lattice.rs `incident_paths`), shared by flat.wgsl and loop.wgsl. A pure gather with one
 // writer per vertex and a fixed order of summation, so the result does not depend on scheduling.
 //
 // This file is prepended after hce_tree.wgsl, hce_light.wgsl and hce_lattice.wgsl to a kernel
@@ -31,7 +31,7 @@ fn acc_add(acc: ptr<function, Acc>, g: u32) {
 }
 
 // Step 2: add the fine triangles of coarse triangle t around lattice point (b, c), in the fixed
-// order of cpu_reference::incident_paths: up triangles at (b, c), (b − 1, c), (b, c − 1), then
+// order of hce_geometry::lattice::incident_paths: up triangles at (b, c), (b − 1, c), (b, c − 1), then
 // down triangles at (b, c), (b + 1, c), (b, c + 1).
 fn gather(acc: ptr<function, Acc>, t: u32, b: i32, c: i32) {
     let area_before = (*acc).area;

@@ -1,5 +1,5 @@
 // The 1-to-4 lattice of a refined coarse triangle and the numbering of its output vertices,
-// shared by flat.wgsl and loop.wgsl (cpu_reference.rs and subdivide.rs number them alike).
+// shared by flat.wgsl and loop.wgsl (the twin of geometry/src/lattice.rs).
 //
 // With n = 2^L, a point of coarse triangle t = (v0, v1, v2) has lattice coordinates (b, c),
 // a = n − b − c. Output vertices are [coarse][edge points, E × (n − 1), counted from the edge

@@ -1,6 +1,6 @@
 // Smooth reconstruction of the baked lighting (SPEC.md, Appendix G), shared by the kernels that
 // colour refined vertices. Prepended to a kernel that declares, with this name:
-//   hce_light: array<u32>   the object's lighting table (runtime/src/lighting.rs `to_words`):
+//   hce_light: array<u32>   the object's lighting table (geometry/src/lighting.rs `to_words`):
 //                           word 0 where the point indices start, word 1 where the models
 //                           start; then per coarse triangle the word of its tree's node 0; the
 //                           node words (a subdivided node: its first child's number; a leaf:
