@@ -1,16 +1,20 @@
-//! A finely tessellated ball beside a bright spot on a large floor (issue 11's darkening of
-//! curved objects): the ball gathers all its light from the floor, whose radiance varies from a
-//! spot-lit patch to dim far corners, while each of the ball's coarse triangles is tiny. The
-//! power-based refinement oracle weighed a source's radiance variation against the receiving
-//! coarse triangle alone, so the floor stayed one source for every ball triangle, and the ball
-//! gathered the floor's mean radiance instead of the bright patch it faces (the sides of the
-//! multiresolution objects in `gen-samples room` were 5% too dark that way, BENCHMARKS.md).
+//! A finely tessellated ball beside a bright patch on a large floor (issue 11's darkening of
+//! curved objects): a lamp tilted away from the ball lights a patch of the floor about a metre
+//! across, so the floor's radiance runs from that patch to dim far corners, and the ball, which
+//! sees only the floor and the lamp's black back, gathers all its light from it while each of
+//! its coarse triangles is tiny. The refinement oracle weighed a source's radiance variation
+//! against the receiving coarse triangle alone, so the floor stayed one source for every ball
+//! triangle and the ball gathered the floor's mean radiance instead of the bright patch it
+//! faces: 63% too little on the sides facing the patch (the sides of the multiresolution
+//! objects in `gen-samples room` were 5% too dark that way). (With a ball of half the size,
+//! this scene also showed a cluster seen from behind sending light: the lamp's two triangles,
+//! one cluster, gave the ball 2.4 times what the floor gives it; `cluster.rs` tests that.)
 //!
 //! The check is on transport alone, so it is exact whatever the floor's own solution: the ball
 //! is convex and nothing else stands in the scene, so what a point of a ball triangle gathers
-//! is the sum, over the floor's baked leaf elements, of the analytic point-to-polygon form
-//! factor times the leaf's radiance. Averaged over each ball triangle and compared with the
-//! triangle's baked radiance over its reflectance.
+//! is the sum, over the baked leaf elements of the floor and the lamp, of the analytic
+//! point-to-polygon form factor (zero from behind) times the leaf's radiance. Averaged over
+//! each ball triangle and compared with the triangle's baked radiance over its reflectance.
 
 use glam::Vec3;
 use hce_bake::element::ElemKey;
@@ -110,7 +114,7 @@ fn leaves(scene: &Scene, res: &hce_bake::BakeResult, o: usize) -> Vec<([Vec3; 3]
 fn a_finely_tessellated_ball_gathers_the_bright_patch_it_faces() {
     let scene = scene();
     let res = bake(&scene, &BakeParams::default()).unwrap();
-    // Everything the ball sees: the floor's leaves and the lamp.
+    // Everything in the scene but the ball (the lamp's back sends nothing).
     let mut sources = leaves(&scene, &res, 0);
     sources.extend(leaves(&scene, &res, 1));
     let ball = &scene.objects[2];
