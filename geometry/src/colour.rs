@@ -10,7 +10,7 @@
 //! * Concheiro et al. Synthesis of multiresolution scenes with global illumination on a GPU.
 //!   GRAPP 2012, section 4 (the nearest-normal rule).
 //!
-//! Two reconstructions (SPEC.md, Appendix G):
+//! Two reconstructions (SPEC.md, Appendix G), and a third to compare them with:
 //!
 //! * [`Reconstruction::Smooth`] (the default): every corner of every level-`L` subtriangle gets
 //!   the value of the field of [`crate::lighting`] at its lattice point, for its vertex's unit
@@ -24,6 +24,9 @@
 //!   leaf; it takes the colour of the representative normal with the largest dot product with its
 //!   own face normal; each vertex averages the colours of its incident subtriangles weighted by
 //!   their areas (across coarse-triangle borders, since refined vertices are shared there).
+//! * [`Reconstruction::Gouraud`], for comparison only (not in SPEC.md): the smooth procedure
+//!   over a table of each leaf's colour for its triangle's geometric normal, without slopes:
+//!   classic radiosity shading of one colour per element (Cohen & Wallace 1993, section 9.2).
 
 use hce_format::{rgb9e5, Object, TreeError};
 
@@ -120,8 +123,8 @@ pub fn apply_baked_colours_with(
 ) -> Result<Vec<[f32; 3]>, ColourError> {
     check_refined(object, refined, level)?;
     match reconstruction {
-        Reconstruction::Smooth => {
-            let table = LightingTable::build(object)?;
+        Reconstruction::Smooth | Reconstruction::Gouraud => {
+            let table = LightingTable::build_with(object, reconstruction)?;
             smooth_colours(object, &table, refined, level)
         }
         Reconstruction::NearestNormal => nearest_normal_colours(object, refined, level),

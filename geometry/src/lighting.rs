@@ -12,23 +12,27 @@
 //!
 //! Two steps, both linear in the stored colours:
 //!
-//! * **Over normals**, per coarse triangle: the `n` colours `B_j` of a tree node, stored for the
-//!   triangle's representative normals `n_j` (Padrón et al., "Hierarchical radiosity for
-//!   multiresolution systems based on normal tests", 2010), are fitted by a linear function of
-//!   the normal, `B(n) = c + G n`, by ridge-regularised least squares. Irradiance is a very
-//!   smooth function of the normal (Ramamoorthi & Hanrahan, "An efficient representation for
-//!   irradiance environment maps", SIGGRAPH 2001: its first spherical-harmonic bands hold it to
-//!   a few percent), and over the spread of normals one coarse triangle's subtriangles cover,
-//!   the constant and linear band carry it. The ridge term keeps directions the set does not
-//!   span (a triangle with one normal, a cylinder's coplanar set, the radial direction of unit
-//!   normals) at zero slope.
-//! * **Over positions**, per object: every leaf element gets a model at each of its three
-//!   corners, the area-weighted average of the leaves meeting there (across coarse-triangle
-//!   borders, except across sharp edges and, for flat objects, folds), and a point inside a leaf
-//!   interpolates its leaf's corners linearly. A corner that lies inside the edge of a larger
-//!   leaf (a T-vertex) takes the value interpolated along that edge, so the field is continuous
-//!   everywhere (Cohen & Wallace, "Radiosity and Realistic Image Synthesis", 1993, section 9.2:
-//!   nodal averaging and T-vertices).
+//! * **A fit over normals at every leaf corner**, per object: the `n` colours `B_j` of a tree
+//!   node, stored for its coarse triangle's representative normals `n_j` (Padrón et al.,
+//!   "Hierarchical radiosity for multiresolution systems based on normal tests", 2010), are
+//!   samples of the node's radiance as a function of the normal. Each corner point of the leaf
+//!   elements pools the samples of every leaf meeting there (across coarse-triangle borders,
+//!   except across sharp edges and, for flat objects, folds), each leaf weighted by its area,
+//!   and fits them by one linear function of the normal, `B(n) = c + G n`, by ridge-regularised
+//!   least squares. Irradiance is a very smooth function of the normal (Ramamoorthi &
+//!   Hanrahan, "An efficient representation for irradiance environment maps", SIGGRAPH 2001:
+//!   its first spherical-harmonic bands hold it to a few percent), and over the normals around
+//!   one point the constant and linear band carry it. Pooling gives the fit the normals on
+//!   every side of the point: a vertex's normal lies among them instead of beyond one
+//!   triangle's set (averaging per-triangle fits extrapolated each to its neighbours' normals,
+//!   which at folds of a coarse mesh made a quarter of the RMS error against a path tracer), and a
+//!   triangle with a single normal still gets the slope its neighbours show. The ridge term
+//!   keeps directions the normals do not span at zero slope.
+//! * **Over positions**: a point inside a leaf interpolates its leaf's corner models linearly.
+//!   A corner that lies inside the edge of a larger leaf (a T-vertex) takes the value
+//!   interpolated along that edge, so the field is continuous everywhere (Cohen & Wallace,
+//!   "Radiosity and Realistic Image Synthesis", 1993, section 9.2: nodal averaging and
+//!   T-vertices).
 //!
 //! A refined vertex with unit normal `n` at lattice point `p` of coarse triangle `t` then gets
 //! `max(0, c(p) + G(p) n)`, evaluated per channel. The corner models are computed once per
@@ -49,8 +53,8 @@ const TREE_LATTICE: i32 = 1 << TREE_LATTICE_BITS;
 /// the kernels accept (15) and every tree depth (12).
 pub const EVAL_LATTICE_BITS: u32 = 16;
 
-/// Ridge weight of the normal fit, per normal of the set (SPEC.md G.2).
-pub const RIDGE_PER_NORMAL: f64 = 1e-4;
+/// Ridge weight of the normal fit, relative to the samples' total weight (SPEC.md G.3).
+pub const RIDGE: f64 = 1e-4;
 
 /// Flat objects join neighbouring coarse triangles whose normals differ by less than this many
 /// degrees (SPEC.md G.3); between steeper ones (the corner of a room) values do not mix.
@@ -72,6 +76,12 @@ pub enum Reconstruction {
     /// the colour of its tree node whose representative normal is closest to its own, and each
     /// vertex averages its subtriangles' colours.
     NearestNormal,
+    /// Classic radiosity rendering (Cohen & Wallace 1993, section 9.2), for comparison: each
+    /// leaf's colour for its triangle's geometric normal, averaged at leaf corners as
+    /// [`Reconstruction::Smooth`] averages its fits and interpolated the same way, with no
+    /// dependence on the normal. What one colour per element looks like when drawn smoothly;
+    /// not part of SPEC.md.
+    Gouraud,
 }
 
 impl std::str::FromStr for Reconstruction {
@@ -80,8 +90,9 @@ impl std::str::FromStr for Reconstruction {
         match s {
             "smooth" => Ok(Self::Smooth),
             "nearest" | "nearest-normal" => Ok(Self::NearestNormal),
+            "gouraud" => Ok(Self::Gouraud),
             _ => Err(format!(
-                "unknown reconstruction '{s}': expected 'smooth' or 'nearest'"
+                "unknown reconstruction '{s}': expected 'smooth', 'nearest' or 'gouraud'"
             )),
         }
     }
@@ -331,29 +342,6 @@ fn coarse_area(object: &Object, t: usize) -> f64 {
     0.5 * dot(n, n).sqrt()
 }
 
-/// The fit of SPEC.md G.2 for one normal set: `B(n) = Σ_j B_j (alpha_j + beta_j · n)`.
-fn normal_weights(normals: &[[f32; 3]]) -> Vec<(f64, [f64; 3])> {
-    let k = normals.len();
-    let ns: Vec<[f64; 3]> = normals.iter().map(|n| n.map(f64::from)).collect();
-    let mean = [0, 1, 2].map(|a| ns.iter().map(|n| n[a]).sum::<f64>() / k as f64);
-    let d: Vec<[f64; 3]> = ns.iter().map(|n| sub(*n, mean)).collect();
-    let lambda = RIDGE_PER_NORMAL * k as f64;
-    let mut m = [[0.0f64; 3]; 3];
-    for a in 0..3 {
-        for b in 0..3 {
-            m[a][b] =
-                d.iter().map(|x| x[a] * x[b]).sum::<f64>() + if a == b { lambda } else { 0.0 };
-        }
-    }
-    let inv = invert3(m);
-    d.iter()
-        .map(|dj| {
-            let beta = mat_vec(inv, *dj);
-            (1.0 / k as f64 - dot(beta, mean), beta)
-        })
-        .collect()
-}
-
 fn invert3(m: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
     let c =
         |r0: usize, c0: usize, r1: usize, c1: usize| m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0];
@@ -384,10 +372,20 @@ struct Leaf {
 impl LightingTable {
     /// Builds the table of `object` (SPEC.md G.2 to G.4).
     pub fn build(object: &Object) -> Result<LightingTable, LightingError> {
+        Self::build_with(object, Reconstruction::Smooth)
+    }
+
+    /// The table of [`Reconstruction::Smooth`], or with [`Reconstruction::Gouraud`] the table of
+    /// the geometric normals' colours without slopes; the nearest-normal rule uses no table and
+    /// gets the smooth one.
+    pub fn build_with(
+        object: &Object,
+        reconstruction: Reconstruction,
+    ) -> Result<LightingTable, LightingError> {
+        let gouraud = reconstruction == Reconstruction::Gouraud;
         let surface = Surface::new(object);
         let mut point_index: HashMap<PointKey, usize> = HashMap::new();
-        let mut sums: Vec<[f64; MODEL_FLOATS]> = Vec::new();
-        let mut weights: Vec<f64> = Vec::new();
+        let mut moments: Vec<Moments> = Vec::new();
         let mut leaves: Vec<Leaf> = Vec::new();
         let mut node_start = Vec::with_capacity(object.triangles.len());
         let mut nodes: Vec<u32> = Vec::new();
@@ -409,7 +407,6 @@ impl LightingTable {
                 colours,
             } = triangle_lighting(object, t)?;
             let nc = normals.len();
-            let fit = normal_weights(normals);
             let area = coarse_area(object, t);
             // Breadth-first walk: the children of the r-th subdivided node are 1 + 4r + c.
             let mut cells = vec![LatticeTriangle::root(TREE_LATTICE); 1];
@@ -428,20 +425,16 @@ impl LightingTable {
                     }
                     continue;
                 }
-                let model = node_model(&colours[k * nc..(k + 1) * nc], &fit);
                 let w = area / (1u64 << (2 * info.depth)) as f64;
                 let mut corners = [0usize; 3];
                 for (slot, p) in corners.iter_mut().zip(cell.corners()) {
                     let key = surface.key(t, p[0], p[1]);
                     let i = *point_index.entry(key).or_insert_with(|| {
-                        sums.push([0.0; MODEL_FLOATS]);
-                        weights.push(0.0);
-                        sums.len() - 1
+                        moments.push(Moments::default());
+                        moments.len() - 1
                     });
-                    for (s, m) in sums[i].iter_mut().zip(model) {
-                        *s += w * m;
-                    }
-                    weights[i] += w;
+                    let samples = if gouraud { 1 } else { nc };
+                    moments[i].add(w, &normals[..samples], &colours[k * nc..k * nc + samples]);
                     *slot = i;
                 }
                 nodes.push(
@@ -458,19 +451,8 @@ impl LightingTable {
                 });
             }
         }
-        let mut values: Vec<[f64; MODEL_FLOATS]> = sums
-            .iter()
-            .zip(&weights)
-            .map(|(s, &w)| {
-                if w > 0.0 {
-                    s.map(|x| x / w)
-                } else {
-                    // Zero-area leaves only: average without weights is impossible here, and the
-                    // point carries no light that any refined triangle could show.
-                    [0.0; MODEL_FLOATS]
-                }
-            })
-            .collect();
+        let flat = gouraud || object.kind == ObjectKind::Flat;
+        let mut values: Vec<[f64; MODEL_FLOATS]> = moments.iter().map(|m| m.fit(flat)).collect();
         // T-vertices: from the largest leaves down, a corner of smaller leaves inside a leaf's
         // edge takes the value interpolated along that edge.
         let mut order: Vec<usize> = (0..leaves.len()).collect();
@@ -608,19 +590,68 @@ fn resolve_edge(
     resolve_edge(surface, index, values, t, (pm, m), b);
 }
 
-/// The node's model `c, G` (SPEC.md G.2) from its colours for the triangle's normals.
-fn node_model(colours: &[u32], fit: &[(f64, [f64; 3])]) -> [f64; MODEL_FLOATS] {
-    let mut m = [0.0f64; MODEL_FLOATS];
-    for (&packed, (alpha, beta)) in colours.iter().zip(fit) {
-        let rgb = rgb9e5::decode(packed).map(f64::from);
-        for ch in 0..3 {
-            m[ch] += alpha * rgb[ch];
+/// Weighted moments of the samples `(normal, colour)` of the leaves meeting at one point
+/// (SPEC.md G.3), accumulated raw and centred in [`Moments::fit`].
+#[derive(Clone, Default)]
+struct Moments {
+    w: f64,
+    n: [f64; 3],
+    nn: [[f64; 3]; 3],
+    b: [f64; 3],
+    bn: [[f64; 3]; 3],
+}
+
+impl Moments {
+    /// Adds a leaf of area weight `w` with one colour per normal of its triangle's set: each
+    /// sample weighs `w / normals.len()`, so a leaf counts by its area alone.
+    fn add(&mut self, w: f64, normals: &[[f32; 3]], colours: &[u32]) {
+        let ws = w / normals.len() as f64;
+        for (n, &packed) in normals.iter().zip(colours) {
+            let n = n.map(f64::from);
+            let rgb = rgb9e5::decode(packed).map(f64::from);
+            self.w += ws;
             for a in 0..3 {
-                m[3 + 3 * ch + a] += beta[a] * rgb[ch];
+                self.n[a] += ws * n[a];
+                self.b[a] += ws * rgb[a];
+                for b in 0..3 {
+                    self.nn[a][b] += ws * n[a] * n[b];
+                    self.bn[a][b] += ws * rgb[a] * n[b];
+                }
             }
         }
     }
-    m
+
+    /// The model `c, G` fitted to the samples (SPEC.md G.3): weighted least squares, linear in
+    /// the normal, ridge-regularised so that directions the normals do not span get slope zero;
+    /// for a flat object the weighted mean and no slope. No samples (or zero weight): zero.
+    fn fit(&self, flat: bool) -> [f64; MODEL_FLOATS] {
+        let w = self.w;
+        if w <= 0.0 {
+            // Zero-area leaves only: the point carries no light that a refined triangle shows.
+            return [0.0; MODEL_FLOATS];
+        }
+        let nbar = self.n.map(|x| x / w);
+        let bbar = self.b.map(|x| x / w);
+        let mut out = [0.0; MODEL_FLOATS];
+        if flat {
+            out[..3].copy_from_slice(&bbar);
+            return out;
+        }
+        let mut m = [[0.0; 3]; 3];
+        for a in 0..3 {
+            for b in 0..3 {
+                m[a][b] = self.nn[a][b] / w - nbar[a] * nbar[b] + if a == b { RIDGE } else { 0.0 };
+            }
+        }
+        let inv = invert3(m);
+        for ch in 0..3 {
+            let cov: [f64; 3] = std::array::from_fn(|a| self.bn[ch][a] / w - bbar[ch] * nbar[a]);
+            let g = mat_vec(inv, cov);
+            out[ch] = bbar[ch] - dot(g, nbar);
+            out[3 + 3 * ch..6 + 3 * ch].copy_from_slice(&g);
+        }
+        out
+    }
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {

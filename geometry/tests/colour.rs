@@ -4,7 +4,7 @@
 
 use hce_format::{example, rgb9e5, tree::encode_tree, Object};
 use hce_geometry::colour::{apply_baked_colours, apply_baked_colours_with, ColourError};
-use hce_geometry::lighting::Reconstruction;
+use hce_geometry::lighting::{LightingTable, Reconstruction};
 use hce_geometry::subdivide::{subdivide, Refined};
 
 fn area(r: &Refined, f: usize) -> f64 {
@@ -294,4 +294,101 @@ fn smooth_reconstruction_keeps_one_colour_trees_exact_and_is_the_default() {
     assert_eq!("nearest".parse(), Ok(Reconstruction::NearestNormal));
     assert_eq!("smooth".parse(), Ok(Reconstruction::Smooth));
     assert!("bilinear".parse::<Reconstruction>().is_err());
+}
+
+/// The bumpy 3×3 grid of the tests above, each triangle carrying its geometric normal alone
+/// with the colour `f(n0)`.
+fn one_normal_grid(f: impl Fn([f32; 3]) -> [f32; 3]) -> Object {
+    let mut c = example::grid(3, 0);
+    let o = &mut c.objects[0];
+    for z in o.mesh.positions.iter_mut().skip(2).step_by(3) {
+        *z *= 5.0;
+    }
+    let p = |v: u32| {
+        let i = 3 * v as usize;
+        glam::Vec3::from_slice(&o.mesh.positions[i..i + 3])
+    };
+    let normals: Vec<[f32; 3]> = o
+        .mesh
+        .triangles
+        .chunks(3)
+        .map(|t| {
+            let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
+            (b - a).cross(c - a).normalize().to_array()
+        })
+        .collect();
+    o.colours = normals.iter().map(|&n| rgb9e5::encode(f(n))).collect();
+    for (t, rec) in o.triangles.iter_mut().enumerate() {
+        rec.normal_start = t as u32;
+        rec.normal_count = 1;
+        rec.colour_start = t as u32;
+    }
+    o.normals = normals;
+    c.objects.swap_remove(0)
+}
+
+#[test]
+fn smooth_fit_pools_the_normals_of_the_triangles_around_a_point() {
+    // One normal per triangle, colours a linear function of it: no triangle's own set spans a
+    // slope, but the samples pooled at a vertex (SPEC.md G.3) do. At the grid's interior vertex
+    // (1, 1), corner 0 of triangle 8, whose fan of six triangles spans the normals around it,
+    // the field must change with the normal as the function does; drawn without slopes
+    // (`gouraud`) it does not change at all.
+    let f = |n: [f32; 3]| [1.0 + 0.5 * n[0] + 0.25 * n[1], 0.5, 0.5 - 0.125 * n[0]];
+    let o = one_normal_grid(f);
+    assert_eq!(
+        o.mesh.triangles[24], 5,
+        "triangle 8 starts at vertex (1, 1)"
+    );
+    let smooth = LightingTable::build(&o).unwrap();
+    let gouraud = LightingTable::build_with(&o, Reconstruction::Gouraud).unwrap();
+    let unit = |v: [f32; 3]| glam::Vec3::from(v).normalize().to_array();
+    let (a, b) = (unit([0.3, -0.2, 1.0]), unit([-0.2, 0.3, 1.0]));
+    let want = [0, 1, 2].map(|ch| f(a)[ch] - f(b)[ch]);
+    let (sa, sb) = (smooth.evaluate(8, 0, 0, a), smooth.evaluate(8, 0, 0, b));
+    for ch in 0..3 {
+        let got = sa[ch] - sb[ch];
+        assert!(
+            (got - want[ch]).abs() < 0.05 * 0.25,
+            "channel {ch}: the field changes by {got} between two normals, the function by {}",
+            want[ch]
+        );
+    }
+    assert_eq!(gouraud.evaluate(8, 0, 0, a), gouraud.evaluate(8, 0, 0, b));
+}
+
+#[test]
+fn gouraud_draws_the_geometric_normals_colours_without_slopes() {
+    // Four normals per triangle, the same colours everywhere: the smooth field follows the
+    // refined normals, the Gouraud one is the colour of the geometric normal (the first) alone.
+    let mut c = example::grid(3, 0);
+    for z in c.objects[0].mesh.positions.iter_mut().skip(2).step_by(3) {
+        *z *= 5.0;
+    }
+    let o = &mut c.objects[0];
+    let normals = [
+        [0.0, 0.0, 1.0],
+        [0.6, 0.0, 0.8],
+        [0.0, 0.6, 0.8],
+        [-0.6, 0.0, 0.8],
+    ];
+    let f = |n: [f32; 3]| [1.0 + 0.5 * n[0] + 0.25 * n[1], 0.5, 0.5 - 0.125 * n[0]];
+    o.normals = normals.to_vec();
+    o.colours = normals.iter().map(|&n| rgb9e5::encode(f(n))).collect();
+    for rec in &mut o.triangles {
+        rec.normal_start = 0;
+        rec.normal_count = 4;
+        rec.colour_start = 0;
+    }
+    let o: &Object = o;
+    let first = rgb9e5::decode(o.colours[0]);
+    let r = subdivide(&o.mesh, 2).unwrap();
+    let gouraud = apply_baked_colours_with(o, &r, 2, Reconstruction::Gouraud).unwrap();
+    for got in &gouraud {
+        for k in 0..3 {
+            assert!((got[k] - first[k]).abs() < 1e-6, "{got:?} vs {first:?}");
+        }
+    }
+    assert_ne!(gouraud, apply_baked_colours(o, &r, 2).unwrap());
+    assert_eq!("gouraud".parse(), Ok(Reconstruction::Gouraud));
 }

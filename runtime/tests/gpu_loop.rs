@@ -133,16 +133,12 @@ struct Report {
 
 /// Refines `object` on the GPU at each of `levels` (reusing one output across levels, as a
 /// viewer does) and compares with the CPU reference.
-/// Both reconstructions are compared; the report is the smooth one's (the default).
+/// Every reconstruction is compared; the report is the smooth one's (the default).
 fn compare(ctx: &GpuContext, object: &Object, levels: &[u32]) -> Report {
     let kernel = LoopKernel::new(ctx);
-    compare_with(
-        ctx,
-        &[&kernel],
-        object,
-        levels,
-        Reconstruction::NearestNormal,
-    );
+    for other in [Reconstruction::NearestNormal, Reconstruction::Gouraud] {
+        compare_with(ctx, &[&kernel], object, levels, other);
+    }
     compare_with(ctx, &[&kernel], object, levels, Reconstruction::Smooth)
         .pop()
         .unwrap()
@@ -222,7 +218,7 @@ fn compare_with(
                 // brightest channel (at least 1e-2 of the object's brightest, for vertices the
                 // clamp at zero darkens) is the stated tolerance there.
                 let (d, limit) = match reconstruction {
-                    Reconstruction::Smooth => (
+                    Reconstruction::Smooth | Reconstruction::Gouraud => (
                         (0..3)
                             .map(|k| f64::from((g[k] - c[k]).abs() / scale.max(1e-2 * brightest)))
                             .fold(0.0, f64::max),

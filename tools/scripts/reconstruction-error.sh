@@ -2,8 +2,9 @@
 # How far `hce render` is from path-traced ground truth on multiresolution objects, per
 # subdivision level: for each mesh, a test room around it (`gen-samples room`), baked twice
 # (default normal sets, and `--max-normals 0`: the geometric normal alone), each bake drawn at
-# levels 0..LEVELS with `hce render --cpu-reference --level L` (the smooth reconstruction, and
-# for the default bake also the paper's nearest-normal rule), against `hce reference` of the
+# levels 0..LEVELS with `hce render --cpu-reference --level L` (the smooth reconstruction; for
+# the default bake also the paper's nearest-normal rule; for the one-normal bake also
+# `--reconstruction gouraud`, classic radiosity rendering), against `hce reference` of the
 # same level; prints the relative RMS difference and bias over the reference's mask (pixels
 # of the multiresolution object away from its silhouette), one row per mesh and level.
 # The reference's own noise adds in quadrature: two 256-path references of the spot room differ
@@ -89,7 +90,7 @@ for mesh in "$@"; do
                 --mask "$dir/mask-$level.png" | awk '/^relative RMS:/ { print $3 }')"
         fi
         row="$(basename "$dir") $level $noise"
-        for variant in default:smooth n0:smooth default:nearest; do
+        for variant in default:smooth n0:smooth default:nearest n0:gouraud; do
             bake="${variant%%:*}"
             rec="${variant##*:}"
             "$hce" render "$dir/baked-$bake.glb" --cpu-reference --level "$level" \
@@ -117,14 +118,15 @@ if [[ "$references" == 2 ]]; then
     echo "(relative RMS errors with the references' noise taken out; noise: the relative RMS"
     echo " difference of the two references, each carrying noise/sqrt(2))"
 fi
-printf '%-20s %5s %7s %7s | %-19s | %-19s | %-19s\n' "" "" "" "" "default bake, smooth" \
-    "--max-normals 0" "default, nearest"
-printf '%-20s %5s %7s %7s | %9s %9s | %9s %9s | %9s %9s\n' mesh level pixels noise "rel RMS" \
-    "bias" "rel RMS" "bias" "rel RMS" "bias"
+printf '%-20s %5s %7s %7s | %-19s | %-19s | %-19s | %-19s\n' "" "" "" "" \
+    "default bake, smooth" "max-normals 0, smooth" "default, nearest" "max-normals 0, gouraud"
+printf '%-20s %5s %7s %7s | %9s %9s | %9s %9s | %9s %9s | %9s %9s\n' mesh level pixels noise \
+    "rel RMS" "bias" "rel RMS" "bias" "rel RMS" "bias" "rel RMS" "bias"
 for row in "${rows[@]}"; do
-    read -r name level noise px1 rms1 bias1 _px2 rms2 bias2 _px3 rms3 bias3 <<<"$row"
-    printf '%-20s %5s %7s %7s | %9s %9s | %9s %9s | %9s %9s\n' "$name" "$level" "$px1" \
-        "$noise" "$rms1" "$bias1" "$rms2" "$bias2" "$rms3" "$bias3"
+    read -r name level noise px1 rms1 bias1 _px2 rms2 bias2 _px3 rms3 bias3 _px4 rms4 bias4 \
+        <<<"$row"
+    printf '%-20s %5s %7s %7s | %9s %9s | %9s %9s | %9s %9s | %9s %9s\n' "$name" "$level" \
+        "$px1" "$noise" "$rms1" "$bias1" "$rms2" "$bias2" "$rms3" "$bias3" "$rms4" "$bias4"
 done
 echo
 echo "($size, $samples paths per pixel, $references reference(s) per level, $((SECONDS - start)) s;"

@@ -93,5 +93,8 @@ fn reconstruction_flag_chooses_the_colour_rule() {
     assert_ne!(cs, cn);
     let (code, _, err) = run("bilinear");
     assert_eq!(code, Some(2), "{err}");
-    assert!(err.contains("expected 'smooth' or 'nearest'"), "{err}");
+    assert!(
+        err.contains("expected 'smooth', 'nearest' or 'gouraud'"),
+        "{err}"
+    );
 }

@@ -39,7 +39,7 @@ struct Params {
     edge_sides_off: u32,
     vertex_corner_offsets_off: u32,
     vertex_corners_off: u32,
-    /// 1 for [`Reconstruction::Smooth`], 0 for the nearest-normal rule.
+    /// 0 for the nearest-normal rule, 1 for the reconstructions that read the lighting table.
     smooth: u32,
 }
 
@@ -321,7 +321,7 @@ impl FlatKernel {
             edge_sides_off: s[4],
             vertex_corner_offsets_off: s[5],
             vertex_corners_off: s[6],
-            smooth: u32::from(object.reconstruction == Reconstruction::Smooth),
+            smooth: u32::from(object.reconstruction != Reconstruction::NearestNormal),
         };
         let uniform = super::util::uniform_init(ctx, "flat params", &params);
         let buffers = [

@@ -75,7 +75,7 @@ struct Params {
     offsets: [u32; SECTIONS],
     /// Always 1 (see `keep` in `loop.wgsl`).
     exact: u32,
-    /// 1 for [`Reconstruction::Smooth`], 0 for the nearest-normal rule.
+    /// 0 for the nearest-normal rule, 1 for the reconstructions that read the lighting table.
     smooth: u32,
 }
 
@@ -641,7 +641,7 @@ impl LoopKernel {
             ring_cap: object.max_valence,
             offsets: object.offsets,
             exact: 1,
-            smooth: u32::from(object.reconstruction == Reconstruction::Smooth),
+            smooth: u32::from(object.reconstruction != Reconstruction::NearestNormal),
         };
         let uniform = super::util::uniform_init(ctx, "loop params", &params);
         let group = |pipeline: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| {

@@ -209,15 +209,16 @@ pub fn lighting_words(
     object: &hce_format::Object,
     reconstruction: hce_geometry::lighting::Reconstruction,
 ) -> Result<Vec<u32>, GpuError> {
-    if reconstruction != hce_geometry::lighting::Reconstruction::Smooth {
+    if reconstruction == hce_geometry::lighting::Reconstruction::NearestNormal {
         return Ok(vec![0]);
     }
-    let table = hce_geometry::lighting::LightingTable::build(object).map_err(|e| {
-        GpuError::InvalidObject {
-            object: object.name.clone(),
-            reason: e.to_string(),
-        }
-    })?;
+    let table =
+        hce_geometry::lighting::LightingTable::build_with(object, reconstruction).map_err(|e| {
+            GpuError::InvalidObject {
+                object: object.name.clone(),
+                reason: e.to_string(),
+            }
+        })?;
     table.to_words().ok_or(GpuError::TooLarge {
         what: "lighting table",
         needed: (table.nodes.len() + table.leaf_points.len() + table.models.len()) as u64 * 4,

@@ -63,8 +63,10 @@ pub struct RenderArgs {
     #[arg(long)]
     pub cpu_reference: bool,
     /// How baked colours become vertex colours: `smooth` (continuous over the surface and
-    /// linear in the normal, SPEC.md Appendix G) or `nearest` (the paper's rule: each
-    /// subtriangle takes the colour of its closest representative normal, averaged at vertices).
+    /// linear in the normal, SPEC.md Appendix G), `nearest` (the paper's rule: each subtriangle
+    /// takes the colour of its closest representative normal, averaged at vertices) or, for
+    /// comparison, `gouraud` (classic radiosity rendering: the elements' colours for their
+    /// geometric normals, averaged at element corners and interpolated; normals ignored).
     #[arg(long, default_value = "smooth", value_parser = parse_reconstruction)]
     pub reconstruction: hce_geometry::lighting::Reconstruction,
 }

@@ -42,7 +42,8 @@ pub struct SubdivideArgs {
     #[arg(long = "levels", hide = true, conflicts_with = "level")]
     pub levels_old: Option<u32>,
     /// On a baked file, how baked colours become vertex colours: `smooth` (the default,
-    /// SPEC.md Appendix G) or `nearest` (the paper's nearest-normal rule), as `hce render`.
+    /// SPEC.md Appendix G), `nearest` (the paper's nearest-normal rule) or `gouraud` (normals
+    /// ignored), as `hce render`.
     #[arg(long, default_value = "smooth", value_parser = super::render::parse_reconstruction)]
     pub reconstruction: hce_geometry::lighting::Reconstruction,
     /// Output mesh (.obj, .gltf or .glb), written atomically.
