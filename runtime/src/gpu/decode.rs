@@ -8,11 +8,12 @@
 use hce_format::Object;
 
 use super::util::{
-    check_size, dispatch_size, read_back, records_words, storage_init, storage_output,
+    check_size, dispatch_size, read_back, storage_init, storage_output, LightingBuffers,
 };
 use super::wgsl::TREE_WGSL;
 use super::{GpuContext, GpuError};
 use hce_geometry::decode::MAX_PATH_LEVEL;
+use hce_geometry::lighting::Reconstruction;
 use hce_geometry::tables::validate_tables;
 
 pub use hce_geometry::decode::DecodedColour;
@@ -87,21 +88,26 @@ pub fn decode_colours(
         });
     let queries_buf = storage_init(ctx, "queries", queries);
     let results = storage_output(ctx, "decoded", out_bytes, wgpu::BufferUsages::empty());
-    let records = storage_init(ctx, "records", &records_words(object));
-    let bits = storage_init(ctx, "bits", &object.bits);
-    let normals = storage_init(ctx, "normals", object.normals.as_flattened());
-    let colours = storage_init(ctx, "colours", &object.colours);
+    // The paper's rule reads the stored colours, not the lighting table.
+    let lighting = LightingBuffers::upload(ctx, object, Reconstruction::NearestNormal)?;
     let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("hce decode"),
         layout: &pipeline.get_bind_group_layout(0),
-        entries: &[&queries_buf, &results, &records, &bits, &normals, &colours]
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect::<Vec<_>>(),
+        entries: &[
+            &queries_buf,
+            &results,
+            &lighting.records,
+            &lighting.bits,
+            &lighting.normals,
+            &lighting.colours,
+        ]
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect::<Vec<_>>(),
     });
     let (x, y) = dispatch_size(ctx, queries.len() as u64)?;
     let mut encoder = ctx

@@ -11,7 +11,8 @@
 use hce_format::Object;
 
 use super::util::{
-    check_size, dispatch_size, read_back, records_words, storage_init, storage_output, PassTimer,
+    check_size, dispatch_size, pack_sections, read_back, storage_init, storage_output,
+    LightingBuffers, PassTimer,
 };
 use super::wgsl::refinement_source;
 use super::{GpuContext, GpuError};
@@ -57,14 +58,8 @@ pub struct FlatObject {
     coarse_positions: wgpu::Buffer,
     topo: wgpu::Buffer,
     section_offsets: [u32; 7],
-    records: wgpu::Buffer,
-    bits: wgpu::Buffer,
-    normals: wgpu::Buffer,
-    colours: wgpu::Buffer,
-    /// How vertex colours are reconstructed, and the lighting table the smooth reconstruction
-    /// reads (one unused word for the nearest-normal rule).
-    reconstruction: Reconstruction,
-    light: wgpu::Buffer,
+    /// The baked lighting and how vertex colours are reconstructed from it.
+    lighting: LightingBuffers,
 }
 
 /// Output buffers of a refinement: drawable as they are (`positions` and `colours` as vertex
@@ -193,45 +188,28 @@ impl FlatKernel {
     ) -> Result<FlatObject, GpuError> {
         validate_tables(object)?;
         let topology = FlatTopology::new(&object.name, &object.mesh)?;
-        let sections: [&[u32]; 7] = [
-            &object.mesh.triangles,
-            &object.mesh.edges,
-            &topology.edge_verts,
-            &topology.edge_side_offsets,
-            &topology.edge_sides,
-            &topology.vertex_corner_offsets,
-            &topology.vertex_corners,
-        ];
-        let mut packed = Vec::with_capacity(sections.iter().map(|s| s.len()).sum());
-        let mut section_offsets = [0u32; 7];
-        for (i, s) in sections.iter().enumerate() {
-            section_offsets[i] = u32::try_from(packed.len()).map_err(|_| GpuError::TooLarge {
-                what: "topology tables",
-                needed: packed.len() as u64 * 4,
-                limit: u64::from(u32::MAX),
-            })?;
-            packed.extend_from_slice(s);
-        }
-        check_size(ctx, "topology tables", packed.len() as u64 * 4)?;
+        let (packed, section_offsets) = pack_sections(
+            ctx,
+            [
+                &object.mesh.triangles,
+                &object.mesh.edges,
+                &topology.edge_verts,
+                &topology.edge_side_offsets,
+                &topology.edge_sides,
+                &topology.vertex_corner_offsets,
+                &topology.vertex_corners,
+            ],
+        )?;
         check_size(
             ctx,
             "coarse positions",
             object.mesh.positions.len() as u64 * 4,
         )?;
-        check_size(ctx, "HCE colours", object.colours.len() as u64 * 4)?;
-        check_size(ctx, "HCE bits", object.bits.len() as u64 * 4)?;
-        let light = super::util::lighting_words(object, reconstruction)?;
-        check_size(ctx, "lighting table", light.len() as u64 * 4)?;
         Ok(FlatObject {
-            reconstruction,
-            light: storage_init(ctx, "lighting table", &light),
+            lighting: LightingBuffers::upload(ctx, object, reconstruction)?,
             coarse_positions: storage_init(ctx, "coarse positions", &object.mesh.positions),
             topo: storage_init(ctx, "topology", &packed),
             section_offsets,
-            records: storage_init(ctx, "records", &records_words(object)),
-            bits: storage_init(ctx, "bits", &object.bits),
-            normals: storage_init(ctx, "normals", object.normals.as_flattened()),
-            colours: storage_init(ctx, "colours", &object.colours),
             topology,
         })
     }
@@ -321,22 +299,22 @@ impl FlatKernel {
             edge_sides_off: s[4],
             vertex_corner_offsets_off: s[5],
             vertex_corners_off: s[6],
-            smooth: u32::from(object.reconstruction != Reconstruction::NearestNormal),
+            smooth: object.lighting.smooth_flag(),
         };
         let uniform = super::util::uniform_init(ctx, "flat params", &params);
         let buffers = [
             &uniform,
             &object.coarse_positions,
             &object.topo,
-            &object.records,
-            &object.bits,
-            &object.normals,
-            &object.colours,
+            &object.lighting.records,
+            &object.lighting.bits,
+            &object.lighting.normals,
+            &object.lighting.colours,
             &o.positions,
             &o.indices,
             &o.faces,
             &o.colours,
-            &object.light,
+            &object.lighting.light,
         ];
         let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("hce flat"),

@@ -42,8 +42,8 @@ use hce_format::Object;
 
 use super::flat::KernelTiming;
 use super::util::{
-    check_size, dispatch_size, read_back, records_words, storage_init, storage_output, PassTimer,
-    WORKGROUP,
+    check_size, dispatch_size, pack_sections, read_back, storage_init, storage_output,
+    LightingBuffers, PassTimer, WORKGROUP,
 };
 use super::wgsl::{loop_source, loop_workgroup_source};
 use super::{AdapterKind, GpuContext, GpuError};
@@ -201,14 +201,8 @@ pub struct LoopObject {
     coarse_positions: wgpu::Buffer,
     topo: wgpu::Buffer,
     offsets: [u32; SECTIONS],
-    records: wgpu::Buffer,
-    bits: wgpu::Buffer,
-    normals: wgpu::Buffer,
-    colours: wgpu::Buffer,
-    /// How vertex colours are reconstructed, and the lighting table the smooth reconstruction
-    /// reads (one unused word for the nearest-normal rule).
-    reconstruction: Reconstruction,
-    light: wgpu::Buffer,
+    /// The baked lighting and how vertex colours are reconstructed from it.
+    lighting: LightingBuffers,
 }
 
 /// Output buffers of a refinement: drawable as they are (`positions`, `normals` and `colours` as
@@ -463,39 +457,27 @@ impl LoopKernel {
                 ]
             })
             .collect();
-        let sections: [&[u32]; SECTIONS] = [
-            &mesh.triangles,
-            &mesh.ring_offsets,
-            &mesh.ring,
-            &mesh.spoke_flags,
-            &mesh.vertex_flags,
-            &mesh.corner_spokes,
-            &mesh.edges,
-            &tri_flags,
-            &crease,
-            &weights,
-            &topology.edge_side_offsets,
-            &topology.edge_sides,
-            &topology.vertex_corner_offsets,
-            &topology.vertex_corners,
-        ];
-        let mut packed = Vec::with_capacity(sections.iter().map(|s| s.len()).sum());
-        let mut offsets = [0u32; SECTIONS];
-        for (i, s) in sections.iter().enumerate() {
-            offsets[i] = u32::try_from(packed.len()).map_err(|_| GpuError::TooLarge {
-                what: "topology tables",
-                needed: packed.len() as u64 * 4,
-                limit: u64::from(u32::MAX),
-            })?;
-            packed.extend_from_slice(s);
-        }
-        check_size(ctx, "topology tables", packed.len() as u64 * 4)?;
+        let (packed, offsets) = pack_sections(
+            ctx,
+            [
+                &mesh.triangles,
+                &mesh.ring_offsets,
+                &mesh.ring,
+                &mesh.spoke_flags,
+                &mesh.vertex_flags,
+                &mesh.corner_spokes,
+                &mesh.edges,
+                &tri_flags,
+                &crease,
+                &weights,
+                &topology.edge_side_offsets,
+                &topology.edge_sides,
+                &topology.vertex_corner_offsets,
+                &topology.vertex_corners,
+            ],
+        )?;
         check_size(ctx, "coarse positions", mesh.positions.len() as u64 * 4)?;
-        check_size(ctx, "HCE colours", object.colours.len() as u64 * 4)?;
-        check_size(ctx, "HCE bits", object.bits.len() as u64 * 4)?;
-        check_size(ctx, "HCE normals", object.normals.len() as u64 * 12)?;
-        let light = super::util::lighting_words(object, reconstruction)?;
-        check_size(ctx, "lighting table", light.len() as u64 * 4)?;
+        let lighting = LightingBuffers::upload(ctx, object, reconstruction)?;
         Ok(LoopObject {
             vertex_count: topology.vertex_count,
             edge_count: topology.edge_count,
@@ -505,12 +487,7 @@ impl LoopKernel {
             coarse_positions: storage_init(ctx, "coarse positions", &mesh.positions),
             topo: storage_init(ctx, "loop topology", &packed),
             offsets,
-            records: storage_init(ctx, "records", &records_words(object)),
-            bits: storage_init(ctx, "bits", &object.bits),
-            normals: storage_init(ctx, "normals", object.normals.as_flattened()),
-            colours: storage_init(ctx, "colours", &object.colours),
-            reconstruction,
-            light: storage_init(ctx, "lighting table", &light),
+            lighting,
         })
     }
 
@@ -641,7 +618,7 @@ impl LoopKernel {
             ring_cap: object.max_valence,
             offsets: object.offsets,
             exact: 1,
-            smooth: u32::from(object.reconstruction != Reconstruction::NearestNormal),
+            smooth: object.lighting.smooth_flag(),
         };
         let uniform = super::util::uniform_init(ctx, "loop params", &params);
         let group = |pipeline: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| {
@@ -697,10 +674,10 @@ impl LoopKernel {
             &[
                 (0, &uniform),
                 (2, &object.topo),
-                (3, &object.records),
-                (4, &object.bits),
-                (5, &object.normals),
-                (6, &object.colours),
+                (3, &object.lighting.records),
+                (4, &object.lighting.bits),
+                (5, &object.lighting.normals),
+                (6, &object.lighting.colours),
                 (8, &o.positions),
                 (10, &o.indices),
                 (11, &o.faces),
@@ -714,7 +691,7 @@ impl LoopKernel {
                 (9, &o.normals),
                 (11, &o.faces),
                 (12, &o.colours),
-                (13, &object.light),
+                (13, &object.lighting.light),
             ],
         );
         // Two timestamps per step (one compute pass each), so the time of each step is known.

@@ -205,7 +205,7 @@ impl PassTimer {
 
 /// The `hce_light` buffer of `hce_light.wgsl` ([`hce_geometry::lighting::LightingTable::to_words`]).
 /// One unused word for the nearest-normal rule (wgpu rejects empty buffers).
-pub fn lighting_words(
+fn lighting_words(
     object: &hce_format::Object,
     reconstruction: hce_geometry::lighting::Reconstruction,
 ) -> Result<Vec<u32>, GpuError> {
@@ -226,8 +226,77 @@ pub fn lighting_words(
     })
 }
 
+/// One object's baked lighting on the GPU, as every kernel that colours refined vertices binds
+/// it: the triangle records, the HCE tree bits, the normal sets and the packed colours (the
+/// paper's rule and `decode.wgsl` read them), and the lighting table of the smooth
+/// reconstruction (`hce_light.wgsl`).
+pub struct LightingBuffers {
+    /// How vertex colours are reconstructed.
+    pub reconstruction: hce_geometry::lighting::Reconstruction,
+    /// [`records_words`].
+    pub records: wgpu::Buffer,
+    pub bits: wgpu::Buffer,
+    /// `x, y, z` f32 per normal.
+    pub normals: wgpu::Buffer,
+    /// RGB9E5 words.
+    pub colours: wgpu::Buffer,
+    /// [`lighting_words`]: one unused word for the nearest-normal rule.
+    pub light: wgpu::Buffer,
+}
+
+impl LightingBuffers {
+    /// Checks every buffer against the device's limits, then uploads them.
+    pub fn upload(
+        ctx: &GpuContext,
+        object: &hce_format::Object,
+        reconstruction: hce_geometry::lighting::Reconstruction,
+    ) -> Result<Self, GpuError> {
+        let records = records_words(object);
+        check_size(ctx, "HCE records", records.len() as u64 * 4)?;
+        check_size(ctx, "HCE colours", object.colours.len() as u64 * 4)?;
+        check_size(ctx, "HCE bits", object.bits.len() as u64 * 4)?;
+        check_size(ctx, "HCE normals", object.normals.len() as u64 * 12)?;
+        let light = lighting_words(object, reconstruction)?;
+        check_size(ctx, "lighting table", light.len() as u64 * 4)?;
+        Ok(LightingBuffers {
+            reconstruction,
+            records: storage_init(ctx, "records", &records),
+            bits: storage_init(ctx, "bits", &object.bits),
+            normals: storage_init(ctx, "normals", object.normals.as_flattened()),
+            colours: storage_init(ctx, "colours", &object.colours),
+            light: storage_init(ctx, "lighting table", &light),
+        })
+    }
+
+    /// The `smooth_light` word of the kernels' parameters: 0 for the nearest-normal rule (the
+    /// faces pass colours fine triangles), 1 for the reconstructions that read the table.
+    pub fn smooth_flag(&self) -> u32 {
+        u32::from(self.reconstruction != hce_geometry::lighting::Reconstruction::NearestNormal)
+    }
+}
+
+/// Packs a kernel's table sections into one word buffer, checked against the device's limits:
+/// the words, and where each section starts (the offsets its WGSL reads from a uniform).
+pub fn pack_sections<const N: usize>(
+    ctx: &GpuContext,
+    sections: [&[u32]; N],
+) -> Result<(Vec<u32>, [u32; N]), GpuError> {
+    let mut packed = Vec::with_capacity(sections.iter().map(|s| s.len()).sum());
+    let mut offsets = [0u32; N];
+    for (i, s) in sections.iter().enumerate() {
+        offsets[i] = u32::try_from(packed.len()).map_err(|_| GpuError::TooLarge {
+            what: "topology tables",
+            needed: packed.len() as u64 * 4,
+            limit: u64::from(u32::MAX),
+        })?;
+        packed.extend_from_slice(s);
+    }
+    check_size(ctx, "topology tables", packed.len() as u64 * 4)?;
+    Ok((packed, offsets))
+}
+
 /// The triangle records as the `array<TriRecord>` words the kernels read.
-pub fn records_words(object: &hce_format::Object) -> Vec<u32> {
+fn records_words(object: &hce_format::Object) -> Vec<u32> {
     object
         .triangles
         .iter()
