@@ -40,6 +40,40 @@ fn close(a: [f32; 3], b: [f64; 3]) -> bool {
     (0..3).all(|k| (f64::from(a[k]) - b[k]).abs() < 1e-5)
 }
 
+/// `grid(3, 0)` (single-node trees, normals (0,0,1) and (0.6,0,0.8) with red 0.0 and 0.01)
+/// with its bumps steepened (z x 5), so that some subtriangles face tilted normals.
+fn bumpy_grid() -> Object {
+    let mut c = example::grid(3, 0);
+    for z in c.objects[0].mesh.positions.iter_mut().skip(2).step_by(3) {
+        *z *= 5.0;
+    }
+    c.objects.swap_remove(0)
+}
+
+/// A colour that is a linear function of the normal.
+fn linear(n: [f32; 3]) -> [f32; 3] {
+    [1.0 + 0.5 * n[0] + 0.25 * n[1], 0.5, 0.5 - 0.125 * n[0]]
+}
+
+/// The bumpy grid with every triangle carrying the same four normals, coloured by [`linear`].
+fn four_normal_grid() -> Object {
+    let mut o = bumpy_grid();
+    let normals = [
+        [0.0, 0.0, 1.0],
+        [0.6, 0.0, 0.8],
+        [0.0, 0.6, 0.8],
+        [-0.6, 0.0, 0.8],
+    ];
+    o.normals = normals.to_vec();
+    o.colours = normals.iter().map(|&n| rgb9e5::encode(linear(n))).collect();
+    for rec in &mut o.triangles {
+        rec.normal_start = 0;
+        rec.normal_count = 4;
+        rec.colour_start = 0;
+    }
+    o
+}
+
 #[test]
 fn single_node_tree_colours_every_vertex_with_its_colour() {
     let mut c = example::single_triangle();
@@ -103,12 +137,7 @@ fn nearest_level_two_paths_stop_at_leaves_and_descend_where_split() {
 #[test]
 fn nearest_subtriangles_pick_the_normal_closest_to_their_own_across_borders() {
     // grid(3, 0): single-node trees, normals (0,0,1) and (0.6,0,0.8) with red 0.0 and 0.01.
-    let mut c = example::grid(3, 0);
-    // Steepen the bumps (z x 5) so that some subtriangles face the tilted normal.
-    for z in c.objects[0].mesh.positions.iter_mut().skip(2).step_by(3) {
-        *z *= 5.0;
-    }
-    let o: &Object = &c.objects[0];
+    let o = &bumpy_grid();
     let r = subdivide(&o.mesh, 2).unwrap();
     let rgb = apply_baked_colours_with(o, &r, 2, Reconstruction::NearestNormal).unwrap();
     let mut picked = [0usize; 2];
@@ -244,32 +273,13 @@ fn smooth_reconstruction_is_linear_in_the_normal() {
     // Every triangle of a bumpy grid carries the same four normals with colours that are a linear
     // function of the normal: the reconstruction must give each refined vertex that function of
     // its own normal, to the quantisation of RGB9E5 and the slight shrinkage of the ridge term.
-    let mut c = example::grid(3, 0);
-    for z in c.objects[0].mesh.positions.iter_mut().skip(2).step_by(3) {
-        *z *= 5.0;
-    }
-    let o = &mut c.objects[0];
-    let normals = [
-        [0.0, 0.0, 1.0],
-        [0.6, 0.0, 0.8],
-        [0.0, 0.6, 0.8],
-        [-0.6, 0.0, 0.8],
-    ];
-    let f = |n: [f32; 3]| [1.0 + 0.5 * n[0] + 0.25 * n[1], 0.5, 0.5 - 0.125 * n[0]];
-    o.normals = normals.to_vec();
-    o.colours = normals.iter().map(|&n| rgb9e5::encode(f(n))).collect();
-    for rec in &mut o.triangles {
-        rec.normal_start = 0;
-        rec.normal_count = 4;
-        rec.colour_start = 0;
-    }
-    let o: &Object = o;
+    let o = &four_normal_grid();
     for level in 1..=3 {
         let r = subdivide(&o.mesh, level).unwrap();
         let smooth = apply_baked_colours(o, &r, level).unwrap();
         let mut worst = 0.0f32;
         for (got, n) in smooth.iter().zip(&r.normals) {
-            let want = f(*n);
+            let want = linear(*n);
             for k in 0..3 {
                 worst = worst.max((got[k] - want[k]).abs() / want[k]);
             }
@@ -299,11 +309,7 @@ fn smooth_reconstruction_keeps_one_colour_trees_exact_and_is_the_default() {
 /// The bumpy 3×3 grid of the tests above, each triangle carrying its geometric normal alone
 /// with the colour `f(n0)`.
 fn one_normal_grid(f: impl Fn([f32; 3]) -> [f32; 3]) -> Object {
-    let mut c = example::grid(3, 0);
-    let o = &mut c.objects[0];
-    for z in o.mesh.positions.iter_mut().skip(2).step_by(3) {
-        *z *= 5.0;
-    }
+    let mut o = bumpy_grid();
     let p = |v: u32| {
         let i = 3 * v as usize;
         glam::Vec3::from_slice(&o.mesh.positions[i..i + 3])
@@ -324,7 +330,7 @@ fn one_normal_grid(f: impl Fn([f32; 3]) -> [f32; 3]) -> Object {
         rec.colour_start = t as u32;
     }
     o.normals = normals;
-    c.objects.swap_remove(0)
+    o
 }
 
 #[test]
@@ -334,7 +340,7 @@ fn smooth_fit_pools_the_normals_of_the_triangles_around_a_point() {
     // (1, 1), corner 0 of triangle 8, whose fan of six triangles spans the normals around it,
     // the field must change with the normal as the function does; drawn without slopes
     // (`gouraud`) it does not change at all.
-    let f = |n: [f32; 3]| [1.0 + 0.5 * n[0] + 0.25 * n[1], 0.5, 0.5 - 0.125 * n[0]];
+    let f = linear;
     let o = one_normal_grid(f);
     assert_eq!(
         o.mesh.triangles[24], 5,
@@ -361,26 +367,7 @@ fn smooth_fit_pools_the_normals_of_the_triangles_around_a_point() {
 fn gouraud_draws_the_geometric_normals_colours_without_slopes() {
     // Four normals per triangle, the same colours everywhere: the smooth field follows the
     // refined normals, the Gouraud one is the colour of the geometric normal (the first) alone.
-    let mut c = example::grid(3, 0);
-    for z in c.objects[0].mesh.positions.iter_mut().skip(2).step_by(3) {
-        *z *= 5.0;
-    }
-    let o = &mut c.objects[0];
-    let normals = [
-        [0.0, 0.0, 1.0],
-        [0.6, 0.0, 0.8],
-        [0.0, 0.6, 0.8],
-        [-0.6, 0.0, 0.8],
-    ];
-    let f = |n: [f32; 3]| [1.0 + 0.5 * n[0] + 0.25 * n[1], 0.5, 0.5 - 0.125 * n[0]];
-    o.normals = normals.to_vec();
-    o.colours = normals.iter().map(|&n| rgb9e5::encode(f(n))).collect();
-    for rec in &mut o.triangles {
-        rec.normal_start = 0;
-        rec.normal_count = 4;
-        rec.colour_start = 0;
-    }
-    let o: &Object = o;
+    let o = &four_normal_grid();
     let first = rgb9e5::decode(o.colours[0]);
     let r = subdivide(&o.mesh, 2).unwrap();
     let gouraud = apply_baked_colours_with(o, &r, 2, Reconstruction::Gouraud).unwrap();
