@@ -8,7 +8,9 @@ use hce_format::Object;
 
 use super::flat::{FlatKernel, KernelTiming};
 use super::loop_kernel::{LoopKernel, PatchScheme};
-use super::util::{check_size, dispatch_size, read_back, storage_output, uniform_init, PassTimer};
+use super::util::{
+    bind_buffers, check_size, dispatch_size, read_back, storage_output, uniform_init, PassTimer,
+};
 use super::{GpuContext, GpuError};
 use hce_geometry::lighting::Reconstruction;
 
@@ -164,20 +166,12 @@ pub fn write_bandwidth(ctx: &GpuContext, bytes: u64, repeats: u32) -> Result<Ban
         });
     let out = storage_output(ctx, "bandwidth buffer", size, wgpu::BufferUsages::empty());
     let params = uniform_init(ctx, "fill params", &[words as u32, 0x5eed_u32, 0, 0]);
-    let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("hce fill"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: params.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: out.as_entire_binding(),
-            },
-        ],
-    });
+    let bind_group = bind_buffers(
+        ctx,
+        "hce fill",
+        &pipeline.get_bind_group_layout(0),
+        &[&params, &out],
+    );
     let groups = dispatch_size(ctx, words)?;
     let run = || -> Result<KernelTiming, GpuError> {
         let mut timer = PassTimer::new(ctx, "hce fill timing", 1, true);

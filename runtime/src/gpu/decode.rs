@@ -8,7 +8,8 @@
 use hce_format::Object;
 
 use super::util::{
-    check_size, dispatch_size, read_back, storage_init, storage_output, LightingBuffers,
+    bind_buffers, check_size, dispatch_size, read_back, storage_init, storage_output,
+    LightingBuffers,
 };
 use super::wgsl::TREE_WGSL;
 use super::{GpuContext, GpuError};
@@ -90,25 +91,19 @@ pub fn decode_colours(
     let results = storage_output(ctx, "decoded", out_bytes, wgpu::BufferUsages::empty());
     // The paper's rule reads the stored colours, not the lighting table.
     let lighting = LightingBuffers::upload(ctx, object, Reconstruction::NearestNormal)?;
-    let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("hce decode"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
+    let bind_group = bind_buffers(
+        ctx,
+        "hce decode",
+        &pipeline.get_bind_group_layout(0),
+        &[
             &queries_buf,
             &results,
             &lighting.records,
             &lighting.bits,
             &lighting.normals,
             &lighting.colours,
-        ]
-        .iter()
-        .enumerate()
-        .map(|(i, b)| wgpu::BindGroupEntry {
-            binding: i as u32,
-            resource: b.as_entire_binding(),
-        })
-        .collect::<Vec<_>>(),
-    });
+        ],
+    );
     let (x, y) = dispatch_size(ctx, queries.len() as u64)?;
     let mut encoder = ctx
         .device

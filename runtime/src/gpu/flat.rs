@@ -11,8 +11,8 @@
 use hce_format::Object;
 
 use super::util::{
-    check_size, dispatch_size, pack_sections, read_back, storage_init, storage_output,
-    LightingBuffers, PassTimer,
+    bind_buffers, check_size, dispatch_size, pack_sections, read_back, storage_init,
+    storage_output, LightingBuffers, PassTimer,
 };
 use super::wgsl::refinement_source;
 use super::{GpuContext, GpuError};
@@ -316,18 +316,7 @@ impl FlatKernel {
             &o.colours,
             &object.lighting.light,
         ];
-        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("hce flat"),
-            layout: &self.layout,
-            entries: &buffers
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: i as u32,
-                    resource: b.as_entire_binding(),
-                })
-                .collect::<Vec<_>>(),
-        });
+        let bind_group = bind_buffers(ctx, "hce flat", &self.layout, &buffers);
         let mut timer = PassTimer::new(ctx, "hce flat timing", 1, measure);
         let vertex_groups = dispatch_size(ctx, u64::from(v))?;
         let face_groups = dispatch_size(ctx, u64::from(f))?;

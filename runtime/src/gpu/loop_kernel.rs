@@ -42,8 +42,8 @@ use hce_format::Object;
 
 use super::flat::KernelTiming;
 use super::util::{
-    check_size, dispatch_size, pack_sections, read_back, storage_init, storage_output,
-    LightingBuffers, PassTimer, WORKGROUP,
+    bind_buffers_at, check_size, dispatch_size, pack_sections, read_back, storage_init,
+    storage_output, LightingBuffers, PassTimer, WORKGROUP,
 };
 use super::wgsl::{loop_source, loop_workgroup_source};
 use super::{AdapterKind, GpuContext, GpuError};
@@ -622,17 +622,7 @@ impl LoopKernel {
         };
         let uniform = super::util::uniform_init(ctx, "loop params", &params);
         let group = |pipeline: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| {
-            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("hce loop"),
-                layout: &pipeline.get_bind_group_layout(0),
-                entries: &buffers
-                    .iter()
-                    .map(|&(binding, b)| wgpu::BindGroupEntry {
-                        binding,
-                        resource: b.as_entire_binding(),
-                    })
-                    .collect::<Vec<_>>(),
-            })
+            bind_buffers_at(ctx, "hce loop", &pipeline.get_bind_group_layout(0), buffers)
         };
         // Step 1: the workgroup kernel (no scratch binding), a workgroup per `tris` triangles,
         // or the scratch kernel, an invocation per slot.

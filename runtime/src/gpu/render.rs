@@ -10,7 +10,7 @@
 use glam::{Mat4, Vec3, Vec4};
 
 use super::lod::Camera;
-use super::util::uniform_init;
+use super::util::{bind_buffers, uniform_init};
 use super::{GpuContext, GpuError};
 
 /// How the camera is placed.
@@ -377,14 +377,7 @@ pub(crate) fn render_draws(
                 "view projection",
                 &(view_proj * d.transform).to_cols_array(),
             );
-            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("hce render"),
-                layout: &layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniform.as_entire_binding(),
-                }],
-            })
+            bind_buffers(ctx, "hce render", &layout, &[&uniform])
         })
         .collect();
 

@@ -226,6 +226,37 @@ fn lighting_words(
     })
 }
 
+/// A bind group of whole buffers, each at the binding number it is paired with.
+pub fn bind_buffers_at(
+    ctx: &GpuContext,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[(u32, &wgpu::Buffer)],
+) -> wgpu::BindGroup {
+    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &buffers
+            .iter()
+            .map(|&(binding, b)| wgpu::BindGroupEntry {
+                binding,
+                resource: b.as_entire_binding(),
+            })
+            .collect::<Vec<_>>(),
+    })
+}
+
+/// A bind group of whole buffers at bindings 0, 1, 2, ... in order.
+pub fn bind_buffers(
+    ctx: &GpuContext,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let numbered: Vec<(u32, &wgpu::Buffer)> = (0u32..).zip(buffers.iter().copied()).collect();
+    bind_buffers_at(ctx, label, layout, &numbered)
+}
+
 /// One object's baked lighting on the GPU, as every kernel that colours refined vertices binds
 /// it: the triangle records, the HCE tree bits, the normal sets and the packed colours (the
 /// paper's rule and `decode.wgsl` read them), and the lighting table of the smooth
