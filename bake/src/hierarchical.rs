@@ -538,14 +538,23 @@ impl Ctx<'_> {
                         // corner of the receiver bounds both its size and its variation.
                         let (mut fmax, mut fmin) = (0.0f32, f32::MAX);
                         let mut bend = 0.0f32;
+                        let inset = inset_corners(rt);
                         for n in &root.normals {
-                            let centre = point_to_polygon(rc, *n, &st);
-                            let at = inset_corners(rt).map(|p| point_to_polygon(p, *n, &st));
-                            for f in at.into_iter().chain([centre]) {
-                                fmax = fmax.max(f);
-                                fmin = fmin.min(f);
+                            let f = |p: Vec3| point_to_polygon(p, *n, &st);
+                            let centre = f(rc);
+                            let at = inset.map(f);
+                            for v in at.into_iter().chain([centre]) {
+                                fmax = fmax.max(v);
+                                fmin = fmin.min(v);
                             }
+                            // Against the plane through the three corner samples: at the
+                            // centre, and between each two corners (a source corner touching
+                            // the receiver's side peaks there).
                             bend = bend.max((centre - (at[0] + at[1] + at[2]) / 3.0).abs());
+                            for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+                                let mid = f((inset[a] + inset[b]) * 0.5);
+                                bend = bend.max((mid - (at[a] + at[b]) * 0.5).abs());
+                            }
                         }
                         est = fmax * l * r_area * std::f32::consts::PI;
                         f_bound = fmax;

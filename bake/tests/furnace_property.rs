@@ -181,6 +181,7 @@ fn worst_node(scene: &Scene) -> (f32, String) {
         for (t, sol) in o.triangles.iter().enumerate() {
             let nn = sol.normals.len();
             for (i, c) in sol.colours.iter().enumerate() {
+                // Every normal of the set: node-major, `colours[node * nn + normal]`.
                 let err = (c[0] - expect) / expect;
                 if err.abs() > worst.0.abs() {
                     let (level, path) = sol.nodes[i / nn];
@@ -254,4 +255,29 @@ fn thin_triangles() {
 fn sharp_angles() {
     check("wedge of 30 degrees", wedge(30f32.to_radians(), 5, 3));
     check("tetrahedron", tetrahedron(3));
+}
+
+/// Multiresolution: each triangle stores a colour for its geometric normal and two normals
+/// tilted 20 and 35 degrees away from it (as a Loop surface's fine normals turn near a fold),
+/// and every one of them must read `E / (1 − ρ)`.
+#[test]
+fn multiresolution_normal_sets() {
+    let mut object = closed_box(Vec3::new(1.0, 0.8, 1.2), 7, |f| Tessellation::Grid {
+        n: 2 + f as u32 % 2,
+        jitter: 0.6,
+    });
+    object.multires = true;
+    object.normal_sets = (0..object.triangles.len())
+        .map(|t| {
+            let [a, b, c] = object.corners(t);
+            let n = (b - a).cross(c - a).normalize();
+            let side = (b - a).normalize();
+            let tilt = |deg: f32, dir: Vec3| {
+                let r = deg.to_radians();
+                (n * r.cos() + dir * r.sin()).to_array()
+            };
+            vec![n.to_array(), tilt(20.0, side), tilt(35.0, -n.cross(side))]
+        })
+        .collect();
+    check("multiresolution box", object);
 }
