@@ -36,6 +36,7 @@ test('refined meshes in Chromium agree with the conformance manifest', { timeout
     await b.page.goto(`${b.url}/web/test/pages/refine.html`);
     let probes = 0;
     for (const c of valid) {
+      /** @type {any} */
       const r = await b.page.evaluate(([url]) => /** @type {any} */ (window).hceRefine(url, [0, 1, 2, 3], ['smooth', 'nearest'], true), [`/conformance/${c.file}`]);
       assert.ok(r.ok, `${c.file}: ${r.error}`);
       assert.equal(r.lost, null, `${c.file}: the device was lost or reported an error`);
