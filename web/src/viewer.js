@@ -17,6 +17,8 @@ const q = new URLSearchParams(location.search);
  */
 const status = { present: '', state: 'starting', error: /** @type {string | null} */ (null), frames: 0, levels: /** @type {number[]} */ ([]), triangles: 0, camera: /** @type {Camera | null} */ (null) };
 /** @type {any} */ (window).hceViewer = status;
+/** Opens a URL as ?url= does; resolves when it is shown or refused (for tests and scripts). */
+/** @type {any} */ (window).hceOpen = (/** @type {string} */ url) => openUrl(url);
 
 /** @param {string} text */
 function setStatus(text) {
@@ -147,6 +149,7 @@ async function start() {
 
 /** @param {string} url */
 async function openUrl(url) {
+  status.state = 'loading';
   await guarded(async () => {
     const response = await fetch(url);
     if (!response.ok) throw new Error(`cannot load ${url}: HTTP ${response.status}`);
