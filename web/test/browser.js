@@ -61,3 +61,19 @@ export async function openBrowser(t, extra = {}) {
   };
   return { page, url: server.url, pageErrors, close };
 }
+
+/**
+ * The `hce` binary the comparisons run: `$HCE_BIN`, else the workspace's debug or release
+ * build. Returns null, having said why, when there is none and none is required (a test run
+ * before `cargo build -p hce-tools`); throws when CI requires the comparisons.
+ * @param {import('node:test').TestContext} t
+ */
+export function hceBinary(t) {
+  const candidates = [process.env.HCE_BIN, path.join(REPO, 'target/debug/hce'), path.join(REPO, 'target/release/hce')];
+  const found = candidates.find((p) => p && fs.existsSync(p));
+  if (found) return found;
+  const msg = 'no hce binary (run `cargo build -p hce-tools` or set HCE_BIN)';
+  if (browserRequired()) throw new Error(`${msg}; CI=true or HCE_REQUIRE_BROWSER=1 makes this a failure`);
+  t.skip(msg);
+  return null;
+}
