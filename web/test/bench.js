@@ -14,7 +14,7 @@ try {
   const r = await b.page.evaluate(([u, o]) => /** @type {any} */ (window).hceBench(u, [1, 2, 3], 3, o), [`/bench/${path.basename(file)}`, object]);
   if (!r.ok) throw new Error(r.error);
   console.log(`adapter: ${r.adapter}; ${r.coarse} coarse triangles, ${r.vertices} vertices`);
-  for (const row of r.rows) console.log(`${row.recon} level ${row.level}: ${row.triangles} triangles, ${row.ms.toFixed(1)} ms`);
+  for (const row of r.rows) console.log(`${row.recon} level ${row.level}: ${row.triangles} triangles, ${row.vertices} vertices, ${row.ms.toFixed(1)} ms`);
 } finally {
   await b.close();
 }

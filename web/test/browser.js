@@ -9,10 +9,10 @@ import { serve } from './server.js';
 /** The repository root (web/ is one of its folders). */
 export const REPO = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
 
-/** Where the browser is: `$CHROMIUM`, else the first of the usual Debian paths. */
+/** Where the browser is: `$CHROMIUM` when set, else the first of the usual Debian paths. */
 export function chromiumPath() {
-  const candidates = [process.env.CHROMIUM, '/usr/bin/chromium', '/usr/bin/chromium-browser'];
-  return candidates.find((p) => p && fs.existsSync(p)) ?? null;
+  const candidates = process.env.CHROMIUM ? [process.env.CHROMIUM] : ['/usr/bin/chromium', '/usr/bin/chromium-browser'];
+  return candidates.find((p) => fs.existsSync(p)) ?? null;
 }
 
 /**

@@ -1,7 +1,7 @@
 // The browser tests' runner for CI (`.ci/run`): every test/*.test.js, one file at a time
 // (each starts its own Chromium), the spec report as it goes, then one count line:
 //   web tests: N passed, M failed, K skipped
-// The exit status is 1 when any failed. With CI=true (or HCE_REQUIRE_BROWSER=1) a missing
+// The exit status is 1 when any failed (or none ran). With CI=true (or HCE_REQUIRE_BROWSER=1) a missing
 // chromium or hce binary is a failure, not a skip.
 import { run } from 'node:test';
 import { spec } from 'node:test/reporters';
@@ -35,5 +35,5 @@ process.on('beforeExit', () => {
   if (printed) return;
   printed = true;
   console.log(`web tests: ${counts.passed} passed, ${counts.failed} failed, ${counts.skipped} skipped`);
-  process.exitCode = counts.failed > 0 || counts.passed === 0 ? 1 : 0;
+  process.exitCode = counts.failed > 0 || counts.passed + counts.skipped === 0 ? 1 : 0;
 });
