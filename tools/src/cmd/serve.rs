@@ -288,13 +288,11 @@ pub fn run(args: ServeArgs) -> Result<()> {
     );
     println!("(127.0.0.1 only; Ctrl-C stops it)");
     std::io::stdout().flush()?;
-    let mut served = 0u64;
-    for stream in listener.incoming() {
+    for (served, stream) in (1u64..).zip(listener.incoming()) {
         // A client that misbehaves affects its own connection only.
         if let Ok(stream) = stream {
             let _ = respond(stream, &asset);
         }
-        served += 1;
         if args.max_requests.is_some_and(|m| served >= m) {
             break;
         }
