@@ -3,13 +3,14 @@
 // 0 to 3 (flat objects too, as `hce subdivide` refines them) against `hce subdivide --merge`:
 // the same vertex and triangle counts and indices; positions within 1e-5 of each object's
 // bounding-box diagonal and normals within 1e-5 (SPEC.md F.1); colours (hce writes them clamped
-// to [0, 1]) within 1e-4 of the vertex's brightest channel (G).
+// to [0, 1]) within 1e-4 of the vertex's brightest channel (G). The Cornell box also as a
+// .gltf with an external buffer.
 import test from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
-import { openBrowser, hceBinary } from './browser.js';
+import { openBrowser, hceBinary, REPO } from './browser.js';
 import { SAMPLES, bakedSample, runHce } from './samples.js';
 
 test('the baked samples refine in Chromium as hce subdivide refines them', { timeout: 900_000 }, async (t) => {
@@ -43,6 +44,19 @@ test('the baked samples refine in Chromium as hce subdivide refines them', { tim
         t.diagnostic(`${at}: ${r.objects.length} objects, ${r.totalVertices} vertices agree; worst colour ${Math.max(...r.objects.map((/** @type {any} */ o) => o.maxColour)).toExponential(2)}, refined in ${r.totalMs.toFixed(0)} ms`);
       }
     }
+    // A .gltf with its buffer in a .bin beside it, as `hce bake -o x.gltf` writes it.
+    const gltf = path.join(dir, 'cornell.gltf');
+    runHce(hce, ['bake', path.join(REPO, 'samples/cornell-box.glb'), '-o', gltf, '--multires', 'short_block', '--creases', 'auto', '-q']);
+    assert.ok(fs.existsSync(path.join(dir, 'cornell.bin')), 'the .gltf has an external buffer');
+    runHce(hce, ['subdivide', gltf, '--level', '2', '--merge', '-o', path.join(dir, 'cornell-gltf-2.glb')]);
+    /** @type {any} */
+    const g = await b.page.evaluate(() => /** @type {any} */ (window).hceCompare('/files/cornell.gltf', 2, '/files/cornell-gltf-2.glb'));
+    assert.ok(g.ok, `cornell.gltf: ${g.error}`);
+    assert.equal(g.totalVertices, g.refVertices);
+    for (const o of g.objects) {
+      assert.ok(o.indicesEqual && o.maxPosition <= 1e-5 * o.diagonal && o.colourOver === 0, `cornell.gltf '${o.name}': ${JSON.stringify(o)}`);
+    }
+    t.diagnostic(`cornell.gltf (external buffer) level 2: ${g.objects.length} objects, ${g.totalVertices} vertices agree`);
     assert.deepEqual(b.pageErrors, []);
   } finally {
     await b.close();
