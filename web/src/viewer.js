@@ -376,10 +376,24 @@ const initialRecon = q.get('recon');
 if (initialRecon) /** @type {HTMLSelectElement} */ ($('recon')).value = initialRecon;
 
 // Files: the picker and drag and drop.
-$('file').addEventListener('change', (e) => {
-  const file = /** @type {HTMLInputElement} */ (e.target).files?.[0];
-  if (file) guarded(async () => open(new Uint8Array(await file.arrayBuffer()), file.name, undefined));
-});
+/**
+ * Opens the asset among `files` (a .glb, .gltf or .hce); a .gltf's external buffers are looked
+ * up among the other files by name.
+ * @param {FileList | undefined | null} files
+ */
+function openFiles(files) {
+  const list = Array.from(files ?? []);
+  const main = list.find((f) => /\.(glb|gltf|hce)$/i.test(f.name)) ?? list[0];
+  if (!main) return;
+  guarded(async () => open(new Uint8Array(await main.arrayBuffer()), main.name, async (uri) => {
+    const name = decodeURIComponent(uri.split('/').pop() ?? uri);
+    const file = list.find((f) => f.name === name);
+    if (!file) throw new Error(`drop or pick '${name}' together with ${main.name}`);
+    return new Uint8Array(await file.arrayBuffer());
+  }));
+}
+
+$('file').addEventListener('change', (e) => openFiles(/** @type {HTMLInputElement} */ (e.target).files));
 const viewEl = $('view');
 viewEl.addEventListener('dragover', (e) => {
   e.preventDefault();
@@ -389,8 +403,7 @@ viewEl.addEventListener('dragleave', () => viewEl.classList.remove('dragging'));
 viewEl.addEventListener('drop', (e) => {
   e.preventDefault();
   viewEl.classList.remove('dragging');
-  const file = e.dataTransfer?.files[0];
-  if (file) guarded(async () => open(new Uint8Array(await file.arrayBuffer()), file.name, undefined));
+  openFiles(e.dataTransfer?.files);
 });
 window.addEventListener('unhandledrejection', (e) => {
   e.preventDefault();

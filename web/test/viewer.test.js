@@ -1,10 +1,30 @@
 // The viewer page's controls: zooming out lowers the automatic levels (the rule of
 // choose_level), orbiting keeps the distance, a level forced in the object table is drawn, the reconstruction switch
-// re-colours the image, the reset button restores the file's camera; nothing escapes.
+// re-colours the image, the reset button restores the file's camera, the file picker opens a
+// .gltf with its .bin; nothing escapes.
 import test from 'node:test';
 import assert from 'node:assert/strict';
+import fs from 'node:fs';
+import os from 'node:os';
 import path from 'node:path';
 import { openBrowser, REPO } from './browser.js';
+
+/**
+ * A .gltf and its .bin from a GLB (the JSON chunk with the buffer's uri set, and the binary
+ * chunk), written to `dir`.
+ * @param {string} glb @param {string} dir @param {string} stem
+ */
+function splitGlb(glb, dir, stem) {
+  const bytes = fs.readFileSync(glb);
+  const jsonLength = bytes.readUInt32LE(12);
+  const json = JSON.parse(bytes.subarray(20, 20 + jsonLength).toString('utf8'));
+  const binStart = 20 + jsonLength;
+  const bin = bytes.subarray(binStart + 8, binStart + 8 + bytes.readUInt32LE(binStart));
+  json.buffers[0].uri = `${stem}.bin`;
+  fs.writeFileSync(path.join(dir, `${stem}.gltf`), JSON.stringify(json));
+  fs.writeFileSync(path.join(dir, `${stem}.bin`), bin);
+  return [path.join(dir, `${stem}.gltf`), path.join(dir, `${stem}.bin`)];
+}
 
 test('the viewer orbits, zooms, forces levels and switches the reconstruction', { timeout: 300_000 }, async (t) => {
   const b = await openBrowser(t, { '/conformance/': path.join(REPO, 'conformance') });
@@ -71,6 +91,20 @@ test('the viewer orbits, zooms, forces levels and switches the reconstruction', 
     await frameAfter(beforeReset);
     assert.deepEqual((await state()).camera.eye, first.camera.eye);
     assert.equal((await state()).error, null);
+    // The file picker, with a .gltf and the .bin it names picked together.
+    const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'hce-viewer-'));
+    try {
+      const files = splitGlb(path.join(REPO, 'conformance/valid/cornell-box.glb'), dir, 'box');
+      const picked = (await state()).frames;
+      await page.setInputFiles('#file', files);
+      await frameAfter(picked);
+      const opened = await state();
+      assert.equal(opened.error, null);
+      assert.equal(opened.levels.length, 8, 'the eight objects of the Cornell box');
+      assert.match(await page.textContent('#status') ?? '', /box\.gltf: 8 objects \(gltf\)/);
+    } finally {
+      fs.rmSync(dir, { recursive: true, force: true });
+    }
     assert.deepEqual(b.pageErrors, []);
   } finally {
     await b.close();
