@@ -1,6 +1,6 @@
 // The browser tests' runner for CI (`.ci/run`): every test/*.test.js, one file at a time
 // (each starts its own Chromium), the spec report as it goes, then one count line:
-//   web tests: N passed, M failed, K skipped
+//   web: N passed, M failed, K skipped
 // The exit status is 1 when any failed (or none ran). With CI=true (or HCE_REQUIRE_BROWSER=1) a missing
 // chromium or hce binary is a failure, not a skip.
 import { run } from 'node:test';
@@ -34,6 +34,6 @@ let printed = false;
 process.on('beforeExit', () => {
   if (printed) return;
   printed = true;
-  console.log(`web tests: ${counts.passed} passed, ${counts.failed} failed, ${counts.skipped} skipped`);
+  console.log(`web: ${counts.passed} passed, ${counts.failed} failed, ${counts.skipped} skipped`);
   process.exitCode = counts.failed > 0 || counts.passed + counts.skipped === 0 ? 1 : 0;
 });
