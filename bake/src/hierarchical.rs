@@ -670,13 +670,11 @@ impl Ctx<'_> {
                     // As for near elements below: split a receiver over which the cluster's
                     // form factor bends more than a linear link follows.
                     if self.splittable(recv, r_area) {
-                        // The cluster as one disc: enough to see the bend, and cheap (this
-                        // runs for every cluster a receiver meets).
+                        // With the geometric normal: the bend is the geometry's.
                         let f = |p: Vec3| {
-                            let d = cluster.centre - p;
-                            let d2 = d.length_squared().max(1e-20);
-                            let w = d / d2.sqrt();
-                            root.normal.dot(w).max(0.0) * proj / (std::f32::consts::PI * d2 + proj)
+                            let mut f = [0.0f32];
+                            self.cluster_form_factors(c, p, &[root.normal], &mut f);
+                            f[0]
                         };
                         let centre = f(rc);
                         let at = inset_corners(rt).map(f);
