@@ -1,10 +1,12 @@
-//! `hce`: bake, inspect, validate, subdivide, render and demo assets with baked global illumination;
-//! path-trace references and compare images with them.
+//! `hce`: bake, inspect, validate, subdivide, render, view and demo assets with baked global
+//! illumination; path-trace references and compare images with them.
 #![forbid(unsafe_code)]
 
 use clap::{Parser, Subcommand};
 
 mod cmd;
+#[cfg(feature = "gpu")]
+mod view;
 
 /// Exit statuses shared by every subcommand (also in SPEC.md Appendix E and README.md).
 const EXIT_CODES: &str = "\
@@ -52,6 +54,10 @@ enum Command {
     /// Check a .hce, .glb or .gltf file deeply; one line per problem.
     #[command(after_help = EXIT_CODES)]
     Validate(cmd::validate::ValidateArgs),
+    /// Open a baked asset in a window (or preview a mesh) and move around it, with each
+    /// object's level chosen live from the view; `--frames N` for scripted runs.
+    #[command(after_help = EXIT_CODES)]
+    View(cmd::view::ViewArgs),
 }
 
 /// `hce inspect x.glb | head` closes the pipe early; Rust's `println!` then panics with "failed
@@ -87,6 +93,7 @@ fn main() {
         Command::Subdivide(args) => cmd::subdivide::run(args),
         Command::Inspect(args) => cmd::inspect::run(args),
         Command::Validate(args) => cmd::validate::run(args),
+        Command::View(args) => cmd::view::run(args),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");
