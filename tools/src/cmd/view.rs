@@ -90,16 +90,6 @@ pub fn run(args: ViewArgs) -> Result<()> {
     if args.frames == Some(0) {
         bail!("--frames must be at least 1");
     }
-    if let Some(f) = &args.file {
-        // Say so before opening a window for a file that is not there.
-        if !f.exists() {
-            return Err(std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                format!("{}: no such file", f.display()),
-            )
-            .into());
-        }
-    }
     if args.frames.is_some() {
         if args.file.is_none() {
             bail!("--frames needs a FILE to draw");

@@ -81,15 +81,30 @@ fn kind_name(kind: Option<ObjectKind>) -> &'static str {
     }
 }
 
-impl Content {
-    /// Opens `path`: a baked asset, or any other mesh previewed flat (as `hce render` does).
-    pub fn open(ctx: &GpuContext, path: &Path, reconstruction: Reconstruction) -> Result<Self> {
+/// A file read and checked on the CPU, before any window or adapter: a bad file is reported
+/// with its exit status even where no window could open.
+pub enum FileData {
+    Baked(Box<Asset>),
+    Plain(Box<hce_format::Object>),
+}
+
+impl FileData {
+    /// Reads `path`: a baked asset, or any other mesh previewed flat (as `hce render` does).
+    pub fn read(path: &Path) -> Result<Self> {
         let is_obj = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
         if !is_obj {
             match Asset::open(path) {
-                Ok(asset) => return Self::baked(ctx, path, asset, reconstruction),
+                Ok(asset) => {
+                    for w in &asset.warnings {
+                        eprintln!("warning: {w}");
+                    }
+                    if asset.bounds().is_none() {
+                        bail!("{}: the asset has nothing to draw", path.display());
+                    }
+                    return Ok(Self::Baked(Box::new(asset)));
+                }
                 Err(AssetError::NotBaked { .. }) => {
                     println!(
                         "{}: no baked lighting; previewing the plain mesh flat",
@@ -99,7 +114,22 @@ impl Content {
                 Err(e) => return Err(e.into()),
             }
         }
-        Self::plain(ctx, path, reconstruction)
+        Ok(Self::Plain(Box::new(plain_object(path)?)))
+    }
+}
+
+impl Content {
+    /// Uploads `data`, read from `path`, with `reconstruction`.
+    pub fn upload(
+        ctx: &GpuContext,
+        path: &Path,
+        data: FileData,
+        reconstruction: Reconstruction,
+    ) -> Result<Self> {
+        match data {
+            FileData::Baked(asset) => Self::baked(ctx, path, *asset, reconstruction),
+            FileData::Plain(object) => Self::plain(ctx, path, *object, reconstruction),
+        }
     }
 
     fn baked(
@@ -108,9 +138,6 @@ impl Content {
         asset: Asset,
         reconstruction: Reconstruction,
     ) -> Result<Self> {
-        for w in &asset.warnings {
-            eprintln!("warning: {w}");
-        }
         let bounds = asset
             .bounds()
             .with_context(|| format!("{}: the asset has nothing to draw", path.display()))?;
@@ -144,8 +171,12 @@ impl Content {
         })
     }
 
-    fn plain(ctx: &GpuContext, path: &Path, reconstruction: Reconstruction) -> Result<Self> {
-        let object = plain_object(path)?;
+    fn plain(
+        ctx: &GpuContext,
+        path: &Path,
+        object: hce_format::Object,
+        reconstruction: Reconstruction,
+    ) -> Result<Self> {
         let view = PlainView::new(&object)?;
         let kernel = FlatKernel::new(ctx);
         let uploaded = kernel.upload_with(ctx, &object, reconstruction)?;
@@ -172,9 +203,14 @@ impl Content {
         })
     }
 
-    /// The same file uploaded again with another reconstruction.
-    pub fn with_reconstruction(&self, ctx: &GpuContext, r: Reconstruction) -> Result<Self> {
-        Self::open(ctx, &self.path, r)
+    /// The same file uploaded again with another reconstruction (the CPU data is kept).
+    pub fn with_reconstruction(self, ctx: &GpuContext, r: Reconstruction) -> Result<Self> {
+        let path = self.path.clone();
+        let data = match self.source {
+            Source::Baked { asset, .. } => FileData::Baked(asset),
+            Source::Plain { object, .. } => FileData::Plain(object),
+        };
+        Self::upload(ctx, &path, data, r)
     }
 
     /// The camera `choice` gives on a view of aspect `aspect`, and where it came from.

@@ -32,7 +32,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
 use camera::{CameraPath, ViewCamera};
-use content::{Content, Levels, ObjectStats};
+use content::{Content, FileData, Levels, ObjectStats};
 use frame::{FrameRenderer, Overlay};
 
 /// What `hce view` was asked to do.
@@ -110,6 +110,8 @@ struct Input {
 
 struct App {
     options: Options,
+    /// The file named on the command line, read before the window opens.
+    first: Option<FileData>,
     gpu: Option<Gpu>,
     content: Option<Content>,
     camera: ViewCamera,
@@ -130,6 +132,7 @@ struct App {
 
 /// Runs the viewer until its window is closed or, in a scripted run, its frames are drawn.
 pub fn run(options: Options) -> Result<()> {
+    let first = options.file.as_deref().map(FileData::read).transpose()?;
     let event_loop = EventLoop::new().map_err(|e| {
         anyhow!(
             "cannot open a window: {e}; `hce view` needs a display (set DISPLAY, or on a \
@@ -149,6 +152,7 @@ pub fn run(options: Options) -> Result<()> {
         settings: options.settings,
         panel: options.panel,
         options,
+        first,
         gpu: None,
         content: None,
         input: Input::default(),
@@ -260,17 +264,16 @@ impl App {
             egui,
             egui_state,
         });
-        if let Some(file) = self.options.file.clone() {
-            self.open(&file, self.options.camera)?;
+        if let (Some(file), Some(data)) = (self.options.file.clone(), self.first.take()) {
+            self.open(&file, data, self.options.camera)?;
         }
         Ok(())
     }
 
     /// Opens `path`, replacing what is shown, and places the camera.
-    fn open(&mut self, path: &Path, choice: CameraChoice) -> Result<()> {
+    fn open(&mut self, path: &Path, data: FileData, choice: CameraChoice) -> Result<()> {
         let gpu = self.gpu.as_ref().context("no window yet")?;
-        let content = Content::open(&gpu.ctx, path, self.settings.reconstruction)
-            .with_context(|| format!("cannot open {}", path.display()))?;
+        let content = Content::upload(&gpu.ctx, path, data, self.settings.reconstruction)?;
         let size = gpu.window.inner_size();
         let aspect = size.width.max(1) as f32 / size.height.max(1) as f32;
         let (camera, source) = content.start_camera(choice, aspect)?;
@@ -287,7 +290,10 @@ impl App {
 
     /// Opens a file dropped on the window; a bad file leaves the current one and says why.
     fn open_dropped(&mut self, path: &Path) {
-        if let Err(e) = self.open(path, CameraChoice::SceneOrAuto) {
+        let opened = FileData::read(path)
+            .and_then(|data| self.open(path, data, CameraChoice::SceneOrAuto))
+            .with_context(|| format!("cannot open {}", path.display()));
+        if let Err(e) = opened {
             eprintln!("error: {e:#}");
             self.message = Some(format!("{e:#}"));
         }
@@ -395,11 +401,13 @@ impl App {
 
         // The reconstruction is part of the upload: a change uploads the file again.
         let gpu = self.gpu.as_mut().context("no window yet")?;
-        if let Some(c) = &self.content {
-            if c.reconstruction != self.settings.reconstruction {
-                let reloaded = c.with_reconstruction(&gpu.ctx, self.settings.reconstruction)?;
-                self.content = Some(reloaded);
-            }
+        if let Some(c) = self.content.take() {
+            let c = if c.reconstruction != self.settings.reconstruction {
+                c.with_reconstruction(&gpu.ctx, self.settings.reconstruction)?
+            } else {
+                c
+            };
+            self.content = Some(c);
         }
         let (width, height) = (gpu.config.width, gpu.config.height);
 
