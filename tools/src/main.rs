@@ -12,7 +12,7 @@ mod view;
 const EXIT_CODES: &str = "\
 Exit status:
   0  success (for `validate`: the file is valid)
-  1  internal or other error
+  1  internal or other error (also: no GPU adapter, or no display for `view`)
   2  usage error (bad arguments)
   3  invalid input (unreadable bytes, failed validation)
   4  I/O error (file missing, unreadable or unwritable)";

@@ -341,8 +341,4 @@ impl Content {
             .map(|d| u64::from(d.index_count / 3))
             .sum()
     }
-
-    pub fn is_baked(&self) -> bool {
-        matches!(self.source, Source::Baked { .. })
-    }
 }

@@ -116,7 +116,7 @@ impl FrameRenderer {
         }
     }
 
-    fn targets(&mut self, ctx: &GpuContext, size: (u32, u32)) -> &Targets {
+    fn ensure_targets(&mut self, ctx: &GpuContext, size: (u32, u32)) {
         if self.targets.as_ref().is_none_or(|t| t.size != size) {
             let extent = wgpu::Extent3d {
                 width: size.0,
@@ -161,7 +161,6 @@ impl FrameRenderer {
                 tone_bind,
             });
         }
-        self.targets.as_ref().expect("targets were just made")
     }
 
     /// Records the frame into `encoder`: the scene seen through `view_proj` on a black
@@ -185,8 +184,15 @@ impl FrameRenderer {
         params[..4].copy_from_slice(&2f32.powf(exposure).to_ne_bytes());
         params[4..8].copy_from_slice(&encode.to_ne_bytes());
         ctx.queue.write_buffer(&self.tone_params, 0, &params);
-        let scene = &self.scene;
-        let t = self.targets(ctx, size);
+        self.ensure_targets(ctx, size);
+        let Self {
+            scene,
+            tone,
+            targets,
+            egui,
+            ..
+        } = self;
+        let t = targets.as_ref().expect("ensure_targets made them");
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("hce view scene"),
@@ -230,7 +236,7 @@ impl FrameRenderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.tone);
+            pass.set_pipeline(tone);
             pass.set_bind_group(0, &t.tone_bind, &[]);
             pass.draw(0..3, 0..1);
         }
@@ -239,9 +245,7 @@ impl FrameRenderer {
                 size_in_pixels: [size.0, size.1],
                 pixels_per_point: o.pixels_per_point,
             };
-            let extra =
-                self.egui
-                    .update_buffers(&ctx.device, &ctx.queue, encoder, o.primitives, &screen);
+            let extra = egui.update_buffers(&ctx.device, &ctx.queue, encoder, o.primitives, &screen);
             if !extra.is_empty() {
                 ctx.queue.submit(extra);
             }
@@ -261,8 +265,7 @@ impl FrameRenderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            self.egui
-                .render(&mut pass.forget_lifetime(), o.primitives, &screen);
+            egui.render(&mut pass.forget_lifetime(), o.primitives, &screen);
         }
     }
 
@@ -349,7 +352,9 @@ impl FrameRenderer {
         );
         let mut out = Vec::with_capacity((row * u64::from(h)) as usize);
         {
-            let bytes = slice.get_mapped_range();
+            let bytes = slice
+                .get_mapped_range()
+                .map_err(|e| anyhow::anyhow!("reading the screenshot back: {e}"))?;
             for line in bytes.chunks_exact(padded as usize) {
                 for p in line[..row as usize].chunks_exact(4) {
                     if bgra {

@@ -458,10 +458,15 @@ impl App {
         gpu.egui_state
             .handle_platform_output(&gpu.window, output.platform_output);
         let primitives = gpu.egui.tessellate(output.shapes, output.pixels_per_point);
-        for (id, delta) in &output.textures_delta.set {
-            gpu.frame
-                .egui
-                .update_texture(&gpu.ctx.device, &gpu.ctx.queue, *id, delta);
+        // Applied now, freed after painting; drained so that nothing is left to drop unapplied.
+        let mut textures = output.textures_delta;
+        let to_free: Vec<egui::TextureId> = textures.free.drain().collect();
+        for (id, deltas) in textures.set.drain() {
+            for delta in &deltas {
+                gpu.frame
+                    .egui
+                    .update_texture(&gpu.ctx.device, &gpu.ctx.queue, id, delta);
+            }
         }
         let overlay = Overlay {
             primitives: &primitives,
@@ -540,7 +545,7 @@ impl App {
             println!("wrote {} ({width}x{height})", path.display());
             self.message = Some(format!("wrote {}", path.display()));
         }
-        for id in &output.textures_delta.free {
+        for id in &to_free {
             gpu.frame.egui.free_texture(id);
         }
 
