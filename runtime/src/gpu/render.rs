@@ -358,7 +358,11 @@ impl MeshPipeline {
                 "view projection",
                 &(view_proj * d.transform).to_cols_array(),
             );
-            pass.set_bind_group(0, &bind_buffers(ctx, "hce render", &layout, &[&uniform]), &[]);
+            pass.set_bind_group(
+                0,
+                &bind_buffers(ctx, "hce render", &layout, &[&uniform]),
+                &[],
+            );
             pass.set_vertex_buffer(0, d.positions.slice(..));
             pass.set_vertex_buffer(1, d.colours.slice(..));
             pass.set_index_buffer(d.indices.slice(..), wgpu::IndexFormat::Uint32);

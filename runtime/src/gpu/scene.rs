@@ -378,9 +378,8 @@ impl GpuScene {
                     .flatten()
             })
             .collect();
-        let drawn = |i: usize, l: u32| {
-            self.triangles_at(i, l) * self.objects[i].instances.len() as u64
-        };
+        let drawn =
+            |i: usize, l: u32| self.triangles_at(i, l) * self.objects[i].instances.len() as u64;
         let total = |levels: &[Option<u32>]| -> u64 {
             levels
                 .iter()

@@ -186,7 +186,10 @@ mod tests {
         };
         let mut v = ViewCamera::from_camera(&c);
         let back = v.camera();
-        assert!(close(back.eye, c.eye) && close(back.target, c.target), "{back:?}");
+        assert!(
+            close(back.eye, c.eye) && close(back.target, c.target),
+            "{back:?}"
+        );
         assert_eq!(back.fov_y_degrees, 35.0);
         let (pivot, dist) = (v.pivot(), v.distance);
         v.orbit(0.7, -0.3);

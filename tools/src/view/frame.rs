@@ -245,7 +245,8 @@ impl FrameRenderer {
                 size_in_pixels: [size.0, size.1],
                 pixels_per_point: o.pixels_per_point,
             };
-            let extra = egui.update_buffers(&ctx.device, &ctx.queue, encoder, o.primitives, &screen);
+            let extra =
+                egui.update_buffers(&ctx.device, &ctx.queue, encoder, o.primitives, &screen);
             if !extra.is_empty() {
                 ctx.queue.submit(extra);
             }

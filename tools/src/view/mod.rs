@@ -219,16 +219,18 @@ impl App {
                 .context("cannot create the window")?,
         );
         let instance = GpuContext::instance();
-        let surface = instance
-            .create_surface(window.clone())
-            .context("cannot draw into the window with Vulkan")?;
-        let ctx = GpuContext::on_instance(
-            &instance,
-            &ContextOptions {
-                force_software: self.options.software,
-            },
-            Some(&surface),
-        )?;
+        let options = ContextOptions {
+            force_software: self.options.software,
+        };
+        let surface = match instance.create_surface(window.clone()) {
+            Ok(s) => s,
+            Err(e) => {
+                // Without any Vulkan driver there is no surface either: say what to install.
+                GpuContext::on_instance(&instance, &options, None)?;
+                return Err(e).context("cannot draw into the window with Vulkan");
+            }
+        };
+        let ctx = GpuContext::on_instance(&instance, &options, Some(&surface))?;
         crate::cmd::render::report_adapter(&ctx.description);
         let caps = surface.get_capabilities(&ctx.adapter);
         let format = choose_format(&caps.formats)
@@ -430,10 +432,7 @@ impl App {
         let empty = Vec::new();
         let objects = self.content.as_ref().map_or(&empty, |c| &c.objects);
         let triangles = self.content.as_ref().map_or(0, |c| c.drawn_triangles());
-        let file = self
-            .content
-            .as_ref()
-            .map(|c| c.path.display().to_string());
+        let file = self.content.as_ref().map(|c| c.path.display().to_string());
         let facts = panel::Facts {
             file: file.as_deref(),
             adapter: &gpu.ctx.description.name,
@@ -485,9 +484,8 @@ impl App {
         let aspect = width as f32 / height.max(1) as f32;
         let view_proj = view_projection(&camera, lo, hi, aspect);
         let surface_texture = match gpu.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => {
-                Some(t)
-            }
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => Some(t),
             wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => None,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
                 gpu.surface.configure(&gpu.ctx.device, &gpu.config);
@@ -523,7 +521,10 @@ impl App {
         let frame_ms = t0.elapsed().as_secs_f64() * 1e3;
         self.frame_ms = frame_ms;
 
-        let last = self.options.frames.is_some_and(|n| self.frame_index + 1 >= n);
+        let last = self
+            .options
+            .frames
+            .is_some_and(|n| self.frame_index + 1 >= n);
         let screenshot = (self.screenshot_requested || actions.screenshot)
             || (last && self.options.screenshot.is_some());
         if screenshot {

@@ -33,7 +33,11 @@ pub fn show(ui: &mut egui::Ui, facts: &Facts<'_>, settings: &mut Settings) -> Ac
         .show(ui, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| {
                 ui.heading("hce view");
-                ui.label(facts.file.unwrap_or("no file: drop a .glb, .gltf, .hce or .obj here"));
+                ui.label(
+                    facts
+                        .file
+                        .unwrap_or("no file: drop a .glb, .gltf, .hce or .obj here"),
+                );
                 ui.label(format!("adapter: {}", facts.adapter));
                 if facts.software {
                     ui.colored_label(
