@@ -116,19 +116,25 @@ fn mean_luma(rgba: &[u8]) -> f64 {
 /// A window screenshot equals `hce render` of the same file, camera, size and level (both
 /// draw with the runtime's pipeline; the window tone-maps on the GPU, `hce render` on the
 /// CPU). Metric: mean absolute difference of 8-bit sRGB channels at most 0.25, and at most
-/// 0.1% of pixels with a channel more than 2 apart. Checked for a forced level and for
-/// levels chosen from the view with another reconstruction.
+/// 0.1% of pixels with a channel more than 2 apart. Checked for a forced level, for levels
+/// chosen from the view with another reconstruction, and for a plain mesh's flat preview.
 #[test]
 fn screenshot_matches_hce_render() {
     let Some(_) = xvfb("screenshot_matches_hce_render") else {
         return;
     };
-    let file = baked();
+    let plain = Path::new(env!("CARGO_MANIFEST_DIR")).join("../samples/teatime.glb");
     let dir = tempfile::tempdir().unwrap();
     let size = format!("{W}x{H}");
-    for (name, extra) in [
-        ("level2", &["--level", "2"][..]),
-        ("auto-nearest", &["--reconstruction", "nearest"][..]),
+    for (name, file, extra) in [
+        ("level2", baked(), &["--level", "2"][..]),
+        (
+            "auto-nearest",
+            baked(),
+            &["--reconstruction", "nearest"][..],
+        ),
+        // Not baked: previewed flat, as `hce render` previews it.
+        ("plain", plain.as_path(), &["--level", "1"][..]),
     ] {
         let shot = dir.path().join(format!("{name}-view.png"));
         let still = dir.path().join(format!("{name}-render.png"));

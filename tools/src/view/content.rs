@@ -55,13 +55,16 @@ enum Source {
         asset: Box<Asset>,
         scene: Box<GpuScene>,
     },
-    Plain {
-        object: Box<hce_format::Object>,
-        view: PlainView,
-        kernel: FlatKernel,
-        uploaded: Box<FlatObject>,
-        out: Option<FlatOutput>,
-    },
+    Plain(Box<Plain>),
+}
+
+/// A plain mesh with the flat kernel that previews it.
+struct Plain {
+    object: Box<hce_format::Object>,
+    view: PlainView,
+    kernel: FlatKernel,
+    uploaded: FlatObject,
+    out: Option<FlatOutput>,
 }
 
 /// A file opened in the viewer.
@@ -191,13 +194,13 @@ impl Content {
         Ok(Self {
             path: path.to_owned(),
             bounds: view.bounds,
-            source: Source::Plain {
+            source: Source::Plain(Box::new(Plain {
                 object: Box::new(object),
                 view,
                 kernel,
-                uploaded: Box::new(uploaded),
+                uploaded,
                 out: None,
-            },
+            })),
             objects,
             reconstruction,
         })
@@ -208,7 +211,7 @@ impl Content {
         let path = self.path.clone();
         let data = match self.source {
             Source::Baked { asset, .. } => FileData::Baked(asset),
-            Source::Plain { object, .. } => FileData::Plain(object),
+            Source::Plain(p) => FileData::Plain(p.object),
         };
         Self::upload(ctx, &path, data, r)
     }
@@ -225,15 +228,16 @@ impl Content {
                 };
                 Ok((camera, text))
             }
-            Source::Plain { object, view, .. } => match choice {
+            Source::Plain(p) => match choice {
                 CameraChoice::Explicit(c) => Ok((c, "as given".to_owned())),
                 CameraChoice::Scene => bail!(
                     "--camera scene: {} is previewed as a plain mesh, without its cameras",
                     self.path.display()
                 ),
-                CameraChoice::Auto | CameraChoice::SceneOrAuto => {
-                    Ok((view.auto_camera(object, aspect), "automatic".to_owned()))
-                }
+                CameraChoice::Auto | CameraChoice::SceneOrAuto => Ok((
+                    p.view.auto_camera(&p.object, aspect),
+                    "automatic".to_owned(),
+                )),
             },
         }
     }
@@ -278,13 +282,14 @@ impl Content {
                     refined.ms += ms;
                 }
             }
-            Source::Plain {
-                object,
-                view,
-                kernel,
-                uploaded,
-                out,
-            } => {
+            Source::Plain(p) => {
+                let Plain {
+                    object,
+                    view,
+                    kernel,
+                    uploaded,
+                    out,
+                } = &mut **p;
                 let coarse = object.triangles.len() as u64;
                 let level = match levels.forced {
                     Some(l) => check_plain_level(l, coarse, levels.max_triangles)?,
@@ -321,7 +326,8 @@ impl Content {
     pub fn draws(&self) -> Vec<MeshDraw<'_>> {
         match &self.source {
             Source::Baked { scene, .. } => scene.draws().iter().map(MeshDraw::from).collect(),
-            Source::Plain { out, .. } => out
+            Source::Plain(p) => p
+                .out
                 .iter()
                 .map(|o| MeshDraw {
                     positions: &o.positions,

@@ -179,6 +179,7 @@ pub fn run(options: Options) -> Result<()> {
             );
         }
     }
+    app.summarise();
     app.write_stats()
 }
 
@@ -600,6 +601,31 @@ impl App {
         Ok(())
     }
 
+    /// After a scripted run: the mean frame, draw and refine times, the first frame (uploads
+    /// and pipeline creation) left out.
+    fn summarise(&self) {
+        let frames = self.stats.get(1..).unwrap_or_default();
+        if frames.is_empty() {
+            return;
+        }
+        let n = frames.len() as f64;
+        let mean = |f: &dyn Fn(&FrameStats) -> f64| frames.iter().map(f).sum::<f64>() / n;
+        let changed: Vec<&FrameStats> = frames.iter().filter(|f| !f.refined.is_empty()).collect();
+        let draw = mean(&|f| f.draw_ms);
+        let refine = mean(&|f| f.refine_ms);
+        println!(
+            "{} frames after the first: frame {:.1} ms, draw {draw:.1} ms, refine {refine:.1} ms \
+             (refine / draw {:.2}); {} frames changed levels, refining {:.1} ms each, longest \
+             frame {:.1} ms",
+            frames.len(),
+            mean(&|f| f.frame_ms),
+            refine / draw.max(1e-9),
+            changed.len(),
+            changed.iter().map(|f| f.refine_ms).sum::<f64>() / changed.len().max(1) as f64,
+            frames.iter().map(|f| f.frame_ms).fold(0.0, f64::max),
+        );
+    }
+
     fn write_stats(&self) -> Result<()> {
         let Some(path) = &self.options.stats else {
             return Ok(());
@@ -650,13 +676,11 @@ impl ApplicationHandler for App {
         let window = gpu.window.clone();
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
-            WindowEvent::Resized(size) => {
-                if size.width > 0 && size.height > 0 {
-                    gpu.config.width = size.width;
-                    gpu.config.height = size.height;
-                    gpu.surface.configure(&gpu.ctx.device, &gpu.config);
-                    window.request_redraw();
-                }
+            WindowEvent::Resized(size) if size.width > 0 && size.height > 0 => {
+                gpu.config.width = size.width;
+                gpu.config.height = size.height;
+                gpu.surface.configure(&gpu.ctx.device, &gpu.config);
+                window.request_redraw();
             }
             WindowEvent::RedrawRequested => {
                 if let Err(e) = self.redraw(event_loop) {
