@@ -164,8 +164,9 @@ impl FrameRenderer {
     }
 
     /// Records the frame into `encoder`: the scene seen through `view_proj` on a black
-    /// background, tone-mapped with `exposure` stops into `target` (of [`Self::format`] and
-    /// `size`), then `overlay` when given.
+    /// background, drawn in the columns from `scene_x` to the right edge, tone-mapped with
+    /// `exposure` stops into `target` (of [`Self::format`] and `size`), then `overlay` when
+    /// given.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &mut self,
@@ -173,6 +174,7 @@ impl FrameRenderer {
         encoder: &mut wgpu::CommandEncoder,
         target: &wgpu::TextureView,
         size: (u32, u32),
+        scene_x: u32,
         view_proj: Mat4,
         draws: &[MeshDraw<'_>],
         exposure: f32,
@@ -217,6 +219,8 @@ impl FrameRenderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
+            let x = scene_x.min(size.0 - 1);
+            pass.set_viewport(x as f32, 0.0, (size.0 - x) as f32, size.1 as f32, 0.0, 1.0);
             scene.draw(ctx, &mut pass, view_proj, draws);
         }
         {
@@ -277,6 +281,7 @@ impl FrameRenderer {
         &mut self,
         ctx: &GpuContext,
         size: (u32, u32),
+        scene_x: u32,
         view_proj: Mat4,
         draws: &[MeshDraw<'_>],
         exposure: f32,
@@ -315,6 +320,7 @@ impl FrameRenderer {
             &mut encoder,
             &view,
             size,
+            scene_x,
             view_proj,
             draws,
             exposure,

@@ -482,7 +482,13 @@ impl App {
             .content
             .as_ref()
             .map_or(([-1.0; 3], [1.0; 3]), |c| c.bounds);
-        let aspect = width as f32 / height.max(1) as f32;
+        // The scene fills the window right of the panel.
+        let scene_x = if show_panel {
+            ((actions.width * output.pixels_per_point).round() as u32).min(width.saturating_sub(1))
+        } else {
+            0
+        };
+        let aspect = (width - scene_x) as f32 / height.max(1) as f32;
         let view_proj = view_projection(&camera, lo, hi, aspect);
         let surface_texture = match gpu.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
@@ -508,6 +514,7 @@ impl App {
                 &mut encoder,
                 &view,
                 (width, height),
+                scene_x,
                 view_proj,
                 &draws,
                 self.settings.exposure,
@@ -533,6 +540,7 @@ impl App {
             let pixels = gpu.frame.screenshot(
                 &gpu.ctx,
                 (width, height),
+                scene_x,
                 view_proj,
                 &draws,
                 self.settings.exposure,
@@ -621,7 +629,7 @@ impl App {
             mean(&|f| f.frame_ms),
             refine / draw.max(1e-9),
             changed.len(),
-            changed.iter().map(|f| f.refine_ms).sum::<f64>() / changed.len().max(1) as f64,
+            changed.iter().map(|f| f.refine_ms).sum::<f64>() / changed.len().max(1) as f64 + 0.0,
             frames.iter().map(|f| f.frame_ms).fold(0.0, f64::max),
         );
     }

@@ -24,11 +24,13 @@ pub struct Facts<'a> {
 pub struct Actions {
     pub reset_camera: bool,
     pub screenshot: bool,
+    /// The panel's width in points: the scene is drawn to its right.
+    pub width: f32,
 }
 
 pub fn show(ui: &mut egui::Ui, facts: &Facts<'_>, settings: &mut Settings) -> Actions {
     let mut actions = Actions::default();
-    egui::Panel::left("hce view panel")
+    let response = egui::Panel::left("hce view panel")
         .default_size(310.0)
         .show(ui, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| {
@@ -133,5 +135,6 @@ pub fn show(ui: &mut egui::Ui, facts: &Facts<'_>, settings: &mut Settings) -> Ac
                 });
             });
         });
+    actions.width = response.response.rect.width();
     actions
 }
