@@ -33,6 +33,11 @@ pub struct ViewArgs {
     /// Lower levels chosen from the view (highest first) to draw at most this many triangles.
     #[arg(long, default_value_t = 16_000_000)]
     pub max_triangles: u64,
+    /// Milliseconds of refinement per frame: level changes beyond it wait for the next frames
+    /// (the largest changes first, at least one object per frame), so that a frame where many
+    /// levels change is not one long stall; 0 refines every change in the frame it happens.
+    #[arg(long, default_value_t = 4.0)]
+    pub refine_budget: f64,
     /// `smooth`, `nearest` or `gouraud`, as for `hce render` (N cycles them in the window).
     #[arg(long, default_value = "smooth", value_parser = super::render::parse_reconstruction)]
     pub reconstruction: hce_geometry::lighting::Reconstruction,
@@ -87,6 +92,9 @@ pub fn run(args: ViewArgs) -> Result<()> {
     if !(args.pixels_per_edge.is_finite() && args.pixels_per_edge > 0.0) {
         bail!("--pixels-per-edge must be a positive number");
     }
+    if !(args.refine_budget.is_finite() && args.refine_budget >= 0.0) {
+        bail!("--refine-budget must be 0 or more milliseconds");
+    }
     if args.frames == Some(0) {
         bail!("--frames must be at least 1");
     }
@@ -125,6 +133,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
                     ..Default::default()
                 },
                 max_triangles: args.max_triangles,
+                refine_budget_ms: args.refine_budget,
             },
             reconstruction: args.reconstruction,
             exposure: args.exposure,

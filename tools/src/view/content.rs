@@ -24,6 +24,9 @@ pub struct Levels {
     pub lod: LodParams,
     /// Most fine triangles drawn, instances counted (as `hce render --max-triangles`).
     pub max_triangles: u64,
+    /// Milliseconds of refinement per frame after which the remaining level changes wait for
+    /// the next frame (at least one object is refined per frame); 0: every change at once.
+    pub refine_budget_ms: f64,
 }
 
 /// One object as the panel and the statistics show it.
@@ -48,6 +51,8 @@ pub struct Refined {
     pub ms: f64,
     /// Levels lowered for the triangle budget.
     pub notes: Vec<String>,
+    /// Objects whose level should change but were left for a later frame (refine budget).
+    pub pending: usize,
 }
 
 enum Source {
@@ -265,11 +270,31 @@ impl Content {
                 };
                 let (wanted, notes) = scene.levels_within(&choice, levels.max_triangles)?;
                 refined.notes = notes;
-                for (i, level) in wanted.iter().enumerate() {
-                    let Some(level) = *level else { continue };
-                    if scene.level(i) == Some(level) {
-                        continue;
+                // Objects not drawn yet first (all of them: there is nothing else to draw),
+                // then the largest level changes; past the frame's refine budget the rest keep
+                // their level and are drawn as they are until a later frame.
+                let mut changed: Vec<(usize, u32, Option<u32>)> = wanted
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(i, l)| l.map(|l| (i, l, scene.level(i))))
+                    .filter(|&(_, l, now)| now != Some(l))
+                    .collect();
+                changed.sort_by_key(|&(i, l, now)| {
+                    (
+                        now.is_some(),
+                        std::cmp::Reverse(now.map(|n| n.abs_diff(l))),
+                        i,
+                    )
+                });
+                refined.pending = changed.len();
+                for (i, level, now) in changed {
+                    if now.is_some()
+                        && levels.refine_budget_ms > 0.0
+                        && refined.ms >= levels.refine_budget_ms
+                    {
+                        break;
                     }
+                    refined.pending -= 1;
                     let t = Instant::now();
                     scene.refine(ctx, i, level)?;
                     ctx.wait()?;

@@ -69,6 +69,8 @@ struct FrameStats {
     levels: Vec<u32>,
     /// Names of the objects refined in this frame.
     refined: Vec<String>,
+    /// Objects whose level should change, left for later frames by the refine budget.
+    pending: usize,
     triangles: u64,
     /// Refinement of the objects whose level changed, GPU work waited for.
     refine_ms: f64,
@@ -444,6 +446,7 @@ impl App {
             triangles,
             frame_ms: self.frame_ms,
             refine_ms: self.refine_ms,
+            pending: refined.pending,
             message: self.message.as_deref(),
         };
         let raw = gpu.egui_state.take_egui_input(&gpu.window);
@@ -572,12 +575,16 @@ impl App {
                 .map(|o| o.level)
                 .collect();
             println!(
-                "frame {}: {} triangles{}, refined [{}] in {:.1} ms, frame {:.1} ms",
+                "frame {}: {} triangles{}, refined [{}] in {:.1} ms{}, frame {:.1} ms",
                 self.frame_index,
                 triangles,
                 if drawn { "" } else { " (not presented)" },
                 names.join(" "),
                 refine_ms,
+                match refined.pending {
+                    0 => String::new(),
+                    n => format!(" ({n} left for later frames)"),
+                },
                 frame_ms
             );
             if !drawn {
@@ -594,6 +601,7 @@ impl App {
                     .filter_map(|&i| objects.get(i))
                     .map(|o| o.name.clone())
                     .collect(),
+                pending: refined.pending,
                 triangles,
                 refine_ms,
                 draw_ms: frame_ms - refine_ms,

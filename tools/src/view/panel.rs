@@ -16,6 +16,8 @@ pub struct Facts<'a> {
     pub triangles: u64,
     pub frame_ms: f64,
     pub refine_ms: f64,
+    /// Level changes left for later frames by the refine budget.
+    pub pending: usize,
     pub message: Option<&'a str>,
 }
 
@@ -78,6 +80,17 @@ pub fn show(ui: &mut egui::Ui, facts: &Facts<'_>, settings: &mut Settings) -> Ac
                 } else {
                     let level = settings.levels.forced.get_or_insert(2);
                     ui.add(egui::Slider::new(level, 0..=6).text("level"));
+                }
+
+                ui.add(
+                    egui::Slider::new(&mut settings.levels.refine_budget_ms, 0.0..=50.0)
+                        .text("refine budget (ms per frame)"),
+                );
+                if facts.pending > 0 {
+                    ui.label(format!(
+                        "{} level changes left for the next frames",
+                        facts.pending
+                    ));
                 }
 
                 ui.separator();
