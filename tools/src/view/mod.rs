@@ -285,8 +285,17 @@ impl App {
         println!("{}: camera {source}", path.display());
         gpu.window
             .set_title(&format!("hce view: {}", path.display()));
-        self.start = camera;
-        self.camera = ViewCamera::from_camera(&camera);
+        // Orbit about the point straight ahead nearest the scene's centre, not the file's
+        // target (a direction only, placed at the scene's radius).
+        let mut view = ViewCamera::from_camera(&camera);
+        let (lo, hi) = content.bounds;
+        let (lo, hi) = (glam::Vec3::from(lo), glam::Vec3::from(hi));
+        let radius = (0.5 * lo.distance(hi)).max(1e-3);
+        view.distance = ((lo + hi) * 0.5 - view.eye)
+            .dot(view.forward())
+            .clamp(0.05 * radius, 2.0 * radius);
+        self.start = view.camera();
+        self.camera = view;
         self.camera_source = source;
         self.content = Some(content);
         self.message = None;
@@ -309,7 +318,7 @@ impl App {
         let Some(content) = &self.content else { return };
         let (lo, hi) = content.bounds;
         let radius = 0.5 * glam::Vec3::from(hi).distance(glam::Vec3::from(lo));
-        let mut speed = 0.5 * radius.max(1e-3) * dt;
+        let mut speed = 0.25 * radius.max(1e-3) * dt;
         if self.input.shift {
             speed *= 4.0;
         }
@@ -384,8 +393,8 @@ impl App {
                 let s = 2.0 * c.distance * (c.fov_y_degrees.to_radians() * 0.5).tan() / height;
                 c.translate(-dx * s, dy * s, 0.0);
             }
-            Some(MouseButton::Left) => self.camera.orbit(-dx * 0.008, -dy * 0.008),
-            Some(MouseButton::Right) => self.camera.turn(-dx * 0.004, -dy * 0.004),
+            Some(MouseButton::Left) => self.camera.orbit(-dx * 0.005, -dy * 0.005),
+            Some(MouseButton::Right) => self.camera.turn(-dx * 0.003, -dy * 0.003),
             _ => {}
         }
     }
@@ -460,6 +469,14 @@ impl App {
         });
         gpu.egui_state
             .handle_platform_output(&gpu.window, output.platform_output);
+        // The panel animates (a header opening, a slider dragged): draw again at once.
+        if output
+            .viewport_output
+            .get(&egui::ViewportId::ROOT)
+            .is_some_and(|v| v.repaint_delay.is_zero())
+        {
+            gpu.window.request_redraw();
+        }
         let primitives = gpu.egui.tessellate(output.shapes, output.pixels_per_point);
         // Applied now, freed after painting; drained so that nothing is left to drop unapplied.
         let mut textures = output.textures_delta;
@@ -686,7 +703,8 @@ impl ApplicationHandler for App {
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
         let Some(gpu) = self.gpu.as_mut() else { return };
         let response = gpu.egui_state.on_window_event(&gpu.window, &event);
-        if response.repaint {
+        // egui asks for a repaint after a redraw too; following that would redraw forever.
+        if response.repaint && !matches!(event, WindowEvent::RedrawRequested) {
             gpu.window.request_redraw();
         }
         let window = gpu.window.clone();
@@ -710,6 +728,20 @@ impl ApplicationHandler for App {
             WindowEvent::ModifiersChanged(m) => {
                 self.input.shift = m.state().shift_key();
                 self.input.ctrl = m.state().control_key();
+            }
+            // The panel takes Tab to move its focus; the window's own keys come first.
+            WindowEvent::KeyboardInput { ref event, .. }
+                if event.state == ElementState::Pressed
+                    && !event.repeat
+                    && matches!(
+                        event.physical_key,
+                        PhysicalKey::Code(KeyCode::Tab | KeyCode::F12)
+                    ) =>
+            {
+                if let PhysicalKey::Code(code) = event.physical_key {
+                    self.key(code);
+                }
+                window.request_redraw();
             }
             _ if response.consumed => {}
             WindowEvent::KeyboardInput { event, .. } => {
@@ -756,5 +788,38 @@ impl ApplicationHandler for App {
                 gpu.window.request_redraw();
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_window_format_is_8_bit_unorm_when_offered() {
+        use wgpu::TextureFormat::*;
+        assert_eq!(
+            choose_format(&[Bgra8UnormSrgb, Rgba16Float, Bgra8Unorm]),
+            Some(Bgra8Unorm)
+        );
+        assert_eq!(
+            choose_format(&[Rgba8UnormSrgb, Rgba8Unorm]),
+            Some(Rgba8Unorm)
+        );
+        assert_eq!(choose_format(&[Bgra8UnormSrgb]), Some(Bgra8UnormSrgb));
+        assert_eq!(choose_format(&[Rgb10a2Unorm]), Some(Rgb10a2Unorm));
+        assert_eq!(choose_format(&[]), None);
+    }
+
+    #[test]
+    fn screenshot_names_do_not_overwrite() {
+        let dir = tempfile::tempdir().unwrap();
+        let first = free_name(dir.path()).unwrap();
+        assert_eq!(first, dir.path().join("hce-view-1.png"));
+        std::fs::write(&first, b"taken").unwrap();
+        assert_eq!(
+            free_name(dir.path()).unwrap(),
+            dir.path().join("hce-view-2.png")
+        );
     }
 }
