@@ -448,6 +448,20 @@ impl GpuScene {
     /// Refines one object to `level`. Does nothing when it is already there; reuses its output
     /// buffers when they are large enough.
     pub fn refine(&mut self, ctx: &GpuContext, object: usize, level: u32) -> Result<(), GpuError> {
+        self.refine_timed(ctx, object, level, false).map(|_| ())
+    }
+
+    /// [`GpuScene::refine`], which with `measure` returns the GPU time of the kernels' dispatches
+    /// in seconds when the adapter has timestamp queries (waiting for the GPU); `None` without
+    /// `measure` or timestamps, on the CPU reference path, and when the object was already at
+    /// `level`.
+    pub fn refine_timed(
+        &mut self,
+        ctx: &GpuContext,
+        object: usize,
+        level: u32,
+        measure: bool,
+    ) -> Result<Option<f64>, GpuError> {
         let count = self.objects.len();
         let o = self.objects.get_mut(object).ok_or_else(|| {
             GpuError::InvalidParams(format!("object {object} does not exist ({count} objects)"))
@@ -456,23 +470,27 @@ impl GpuScene {
         match &mut o.refiner {
             Refiner::Flat { object, out } => {
                 if out.as_ref().is_some_and(|b| b.level == level) {
-                    return Ok(());
+                    return Ok(None);
                 }
                 let kernel = self
                     .flat
                     .as_ref()
                     .ok_or_else(|| invalid(&name, "the flat kernel was not created"))?;
-                kernel.refine_into(ctx, object, level, out, false)?;
+                return Ok(kernel
+                    .refine_into(ctx, object, level, out, measure)?
+                    .gpu_seconds);
             }
             Refiner::Loop { object, out } => {
                 if out.as_ref().is_some_and(|b| b.level == level) {
-                    return Ok(());
+                    return Ok(None);
                 }
                 let kernel = self
                     .loop_kernel
                     .as_ref()
                     .ok_or_else(|| invalid(&name, "the Loop kernel was not created"))?;
-                kernel.refine_into(ctx, object, level, out, false)?;
+                return Ok(kernel
+                    .refine_into(ctx, object, level, out, measure)?
+                    .gpu_seconds);
             }
             Refiner::CpuReference {
                 reconstruction,
@@ -481,7 +499,7 @@ impl GpuScene {
                 out,
             } => {
                 if out.as_ref().is_some_and(|b| b.level == level) {
-                    return Ok(());
+                    return Ok(None);
                 }
                 if level > hce_geometry::subdivide::MAX_LOOP_LEVEL {
                     return Err(GpuError::LevelTooHigh {
@@ -500,7 +518,7 @@ impl GpuScene {
                 *out = Some(upload_cpu(ctx, out.take(), scratch, &colours, level)?);
             }
         }
-        Ok(())
+        Ok(None)
     }
 
     /// The current buffers of `object`, `None` before its first refinement.

@@ -40,6 +40,9 @@ pub struct ObjectStats {
     pub instances: usize,
     /// Wall time of its last refinement, GPU work waited for, in milliseconds.
     pub refine_ms: f64,
+    /// GPU time of its last refinement's dispatches (timestamp queries), in milliseconds,
+    /// where the adapter has them.
+    pub refine_gpu_ms: Option<f64>,
 }
 
 /// What one frame's level update did.
@@ -165,6 +168,7 @@ impl Content {
                 triangles: 0,
                 instances: scene.instance_count(i),
                 refine_ms: 0.0,
+                refine_gpu_ms: None,
             })
             .collect();
         Ok(Self {
@@ -195,6 +199,7 @@ impl Content {
             triangles: 0,
             instances: 1,
             refine_ms: 0.0,
+            refine_gpu_ms: None,
         }];
         Ok(Self {
             path: path.to_owned(),
@@ -258,6 +263,8 @@ impl Content {
         levels: &Levels,
     ) -> Result<Refined> {
         let mut refined = Refined::default();
+        // GPU timestamps where the adapter has them (reading them waits, as the frame does).
+        let measure = ctx.description.timestamps;
         match &mut self.source {
             Source::Baked { scene, .. } => {
                 let choice = match levels.forced {
@@ -296,13 +303,14 @@ impl Content {
                     }
                     refined.pending -= 1;
                     let t = Instant::now();
-                    scene.refine(ctx, i, level)?;
+                    let gpu = scene.refine_timed(ctx, i, level, measure)?;
                     ctx.wait()?;
                     let ms = t.elapsed().as_secs_f64() * 1e3;
                     let s = &mut self.objects[i];
                     s.level = level;
                     s.triangles = scene.triangles_at(i, level);
                     s.refine_ms = ms;
+                    s.refine_gpu_ms = gpu.map(|g| g * 1e3);
                     refined.objects.push(i);
                     refined.ms += ms;
                 }
@@ -332,13 +340,14 @@ impl Content {
                 };
                 if out.as_ref().map(|o| o.level) != Some(level) {
                     let t = Instant::now();
-                    kernel.refine_into(ctx, uploaded, level, out, false)?;
+                    let timing = kernel.refine_into(ctx, uploaded, level, out, measure)?;
                     ctx.wait()?;
                     let ms = t.elapsed().as_secs_f64() * 1e3;
                     let s = &mut self.objects[0];
                     s.level = level;
                     s.triangles = out.as_ref().map_or(0, |o| u64::from(o.triangle_count));
                     s.refine_ms = ms;
+                    s.refine_gpu_ms = timing.gpu_seconds.map(|g| g * 1e3);
                     refined.objects.push(0);
                     refined.ms += ms;
                 }

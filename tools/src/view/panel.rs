@@ -132,7 +132,7 @@ pub fn show(ui: &mut egui::Ui, facts: &Facts<'_>, settings: &mut Settings) -> Ac
                     ui.label("name");
                     ui.label("level");
                     ui.label("triangles");
-                    ui.label("refine ms");
+                    ui.label("refine ms (GPU)");
                     ui.end_row();
                     for o in facts.objects.iter().filter(|o| o.instances > 0) {
                         ui.label(&o.name).on_hover_text(o.kind);
@@ -142,7 +142,11 @@ pub fn show(ui: &mut egui::Ui, facts: &Facts<'_>, settings: &mut Settings) -> Ac
                         } else {
                             ui.label(format!("{} x {}", o.triangles, o.instances));
                         }
-                        ui.label(format!("{:.2}", o.refine_ms));
+                        match o.refine_gpu_ms {
+                            Some(g) => ui.label(format!("{:.2} ({g:.2})", o.refine_ms)),
+                            None => ui.label(format!("{:.2}", o.refine_ms)),
+                        }
+                        .on_hover_text("wall time, GPU work waited for (GPU timestamps)");
                         ui.end_row();
                     }
                 });
