@@ -52,6 +52,8 @@ pub struct Refined {
     pub objects: Vec<usize>,
     /// Their refinement's wall time, GPU work waited for, in milliseconds.
     pub ms: f64,
+    /// The GPU time of their dispatches (timestamp queries), where the adapter has them.
+    pub gpu_ms: Option<f64>,
     /// Levels lowered for the triangle budget.
     pub notes: Vec<String>,
     /// Objects whose level should change but were left for a later frame (refine budget).
@@ -311,6 +313,9 @@ impl Content {
                     s.triangles = scene.triangles_at(i, level);
                     s.refine_ms = ms;
                     s.refine_gpu_ms = gpu.map(|g| g * 1e3);
+                    if let Some(g) = s.refine_gpu_ms {
+                        *refined.gpu_ms.get_or_insert(0.0) += g;
+                    }
                     refined.objects.push(i);
                     refined.ms += ms;
                 }
@@ -348,6 +353,7 @@ impl Content {
                     s.triangles = out.as_ref().map_or(0, |o| u64::from(o.triangle_count));
                     s.refine_ms = ms;
                     s.refine_gpu_ms = timing.gpu_seconds.map(|g| g * 1e3);
+                    refined.gpu_ms = s.refine_gpu_ms;
                     refined.objects.push(0);
                     refined.ms += ms;
                 }

@@ -74,6 +74,8 @@ struct FrameStats {
     triangles: u64,
     /// Refinement of the objects whose level changed, GPU work waited for.
     refine_ms: f64,
+    /// The GPU time of their dispatches, where the adapter has timestamp queries.
+    refine_gpu_ms: Option<f64>,
     /// The rest of the frame: panel, drawing, presenting, GPU work waited for.
     draw_ms: f64,
     frame_ms: f64,
@@ -621,6 +623,7 @@ impl App {
                 pending: refined.pending,
                 triangles,
                 refine_ms,
+                refine_gpu_ms: refined.gpu_ms,
                 draw_ms: frame_ms - refine_ms,
                 frame_ms,
             });
@@ -646,10 +649,11 @@ impl App {
         let changed: Vec<&FrameStats> = frames.iter().filter(|f| !f.refined.is_empty()).collect();
         let draw = mean(&|f| f.draw_ms);
         let refine = mean(&|f| f.refine_ms);
+        let gpu = mean(&|f| f.refine_gpu_ms.unwrap_or(0.0));
         println!(
             "{} frames after the first: frame {:.1} ms, draw {draw:.1} ms, refine {refine:.1} ms \
-             (refine / draw {:.2}); {} frames changed levels, refining {:.1} ms each, longest \
-             frame {:.1} ms",
+             ({gpu:.1} ms in GPU timestamps; refine / draw {:.2}); {} frames changed levels, \
+             refining {:.1} ms each, longest frame {:.1} ms",
             frames.len(),
             mean(&|f| f.frame_ms),
             refine / draw.max(1e-9),
