@@ -58,6 +58,9 @@ enum Command {
     /// object's level chosen live from the view; `--frames N` for scripted runs.
     #[command(after_help = EXIT_CODES)]
     View(cmd::view::ViewArgs),
+    /// Serve the browser viewer (WebGPU) for a baked file on 127.0.0.1 and print its URL.
+    #[command(after_help = EXIT_CODES)]
+    Serve(cmd::serve::ServeArgs),
 }
 
 /// `hce inspect x.glb | head` closes the pipe early; Rust's `println!` then panics with "failed
@@ -94,6 +97,7 @@ fn main() {
         Command::Inspect(args) => cmd::inspect::run(args),
         Command::Validate(args) => cmd::validate::run(args),
         Command::View(args) => cmd::view::run(args),
+        Command::Serve(args) => cmd::serve::run(args),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");
