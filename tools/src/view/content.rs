@@ -264,6 +264,14 @@ impl Content {
         viewport_height: u32,
         levels: &Levels,
     ) -> Result<Refined> {
+        // Levels chosen from the view also stay within the adapter's largest storage binding:
+        // a refined object's largest buffers hold 16 bytes per fine triangle (the flat kernel's
+        // face colours; indices take 12).
+        let binding = ctx.device.limits().max_storage_buffer_binding_size;
+        let levels = &Levels {
+            max_triangles: levels.max_triangles.min(binding / 16),
+            ..*levels
+        };
         let mut refined = Refined::default();
         // GPU timestamps where the adapter has them (reading them waits, as the frame does).
         let measure = ctx.description.timestamps;

@@ -429,7 +429,18 @@ impl App {
 
         let t0 = Instant::now();
         let refined = match self.content.as_mut() {
-            Some(c) => c.update(&gpu.ctx, camera, height, &self.settings.levels)?,
+            Some(c) => match c.update(&gpu.ctx, camera, height, &self.settings.levels) {
+                Ok(r) => r,
+                // In the window a level the adapter cannot hold is a message, not the end:
+                // back to levels from the view, which stay within its buffers.
+                Err(e) if !scripted => {
+                    eprintln!("error: {e:#}");
+                    self.message = Some(format!("{e:#}"));
+                    self.settings.levels.forced = None;
+                    Default::default()
+                }
+                Err(e) => return Err(e),
+            },
             None => Default::default(),
         };
         let refine_ms = refined.ms;
