@@ -1,16 +1,18 @@
-//! `hce`: bake, inspect, validate, subdivide, render and demo assets with baked global illumination;
-//! path-trace references and compare images with them.
+//! `hce`: bake, inspect, validate, subdivide, render, view and demo assets with baked global
+//! illumination; path-trace references and compare images with them.
 #![forbid(unsafe_code)]
 
 use clap::{Parser, Subcommand};
 
 mod cmd;
+#[cfg(feature = "gpu")]
+mod view;
 
 /// Exit statuses shared by every subcommand (also in SPEC.md Appendix E and README.md).
 const EXIT_CODES: &str = "\
 Exit status:
   0  success (for `validate`: the file is valid)
-  1  internal or other error
+  1  internal or other error (also: no GPU adapter, or no display for `view`)
   2  usage error (bad arguments)
   3  invalid input (unreadable bytes, failed validation)
   4  I/O error (file missing, unreadable or unwritable)";
@@ -52,6 +54,10 @@ enum Command {
     /// Check a .hce, .glb or .gltf file deeply; one line per problem.
     #[command(after_help = EXIT_CODES)]
     Validate(cmd::validate::ValidateArgs),
+    /// Open a baked asset in a window (or preview a mesh) and move around it, with each
+    /// object's level chosen live from the view; `--frames N` for scripted runs.
+    #[command(after_help = EXIT_CODES)]
+    View(cmd::view::ViewArgs),
     /// Serve the browser viewer (WebGPU) for a baked file on 127.0.0.1 and print its URL.
     #[command(after_help = EXIT_CODES)]
     Serve(cmd::serve::ServeArgs),
@@ -90,6 +96,7 @@ fn main() {
         Command::Subdivide(args) => cmd::subdivide::run(args),
         Command::Inspect(args) => cmd::inspect::run(args),
         Command::Validate(args) => cmd::validate::run(args),
+        Command::View(args) => cmd::view::run(args),
         Command::Serve(args) => cmd::serve::run(args),
     };
     if let Err(e) = result {

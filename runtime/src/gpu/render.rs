@@ -245,12 +245,130 @@ pub fn render_gpu_mesh(
 
 /// One draw of a scene: a mesh on the GPU (`positions` f32 ×3, linear `colours` f32 ×4, `u32`
 /// indices) placed in the world by `transform` (object to world).
-pub(crate) struct MeshDraw<'a> {
+#[derive(Clone, Copy, Debug)]
+pub struct MeshDraw<'a> {
     pub positions: &'a wgpu::Buffer,
     pub colours: &'a wgpu::Buffer,
     pub indices: &'a wgpu::Buffer,
     pub index_count: u32,
     pub transform: Mat4,
+}
+
+impl<'a> From<&super::SceneDraw<'a>> for MeshDraw<'a> {
+    fn from(d: &super::SceneDraw<'a>) -> Self {
+        Self {
+            positions: d.positions,
+            colours: d.colours,
+            indices: d.indices,
+            index_count: d.index_count,
+            transform: d.transform,
+        }
+    }
+}
+
+/// The pipeline that draws placed meshes with their linear colours and no lighting
+/// (`render.wgsl`) into a colour target of `format` with a [`MeshPipeline::DEPTH_FORMAT`] depth
+/// buffer: the headless renderer's, and a windowed viewer's (`hce view`), which draws into its
+/// own pass.
+pub struct MeshPipeline {
+    pipeline: wgpu::RenderPipeline,
+}
+
+impl MeshPipeline {
+    /// The depth attachment's format; clear it to 1.0 (nearer surfaces have smaller depths).
+    pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+    pub fn new(ctx: &GpuContext, format: wgpu::TextureFormat) -> Self {
+        let module = ctx
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("hce render"),
+                source: wgpu::ShaderSource::Wgsl(include_str!("render.wgsl").into()),
+            });
+        let pipeline = ctx
+            .device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("hce render"),
+                layout: None,
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[
+                        Some(wgpu::VertexBufferLayout {
+                            array_stride: 12,
+                            step_mode: wgpu::VertexStepMode::Vertex,
+                            attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+                        }),
+                        Some(wgpu::VertexBufferLayout {
+                            array_stride: 16,
+                            step_mode: wgpu::VertexStepMode::Vertex,
+                            attributes: &wgpu::vertex_attr_array![1 => Float32x4],
+                        }),
+                    ],
+                },
+                primitive: wgpu::PrimitiveState {
+                    // Baked assets may be open surfaces: draw both sides.
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: Self::DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+        Self { pipeline }
+    }
+
+    /// Records `draws` into `pass` (which must target this pipeline's formats), seen through
+    /// `view_proj` ([`view_projection`]).
+    pub fn draw(
+        &self,
+        ctx: &GpuContext,
+        pass: &mut wgpu::RenderPass<'_>,
+        view_proj: Mat4,
+        draws: &[MeshDraw<'_>],
+    ) {
+        // One uniform per draw: the shader's matrix is view-projection times the draw's
+        // transform.
+        let layout = self.pipeline.get_bind_group_layout(0);
+        pass.set_pipeline(&self.pipeline);
+        for d in draws {
+            if d.index_count == 0 {
+                continue;
+            }
+            let uniform = uniform_init(
+                ctx,
+                "view projection",
+                &(view_proj * d.transform).to_cols_array(),
+            );
+            pass.set_bind_group(
+                0,
+                &bind_buffers(ctx, "hce render", &layout, &[&uniform]),
+                &[],
+            );
+            pass.set_vertex_buffer(0, d.positions.slice(..));
+            pass.set_vertex_buffer(1, d.colours.slice(..));
+            pass.set_index_buffer(d.indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..d.index_count, 0, 0..1);
+        }
+    }
 }
 
 /// Draws several placed meshes into one image and reads it back. `bounds` (world space) place
@@ -309,77 +427,11 @@ pub(crate) fn render_draws(
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Depth32Float,
+        format: MeshPipeline::DEPTH_FORMAT,
         usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
         view_formats: &[],
     });
-    let module = ctx
-        .device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("hce render"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("render.wgsl").into()),
-        });
-    let pipeline = ctx
-        .device
-        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("hce render"),
-            layout: None,
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[
-                    Some(wgpu::VertexBufferLayout {
-                        array_stride: 12,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![0 => Float32x3],
-                    }),
-                    Some(wgpu::VertexBufferLayout {
-                        array_stride: 16,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![1 => Float32x4],
-                    }),
-                ],
-            },
-            primitive: wgpu::PrimitiveState {
-                // Baked assets may be open surfaces: draw both sides.
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-    // One uniform per draw: the shader's matrix is view-projection times the draw's transform.
-    let layout = pipeline.get_bind_group_layout(0);
-    let bind_groups: Vec<wgpu::BindGroup> = draws
-        .iter()
-        .map(|d| {
-            let uniform = uniform_init(
-                ctx,
-                "view projection",
-                &(view_proj * d.transform).to_cols_array(),
-            );
-            bind_buffers(ctx, "hce render", &layout, &[&uniform])
-        })
-        .collect();
+    let pipeline = MeshPipeline::new(ctx, format);
 
     let row_bytes = u64::from(w) * 16;
     let padded_row = row_bytes.next_multiple_of(u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT));
@@ -419,17 +471,7 @@ pub(crate) fn render_draws(
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&pipeline);
-        for (d, bind_group) in draws.iter().zip(&bind_groups) {
-            if d.index_count == 0 {
-                continue;
-            }
-            pass.set_bind_group(0, bind_group, &[]);
-            pass.set_vertex_buffer(0, d.positions.slice(..));
-            pass.set_vertex_buffer(1, d.colours.slice(..));
-            pass.set_index_buffer(d.indices.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..d.index_count, 0, 0..1);
-        }
+        pipeline.draw(ctx, &mut pass, view_proj, draws);
     }
     encoder.copy_texture_to_buffer(
         wgpu::TexelCopyTextureInfo {
