@@ -10,7 +10,13 @@
 //! solution is split (that error weighed against every receiver that makes it: the whole
 //! coarse receiver triangle, so that a finely split receiver cannot hide it, BENCHMARKS.md,
 //! Cornell box; and the coarse triangles of the same object around it that see the source
-//! from about the same place, so that a finely tessellated object cannot either). The system is solved
+//! from about the same place, so that a finely tessellated object cannot either). Every leaf
+//! is drawn, so two rules judge a link against the radiance of its receiver rather than the
+//! scene's power: a receiver over which the link's form factor bends more than a linear
+//! function follows is split, and so is one that a shadow edge crosses (partial visibility).
+//! A link's coefficient is linear over its receiver (its values at the three corners), so that
+//! push hands each leaf the form factor over its own part (in a closed furnace, constant links
+//! left leaves by a wall 13% too bright). The system is solved
 //! by gathering over links and push-pull, and links are refined again against the solution.
 //! Instead of linking every pair of input triangles up front, receivers start from
 //! the top of a cluster hierarchy ([`crate::cluster`], after Smits et al. 1994) and open
