@@ -648,6 +648,8 @@ pub struct AssetRenderOptions {
     pub scene: SceneOptions,
     /// Linear background colour. Default black.
     pub background: [f32; 3],
+    /// Multisamples per pixel, as [`RenderParams::samples`]. Default 4.
+    pub samples: u32,
 }
 
 impl Default for AssetRenderOptions {
@@ -661,6 +663,7 @@ impl Default for AssetRenderOptions {
             max_triangles: 16_000_000,
             scene: SceneOptions::default(),
             background: [0.0; 3],
+            samples: 4,
         }
     }
 }
@@ -800,6 +803,7 @@ pub fn render_asset(
             height: options.height,
             framing: Framing::Camera(camera),
             background: options.background,
+            samples: options.samples,
         },
     )?;
     let objects = levels
