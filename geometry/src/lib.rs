@@ -11,6 +11,7 @@
 //! * [`lattice`]: the 1-to-4 lattice of a refined triangle and its vertex numbering.
 //! * [`subdivide`](mod@subdivide): Loop subdivision, the CPU reference of the GPU Loop kernel.
 //! * [`flat`]: flat (linear) refinement, the CPU reference of the GPU flat kernel.
+//! * [`split`]: a multiresolution object's refined vertices split at sharp edges (SPEC.md F.5).
 //! * [`decode`]: the paper's per-subtriangle colour (tree walk, nearest representative normal).
 //! * [`lighting`], [`colour`]: the reconstruction of baked lighting on a refined mesh
 //!   (SPEC.md, Appendix G).
@@ -28,6 +29,8 @@ pub mod decode;
 pub mod flat;
 #[forbid(unsafe_code)]
 pub mod lattice;
+#[forbid(unsafe_code)]
+pub mod split;
 #[forbid(unsafe_code)]
 pub mod lighting;
 mod os;

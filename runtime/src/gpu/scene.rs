@@ -424,6 +424,10 @@ impl GpuScene {
                     });
                 }
                 subdivide_into(&object.mesh, level, scratch).map_err(|e| invalid(&name, e))?;
+                hce_geometry::split::SplitTables::new(&name, &object.mesh)
+                    .map_err(|e| invalid(&name, e))?
+                    .apply(&object.mesh, scratch)
+                    .map_err(|e| invalid(&name, e))?;
                 let colours = hce_geometry::colour::apply_baked_colours_with(
                     object,
                     scratch,

@@ -3,7 +3,8 @@
 //!
 //! Geometry is what the renderer draws: the baked asset opened with
 //! [`hce_runtime::asset::Asset`], every multiresolution object Loop-subdivided to `--level` on
-//! the CPU ([`hce_geometry::subdivide`], from the file's control mesh, as `hce render
+//! the CPU with its vertices split at sharp edges ([`hce_geometry::refine::subdivide_split`],
+//! from the file's control mesh, as `hce render
 //! --cpu-reference` does), flat objects as they are (their refinement is linear), each instance
 //! placed by its node's world transform. Materials and lights are the baker's: the same file read
 //! by [`hce_bake::import::import_scene`] (reflectance and emission per coarse triangle, which
@@ -313,7 +314,8 @@ fn build_scene(
         let multires = object.kind == ObjectKind::Multiresolution;
         let refined = if multires {
             Some(
-                hce_geometry::subdivide(&object.mesh, level)
+                hce_geometry::refine::subdivide_split(&object.name, &object.mesh, level)
+                    .map_err(anyhow::Error::msg)
                     .with_context(|| format!("object '{}': subdividing", object.name))?,
             )
         } else {
