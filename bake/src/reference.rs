@@ -843,7 +843,10 @@ mod tests {
         for ((a, ha), (b, hb)) in all.iter().zip(&four) {
             assert_eq!(ha, hb);
             for c in 0..3 {
-                assert!((a[c] - b[c]).abs() <= 1e-6 * a[c].abs().max(1.0), "{a:?} {b:?}");
+                assert!(
+                    (a[c] - b[c]).abs() <= 1e-6 * a[c].abs().max(1.0),
+                    "{a:?} {b:?}"
+                );
             }
         }
         // A pixel whose positions see different objects has no shared hit.

@@ -30,12 +30,12 @@ pub mod flat;
 #[forbid(unsafe_code)]
 pub mod lattice;
 #[forbid(unsafe_code)]
-pub mod split;
-#[forbid(unsafe_code)]
 pub mod lighting;
 mod os;
 #[forbid(unsafe_code)]
 pub mod refine;
+#[forbid(unsafe_code)]
+pub mod split;
 #[forbid(unsafe_code)]
 pub mod subdivide;
 #[forbid(unsafe_code)]

@@ -69,10 +69,16 @@ pub fn corner_groups(mesh: &ControlMesh, joined: &[bool]) -> Vec<u32> {
                 continue;
             }
             let u = mesh.neighbours[3 * t + e] as usize;
-            let (a, b) = (mesh.triangles[3 * t + e], mesh.triangles[3 * t + (e + 1) % 3]);
+            let (a, b) = (
+                mesh.triangles[3 * t + e],
+                mesh.triangles[3 * t + (e + 1) % 3],
+            );
             for (c, v) in [(e, a), ((e + 1) % 3, b)] {
                 if let Some(cu) = (0..3).find(|&cu| mesh.triangles[3 * u + cu] == v) {
-                    let (ra, rb) = (find(&mut up, (3 * t + c) as u32), find(&mut up, (3 * u + cu) as u32));
+                    let (ra, rb) = (
+                        find(&mut up, (3 * t + c) as u32),
+                        find(&mut up, (3 * u + cu) as u32),
+                    );
                     let (lo, hi) = (ra.min(rb), ra.max(rb));
                     up[hi as usize] = lo;
                 }
@@ -132,8 +138,8 @@ impl SplitTables {
         let mut split_vertex = vec![false; nv];
         let mut copy_split = Vec::new();
         for v in 0..nv {
-            let corners = &topo.vertex_corners
-                [topo.vertex_corner_offsets[v] as usize..topo.vertex_corner_offsets[v + 1] as usize];
+            let corners = &topo.vertex_corners[topo.vertex_corner_offsets[v] as usize
+                ..topo.vertex_corner_offsets[v + 1] as usize];
             // Regions in order of their first corner; the owner corner is the first of all.
             let mut roots: Vec<u32> = Vec::new();
             let mut ranks: Vec<usize> = Vec::new();
@@ -170,8 +176,8 @@ impl SplitTables {
         let mut copy_sides = Vec::new();
         let mut edge_split = vec![false; ne];
         for id in 0..ne {
-            let sides =
-                &topo.edge_sides[topo.edge_side_offsets[id] as usize..topo.edge_side_offsets[id + 1] as usize];
+            let sides = &topo.edge_sides
+                [topo.edge_side_offsets[id] as usize..topo.edge_side_offsets[id + 1] as usize];
             if sides.len() == 2 && !joined[sides[0] as usize] {
                 edge_copy[id] = copy_sides.len() as u32;
                 edge_split[id] = true;
@@ -330,7 +336,8 @@ impl SplitTables {
             let from_owner = self.edge_slot(id)[0] as usize == side;
             for k in 1..m {
                 let kk = if from_owner { k } else { m - k };
-                r.normals[first + (k - 1) as usize] = region_normal(r, &[(t, edge_point(m, e, kk))]);
+                r.normals[first + (k - 1) as usize] =
+                    region_normal(r, &[(t, edge_point(m, e, kk))]);
             }
         }
         Ok(())
@@ -355,4 +362,3 @@ fn region_normal(r: &Refined, points: &[(usize, [i32; 2])]) -> [f32; 3] {
     }
     crate::subdivide::unit_normal(s.unwrap_or([0.0; 3]))
 }
-

@@ -43,7 +43,11 @@ fn the_creased_cube_splits_into_its_six_faces() {
         let plain = subdivide(&mesh, level).unwrap();
         let r = subdivide_split("cube", &mesh, level).unwrap();
         let m = (1usize << level) - 1;
-        assert_eq!(r.positions.len(), plain.positions.len() + 28 + 24 * m, "level {level}");
+        assert_eq!(
+            r.positions.len(),
+            plain.positions.len() + 28 + 24 * m,
+            "level {level}"
+        );
         assert_eq!(r.indices.len(), plain.indices.len());
         // The split moves corners only: the same points, so the same fine triangles.
         for (a, b) in r.indices.iter().zip(&plain.indices) {
@@ -66,7 +70,9 @@ fn the_creased_cube_splits_into_its_six_faces() {
             }
         }
         // Every vertex is used, and by one face only.
-        assert!(faces_of.iter().all(|l| !l.is_empty() && l.iter().all(|n| n == &l[0])));
+        assert!(faces_of
+            .iter()
+            .all(|l| !l.is_empty() && l.iter().all(|n| n == &l[0])));
     }
 }
 
@@ -76,14 +82,23 @@ fn a_mesh_without_creases_is_not_split() {
     let tables = SplitTables::new("cube", &mesh).unwrap();
     assert!(tables.is_empty());
     assert!(tables.corner_copy.iter().all(|&c| c == NO_COPY));
-    assert_eq!(subdivide_split("cube", &mesh, 2).unwrap(), subdivide(&mesh, 2).unwrap());
+    assert_eq!(
+        subdivide_split("cube", &mesh, 2).unwrap(),
+        subdivide(&mesh, 2).unwrap()
+    );
 }
 
 /// The cube with single-node trees, one colour per face of the cube (the geometric normal
 /// only): what a bake of a box lit differently on each side stores.
 fn coloured_cube(mesh: ControlMesh) -> Object {
     let f = mesh.triangle_count();
-    let colour = |n: [f32; 3]| [0.2 + 0.3 * n[0].abs(), 0.2 + 0.3 * n[1].abs(), 0.2 + 0.3 * n[2].abs()];
+    let colour = |n: [f32; 3]| {
+        [
+            0.2 + 0.3 * n[0].abs(),
+            0.2 + 0.3 * n[1].abs(),
+            0.2 + 0.3 * n[2].abs(),
+        ]
+    };
     let normals: Vec<[f32; 3]> = (0..f).map(|t| face_normal(&mesh, t)).collect();
     let colours = normals.iter().map(|&n| rgb9e5::encode(colour(n))).collect();
     let triangles = (0..f as u32)

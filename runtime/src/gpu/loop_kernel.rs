@@ -47,9 +47,9 @@ use super::util::{
 };
 use super::wgsl::{loop_source, loop_workgroup_source};
 use super::{AdapterKind, GpuContext, GpuError};
-use hce_geometry::split::{joined_sides, SplitTables};
 use hce_geometry::flat::{FlatTopology, RefinedMesh};
 use hce_geometry::lighting::Reconstruction;
+use hce_geometry::split::{joined_sides, SplitTables};
 use hce_geometry::subdivide::{prepare, MAX_LOOP_LEVEL};
 use hce_geometry::tables::validate_tables;
 

@@ -176,9 +176,17 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
     let rows = AtomicU64::new(0);
     let t1 = Instant::now();
     let pixels = pool.install(|| {
-        tracer.render(width, height, args.samples, positions.len(), args.seed, ray, || {
-            bar.set_position(rows.fetch_add(1, Ordering::Relaxed) + 1);
-        })
+        tracer.render(
+            width,
+            height,
+            args.samples,
+            positions.len(),
+            args.seed,
+            ray,
+            || {
+                bar.set_position(rows.fetch_add(1, Ordering::Relaxed) + 1);
+            },
+        )
     });
     bar.finish_and_clear();
     let trace_s = t1.elapsed().as_secs_f64();

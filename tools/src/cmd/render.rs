@@ -80,7 +80,9 @@ pub struct RenderArgs {
 pub fn parse_msaa(s: &str) -> Result<u32, String> {
     match s.trim().parse::<u32>() {
         Ok(n @ (1 | 2 | 4 | 8 | 16)) => Ok(n),
-        _ => Err(format!("'{s}': expected 1, 2, 4, 8 or 16 samples per pixel")),
+        _ => Err(format!(
+            "'{s}': expected 1, 2, 4, 8 or 16 samples per pixel"
+        )),
     }
 }
 
