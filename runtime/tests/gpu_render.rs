@@ -87,12 +87,12 @@ fn multisampling_averages_coverage_at_the_standard_positions() {
     else {
         return;
     };
-    // A white rectangle facing the camera whose right edge crosses the middle of pixel column
-    // 16 (normalised x = 1/32): of the standard 4-sample positions (x = 0.375, 0.875, 0.125,
-    // 0.625 of the pixel), two lie left of it.
+    // A white rectangle facing the camera whose right edge crosses pixel column 16 at 0.4 of its
+    // width (normalised x = 0.8/32), left of its centre: of the standard 4-sample positions
+    // (x = 0.375, 0.875, 0.125, 0.625 of the pixel), two lie left of it.
     let fov = 30.0f32;
     let f = 1.0 / (fov.to_radians() * 0.5).tan();
-    let edge = 5.0 / (32.0 * f);
+    let edge = 0.8 * 5.0 / (32.0 * f);
     let positions = [
         -3.0, -3.0, 0.0, edge, -3.0, 0.0, edge, 3.0, 0.0, -3.0, 3.0, 0.0,
     ];
@@ -116,12 +116,21 @@ fn multisampling_averages_coverage_at_the_standard_positions() {
     if image.samples == 4 {
         assert_eq!(px(&image, 16), 0.5);
         let xs: Vec<f32> = sample_positions(4).unwrap().iter().map(|p| p[0]).collect();
-        assert_eq!(xs.iter().filter(|&&x| x < 0.5).count(), 2);
+        assert_eq!(xs.iter().filter(|&&x| x < 0.4).count(), 2);
     }
-    // One sample is the pixel centre, which lies on the edge: all or nothing.
+    // Colours falling to zero at the edge: pixel 16, covered in part, is shaded inside the
+    // covered part, not at its centre beyond the edge, so nothing is extrapolated below zero.
+    let gradient = [[1.0f32; 4], [0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0], [1.0; 4]].concat();
+    let shaded = render_mesh(&ctx, &positions, &gradient, &indices, &params).unwrap();
+    assert!(
+        shaded.pixels.iter().all(|&v| (0.0..=1.0).contains(&v)),
+        "{:?}",
+        shaded.pixels.iter().find(|&&v| !(0.0..=1.0).contains(&v))
+    );
+    // One sample is the pixel centre, right of the edge: uncovered.
     params.samples = 1;
     let single = render_mesh(&ctx, &positions, &colours, &indices, &params).unwrap();
     assert_eq!(single.samples, 1);
-    assert!([0.0, 1.0].contains(&px(&single, 16)));
+    assert_eq!(px(&single, 16), 0.0);
     assert_eq!((px(&single, 15), px(&single, 17)), (1.0, 0.0));
 }

@@ -11,7 +11,9 @@
 //! 32-bit float, which WebGPU does not promise to multisample or resolve, so the count is the
 //! largest the adapter supports for it (with `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`, which
 //! [`GpuContext::new`] asks for) and `render_resolve.wgsl` averages the samples itself. The
-//! fragment stage runs once per pixel and triangle, at the pixel centre; coverage is tested at
+//! fragment stage runs once per pixel and triangle, at the pixel centre where the triangle covers
+//! every sample, else inside the covered samples (centroid interpolation: colours are never
+//! extrapolated beyond a triangle's edge); coverage is tested at
 //! the standard sample positions of Vulkan, Direct3D and WebGPU ([`sample_positions`]), which is
 //! where `hce reference --msaa` traces its rays, so the two images still line up pixel for pixel.
 
