@@ -108,6 +108,10 @@ fn reference_of_the_baked_cornell_box_is_deterministic_and_lit() {
             "24x18",
             "--samples",
             "4",
+            // One ray per pixel centre: at 24 x 18 pixels the light covers no pixel's four
+            // multisample positions, and it must show at full strength below.
+            "--msaa",
+            "1",
             "--threads",
             threads,
             "-o",
