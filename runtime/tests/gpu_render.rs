@@ -120,7 +120,13 @@ fn multisampling_averages_coverage_at_the_standard_positions() {
     }
     // Colours falling to zero at the edge: pixel 16, covered in part, is shaded inside the
     // covered part, not at its centre beyond the edge, so nothing is extrapolated below zero.
-    let gradient = [[1.0f32; 4], [0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0], [1.0; 4]].concat();
+    let gradient = [
+        [1.0f32; 4],
+        [0.0, 0.0, 0.0, 1.0],
+        [0.0, 0.0, 0.0, 1.0],
+        [1.0; 4],
+    ]
+    .concat();
     let shaded = render_mesh(&ctx, &positions, &gradient, &indices, &params).unwrap();
     assert!(
         shaded.pixels.iter().all(|&v| (0.0..=1.0).contains(&v)),

@@ -387,7 +387,7 @@ pub(crate) fn render_draws(
     // binding is drawn with one sample.
     let image_bytes = u64::from(w) * u64::from(h) * 16;
     let limits = ctx.device.limits();
-    let samples = if image_bytes > u64::from(limits.max_storage_buffer_binding_size)
+    let samples = if image_bytes > limits.max_storage_buffer_binding_size
         || image_bytes > limits.max_buffer_size
     {
         1
