@@ -66,6 +66,36 @@ impl Occluders {
         self.ray_clear(a, d / len, len - self.eps)
     }
 
+    /// Whether the segment from `a`, on a surface of unit normal `na`, to `b`, on a surface of
+    /// unit normal `nb`, crosses no triangle on its way. Near each end the segment is kept
+    /// clear for as long as it stays within the tolerance of that end's own plane: a segment
+    /// that leaves or meets its surface at a grazing angle (between two faces meeting at a
+    /// sharp edge, or along a wall from a point next to it) runs within rounding distance of
+    /// that plane for a long way, and met the neighbouring triangles of its own surface
+    /// there. A fixed gap at each end let a closed 30-degree wedge lose 4% of its light at the
+    /// leaves along its edge (issue 20).
+    pub fn segment_clear_between(&self, a: Vec3, na: Vec3, b: Vec3, nb: Vec3) -> bool {
+        let d = b - a;
+        let len = d.length();
+        if len <= 2.0 * self.eps {
+            return true;
+        }
+        let dir = d / len;
+        // The distance along the segment over which it rises `eps` above each end's plane,
+        // never more than a quarter of the segment (a grazing ray carries almost no light:
+        // the form factor weighs it by the cosine).
+        let gap = |n: Vec3| (self.eps / n.dot(dir).abs().max(1e-6)).clamp(self.eps, 0.25 * len);
+        let (t0, t1) = (gap(na), len - gap(nb));
+        let Some(bvh) = &self.bvh else { return true };
+        if t0 >= t1 {
+            return true;
+        }
+        let ray = Ray::new(a.into(), dir.into(), t0, t1);
+        bvh.ray_traverse_miss(ray, |r, id| {
+            self.tris[bvh.primitive_indices[id] as usize].intersect(r)
+        })
+    }
+
     /// Whether the ray from `origin` along unit `dir` first meets the back of a triangle (the
     /// side its counter-clockwise winding does not face); false when it meets nothing.
     pub fn first_hit_is_back(&self, origin: Vec3, dir: Vec3) -> bool {

@@ -116,7 +116,20 @@ fn multiresolution_furnace_is_exact_at_every_level() {
         sets > Some(1),
         "the cube's triangles should carry several normals, got at most {sets:?}"
     );
-    for level in 1..=4 {
+    // Every node and leaf of every tree, for every normal of its set.
+    let expect = EMISSION / (1.0 - RHO);
+    let mut worst_node = 0.0f32;
+    for &packed in &object.colours {
+        for c in hce_format::rgb9e5::decode(packed) {
+            worst_node = worst_node.max((c - expect).abs() / expect);
+        }
+    }
+    println!(
+        "furnace nodes: worst relative error {:.3}%",
+        100.0 * worst_node
+    );
+    assert!(worst_node < 0.01, "a tree node is {worst_node} off");
+    for level in 0..=4 {
         let (smooth, at) = worst_error(&object, level, Reconstruction::Smooth);
         let (nearest, _) = worst_error(&object, level, Reconstruction::NearestNormal);
         println!(
@@ -128,6 +141,10 @@ fn multiresolution_furnace_is_exact_at_every_level() {
         assert!(
             smooth < 0.01,
             "level {level}: worst relative error {smooth} at {at:?}"
+        );
+        assert!(
+            nearest < 0.01,
+            "level {level}: worst relative error {nearest} (nearest normal)"
         );
     }
 }

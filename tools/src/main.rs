@@ -52,6 +52,9 @@ enum Command {
     /// Check a .hce, .glb or .gltf file deeply; one line per problem.
     #[command(after_help = EXIT_CODES)]
     Validate(cmd::validate::ValidateArgs),
+    /// Serve the browser viewer (WebGPU) for a baked file on 127.0.0.1 and print its URL.
+    #[command(after_help = EXIT_CODES)]
+    Serve(cmd::serve::ServeArgs),
 }
 
 /// `hce inspect x.glb | head` closes the pipe early; Rust's `println!` then panics with "failed
@@ -87,6 +90,7 @@ fn main() {
         Command::Subdivide(args) => cmd::subdivide::run(args),
         Command::Inspect(args) => cmd::inspect::run(args),
         Command::Validate(args) => cmd::validate::run(args),
+        Command::Serve(args) => cmd::serve::run(args),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

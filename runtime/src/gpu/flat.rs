@@ -11,7 +11,7 @@
 use hce_format::Object;
 
 use super::util::{
-    bind_buffers, check_size, dispatch_size, pack_sections, read_back, storage_init,
+    bind_buffers_at, check_size, dispatch_size, pack_sections, read_back, storage_init,
     storage_output, LightingBuffers, PassTimer,
 };
 use super::wgsl::refinement_source;
@@ -49,7 +49,6 @@ pub struct FlatKernel {
     positions: wgpu::ComputePipeline,
     faces: wgpu::ComputePipeline,
     colours: wgpu::ComputePipeline,
-    layout: wgpu::BindGroupLayout,
 }
 
 /// An object's tables on the GPU, validated.
@@ -119,47 +118,14 @@ impl FlatKernel {
                 label: Some("hce flat"),
                 source: wgpu::ShaderSource::Wgsl(source.into()),
             });
-        let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let mut entries = vec![wgpu::BindGroupLayoutEntry {
-            binding: 0,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        }];
-        entries.extend((1..=6).map(|b| storage(b, true)));
-        entries.extend((7..=10).map(|b| storage(b, false)));
-        entries.push(storage(11, true));
-        let layout = ctx
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("hce flat"),
-                entries: &entries,
-            });
-        let pipeline_layout = ctx
-            .device
-            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("hce flat"),
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
-            });
+        // Each entry point gets the layout of the bindings it uses (`layout: None`), as the Loop
+        // kernel's do, which keeps every step within WebGPU's default limit of 8 storage
+        // buffers per stage: the three steps bind 3, 8 and 4 of the module's 11.
         let make = |entry: &str| {
             ctx.device
                 .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some(entry),
-                    layout: Some(&pipeline_layout),
+                    layout: None,
                     module: &module,
                     entry_point: Some(entry),
                     compilation_options: Default::default(),
@@ -170,7 +136,6 @@ impl FlatKernel {
             positions: make("positions_main"),
             faces: make("faces_main"),
             colours: make("colours_main"),
-            layout,
         }
     }
 
@@ -302,21 +267,43 @@ impl FlatKernel {
             smooth: object.lighting.smooth_flag(),
         };
         let uniform = super::util::uniform_init(ctx, "flat params", &params);
-        let buffers = [
-            &uniform,
-            &object.coarse_positions,
-            &object.topo,
-            &object.lighting.records,
-            &object.lighting.bits,
-            &object.lighting.normals,
-            &object.lighting.colours,
-            &o.positions,
-            &o.indices,
-            &o.faces,
-            &o.colours,
-            &object.lighting.light,
-        ];
-        let bind_group = bind_buffers(ctx, "hce flat", &self.layout, &buffers);
+        let group = |pipeline: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| {
+            bind_buffers_at(ctx, "hce flat", &pipeline.get_bind_group_layout(0), buffers)
+        };
+        // The bindings of `flat.wgsl` each step reads or writes, by number.
+        let positions_group = group(
+            &self.positions,
+            &[
+                (0, &uniform),
+                (1, &object.coarse_positions),
+                (2, &object.topo),
+                (7, &o.positions),
+            ],
+        );
+        let faces_group = group(
+            &self.faces,
+            &[
+                (0, &uniform),
+                (2, &object.topo),
+                (3, &object.lighting.records),
+                (4, &object.lighting.bits),
+                (5, &object.lighting.normals),
+                (6, &object.lighting.colours),
+                (7, &o.positions),
+                (8, &o.indices),
+                (9, &o.faces),
+            ],
+        );
+        let colours_group = group(
+            &self.colours,
+            &[
+                (0, &uniform),
+                (2, &object.topo),
+                (9, &o.faces),
+                (10, &o.colours),
+                (11, &object.lighting.light),
+            ],
+        );
         let mut timer = PassTimer::new(ctx, "hce flat timing", 1, measure);
         let vertex_groups = dispatch_size(ctx, u64::from(v))?;
         let face_groups = dispatch_size(ctx, u64::from(f))?;
@@ -328,13 +315,15 @@ impl FlatKernel {
                 label: Some("hce flat"),
                 timestamp_writes: timer.writes(0),
             });
-            pass.set_bind_group(0, &bind_group, &[]);
             // wgpu orders the dispatches: each one sees the previous one's writes.
             pass.set_pipeline(&self.positions);
+            pass.set_bind_group(0, &positions_group, &[]);
             pass.dispatch_workgroups(vertex_groups.0, vertex_groups.1, 1);
             pass.set_pipeline(&self.faces);
+            pass.set_bind_group(0, &faces_group, &[]);
             pass.dispatch_workgroups(face_groups.0, face_groups.1, 1);
             pass.set_pipeline(&self.colours);
+            pass.set_bind_group(0, &colours_group, &[]);
             pass.dispatch_workgroups(vertex_groups.0, vertex_groups.1, 1);
         }
         timer.resolve(ctx, &mut encoder);

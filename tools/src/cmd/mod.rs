@@ -8,6 +8,7 @@ pub mod inspect;
 #[cfg(feature = "gpu")]
 pub mod reference;
 pub mod render;
+pub mod serve;
 pub mod subdivide;
 pub mod validate;
 

@@ -1,0 +1,328 @@
+// The lighting table of the smooth reconstruction (SPEC.md Appendix G), a port of
+// geometry/src/lighting.rs `LightingTable::build_with` and `to_words`: per leaf corner point
+// one linear model of colour over normals, fitted to the samples of every leaf meeting there,
+// T-vertices resolved, in the word layout `hce_light.wgsl` reads. Fits in f64, rounded once to
+// f32, as G.3 says.
+import { NO_NEIGHBOUR, SPOKE_SHARP } from './container.js';
+
+/** @typedef {import('./container.js').HceObject} HceObject */
+
+const TREE_LATTICE = 1 << 12;
+/** Ridge weight of the normal fit (G.3). */
+export const RIDGE = 1e-4;
+/** Flat objects join neighbours whose normals differ by less than this (G.2). */
+export const FLAT_JOIN_DEGREES = 10;
+const MODEL_FLOATS = 12;
+const LEAF = 0x80000000;
+
+/**
+ * Decodes an RGB9E5 colour (2.4) to f32 values, as `rgb9e5::decode`.
+ * @param {number} v
+ * @returns {[number, number, number]}
+ */
+export function rgb9e5(v) {
+  const scale = Math.fround(2 ** ((v >>> 27) - 15 - 9));
+  return [Math.fround((v & 0x1ff) * scale), Math.fround(((v >>> 9) & 0x1ff) * scale), Math.fround(((v >>> 18) & 0x1ff) * scale)];
+}
+
+/** @param {number[]} a @param {number[]} b */
+const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+
+/**
+ * @param {HceObject} o
+ * @param {number} t
+ * @returns {[number[], number]} the unit geometric normal (f64) and the area of coarse triangle t
+ */
+function coarseNormalArea(o, t) {
+  const m = o.mesh;
+  const p = (/** @type {number} */ c) => {
+    const v = m.triangles[3 * t + c];
+    return [m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]];
+  };
+  const [p0, p1, p2] = [p(0), p(1), p(2)];
+  const u = [p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]];
+  const w = [p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]];
+  const n = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];
+  const l = Math.sqrt(dot(n, n));
+  return [l > 0 ? n.map((x) => x / l) : [0, 0, 0], 0.5 * l];
+}
+
+/**
+ * The surface facts point identities need (lighting.rs `Surface`): which edges join their
+ * triangles, and the group of each triangle corner's vertex.
+ * @param {HceObject} o
+ */
+function surface(o) {
+  const m = o.mesh;
+  const F = m.triangles.length / 3;
+  const normals = [];
+  for (let t = 0; t < F; t++) normals.push(coarseNormalArea(o, t)[0]);
+  const cosJoin = Math.cos((FLAT_JOIN_DEGREES * Math.PI) / 180);
+  const joined = new Uint8Array(3 * F);
+  for (let t = 0; t < F; t++) {
+    for (let e = 0; e < 3; e++) {
+      const u = m.neighbours[3 * t + e];
+      if (u === NO_NEIGHBOUR || u >= F) continue;
+      const v = m.triangles[3 * t + e];
+      const spoke = m.spokeFlags[m.ringOffsets[v] + m.cornerSpokes[3 * t + e]];
+      const smooth = spoke !== undefined && (spoke & SPOKE_SHARP) === 0;
+      joined[3 * t + e] = smooth && (o.kind === 'multiresolution' || dot(normals[t], normals[u]) >= cosJoin) ? 1 : 0;
+    }
+  }
+  const parent = new Uint32Array(3 * F);
+  for (let i = 0; i < parent.length; i++) parent[i] = i;
+  const find = (/** @type {number} */ a) => {
+    while (parent[a] !== a) {
+      parent[a] = parent[parent[a]];
+      a = parent[a];
+    }
+    return a;
+  };
+  for (let t = 0; t < F; t++) {
+    for (let e = 0; e < 3; e++) {
+      if (!joined[3 * t + e]) continue;
+      const u = m.neighbours[3 * t + e];
+      const a = m.triangles[3 * t + e];
+      const b = m.triangles[3 * t + (e + 1) % 3];
+      for (const [c, v] of [[e, a], [(e + 1) % 3, b]]) {
+        for (let cu = 0; cu < 3; cu++) {
+          if (m.triangles[3 * u + cu] !== v) continue;
+          const ra = find(3 * t + c);
+          const rb = find(3 * u + cu);
+          // The smaller root wins, so the result does not depend on the order of the unions.
+          if (ra < rb) parent[rb] = ra;
+          else if (rb < ra) parent[ra] = rb;
+          break;
+        }
+      }
+    }
+  }
+  const group = new Uint32Array(3 * F);
+  for (let i = 0; i < group.length; i++) group[i] = find(i);
+  /**
+   * The key of lattice point (x, y) (denominator 4096) of coarse triangle t (G.2).
+   * @param {number} t @param {number} x @param {number} y
+   */
+  const key = (t, x, y) => {
+    const n = TREE_LATTICE;
+    const a = n - x - y;
+    let corner = -1;
+    let edge = -1;
+    let k = 0;
+    if (x === 0 && y === 0) corner = 0;
+    else if (a === 0 && y === 0) corner = 1;
+    else if (a === 0 && x === 0) corner = 2;
+    else if (y === 0) [edge, k] = [0, x];
+    else if (a === 0) [edge, k] = [1, y];
+    else if (x === 0) [edge, k] = [2, a];
+    if (corner >= 0) return `v${m.triangles[3 * t + corner]}/${group[3 * t + corner]}`;
+    if (edge >= 0 && joined[3 * t + edge]) {
+      const va = m.triangles[3 * t + edge];
+      const vb = m.triangles[3 * t + (edge + 1) % 3];
+      return `e${m.edges[3 * t + edge]}/${va < vb ? k : n - k}`;
+    }
+    return `f${t}/${x}/${y}`;
+  };
+  return key;
+}
+
+/** Weighted moments of the samples at one point (G.3). */
+class Moments {
+  constructor() {
+    this.w = 0;
+    this.n = [0, 0, 0];
+    this.nn = [0, 0, 0, 0, 0, 0, 0, 0, 0];
+    this.b = [0, 0, 0];
+    this.bn = [0, 0, 0, 0, 0, 0, 0, 0, 0];
+  }
+
+  /**
+   * @param {number} w the leaf's area weight
+   * @param {Float32Array} normals x, y, z per normal
+   * @param {Uint32Array} colours one per normal
+   * @param {number} samples how many of them
+   */
+  add(w, normals, colours, samples, all = samples) {
+    const ws = w / all;
+    for (let j = 0; j < samples; j++) {
+      const n = [normals[3 * j], normals[3 * j + 1], normals[3 * j + 2]];
+      const rgb = rgb9e5(colours[j]);
+      this.w += ws;
+      for (let a = 0; a < 3; a++) {
+        this.n[a] += ws * n[a];
+        this.b[a] += ws * rgb[a];
+        for (let b = 0; b < 3; b++) {
+          this.nn[3 * a + b] += ws * n[a] * n[b];
+          this.bn[3 * a + b] += ws * rgb[a] * n[b];
+        }
+      }
+    }
+  }
+
+  /** @param {boolean} flat @returns {number[]} */
+  fit(flat) {
+    const w = this.w;
+    const out = new Array(MODEL_FLOATS).fill(0);
+    if (w <= 0) return out;
+    const nbar = this.n.map((x) => x / w);
+    const bbar = this.b.map((x) => x / w);
+    if (flat) {
+      out[0] = bbar[0];
+      out[1] = bbar[1];
+      out[2] = bbar[2];
+      return out;
+    }
+    const m = [0, 1, 2].map((a) => [0, 1, 2].map((b) => this.nn[3 * a + b] / w - nbar[a] * nbar[b] + (a === b ? RIDGE : 0)));
+    const c = (/** @type {number} */ r0, /** @type {number} */ c0, /** @type {number} */ r1, /** @type {number} */ c1) => m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0];
+    const adj = [
+      [c(1, 1, 2, 2), -c(0, 1, 2, 2), c(0, 1, 1, 2)],
+      [-c(1, 0, 2, 2), c(0, 0, 2, 2), -c(0, 0, 1, 2)],
+      [c(1, 0, 2, 1), -c(0, 0, 2, 1), c(0, 0, 1, 1)],
+    ];
+    const det = m[0][0] * adj[0][0] + m[0][1] * adj[1][0] + m[0][2] * adj[2][0];
+    const inv = adj.map((row) => row.map((x) => x / det));
+    for (let ch = 0; ch < 3; ch++) {
+      const cov = [0, 1, 2].map((a) => this.bn[3 * ch + a] / w - bbar[ch] * nbar[a]);
+      const g = inv.map((row) => dot(row, cov));
+      out[ch] = bbar[ch] - dot(g, nbar);
+      out[3 + 3 * ch] = g[0];
+      out[4 + 3 * ch] = g[1];
+      out[5 + 3 * ch] = g[2];
+    }
+    return out;
+  }
+}
+
+/**
+ * Corners of the lattice triangle (origin, sigma, side) (lattice.rs `LatticeTriangle`).
+ * @param {number[]} cell [x, y, sigma, side]
+ * @returns {number[][]}
+ */
+function corners(cell) {
+  const [x, y, s, side] = cell;
+  const d = s * side;
+  return [[x, y], [x + d, y], [x, y + d]];
+}
+
+/** @param {number[]} cell @param {number} c */
+function child(cell, c) {
+  const [x, y, s, side] = cell;
+  const h = side / 2;
+  if (c === 0) return [x, y, s, h];
+  if (c === 1) return [x + s * h, y, s, h];
+  if (c === 2) return [x + s * h, y + s * h, -s, h];
+  return [x, y + s * h, s, h];
+}
+
+/**
+ * The `hce_light` words of `hce_light.wgsl` for `object` (`LightingTable::build_with` then
+ * `to_words`). `gouraud` builds the table of the geometric normals' colours without slopes.
+ * @param {HceObject} o an object that passed tables.js
+ * @param {{ gouraud?: boolean }} [options]
+ * @returns {Uint32Array}
+ */
+export function lightingWords(o, options = {}) {
+  const gouraud = options.gouraud ?? false;
+  const key = surface(o);
+  /** @type {Map<string, number>} */
+  const pointIndex = new Map();
+  /** @type {Moments[]} */
+  const moments = [];
+  /** @type {{ triangle: number, depth: number, cell: number[], corners: number[] }[]} */
+  const leaves = [];
+  const F = o.records.length / 4;
+  const nodeStart = new Uint32Array(F);
+  /** @type {number[]} */
+  const nodes = [];
+  for (let t = 0; t < F; t++) {
+    nodeStart[t] = nodes.length;
+    const [bitsStart, colourStart, normalStart, nc] = o.records.subarray(4 * t, 4 * t + 4);
+    const normals = o.normals.subarray(3 * normalStart, 3 * (normalStart + nc));
+    const area = coarseNormalArea(o, t)[1];
+    /** @type {number[][]} */
+    const cells = [[0, 0, 1, TREE_LATTICE]];
+    let subdividedSeen = 0;
+    let count = 1;
+    let depth = 0;
+    let levelEnd = 1;
+    let nextLevel = 0;
+    for (let k = 0; k < count; k++) {
+      if (k === levelEnd) {
+        depth += 1;
+        levelEnd += nextLevel;
+        nextLevel = 0;
+      }
+      const i = bitsStart + k;
+      const subdivided = ((o.bits[Math.floor(i / 32)] >>> (i % 32)) & 1) === 1;
+      const cell = cells[k];
+      if (subdivided) {
+        count += 4;
+        nextLevel += 4;
+        const first = 1 + 4 * subdividedSeen;
+        subdividedSeen += 1;
+        nodes.push(first);
+        for (let c = 0; c < 4; c++) cells[first + c] = child(cell, c);
+        continue;
+      }
+      const w = area / 4 ** depth;
+      const slots = [];
+      const samples = gouraud ? 1 : nc;
+      const colours = o.colours.subarray(colourStart + k * nc, colourStart + k * nc + nc);
+      for (const p of corners(cell)) {
+        const id = key(t, p[0], p[1]);
+        let index = pointIndex.get(id);
+        if (index === undefined) {
+          index = moments.length;
+          pointIndex.set(id, index);
+          moments.push(new Moments());
+        }
+        moments[index].add(w, normals, colours, samples);
+        slots.push(index);
+      }
+      nodes.push((LEAF | leaves.length) >>> 0);
+      leaves.push({ triangle: t, depth, cell, corners: slots });
+    }
+  }
+  const flat = gouraud || o.kind === 'flat';
+  const values = moments.map((m) => m.fit(flat));
+  // T-vertices: from the largest leaves down (a stable sort keeps triangle and node order).
+  const order = leaves.map((_, i) => i).sort((a, b) => leaves[a].depth - leaves[b].depth || a - b);
+  /**
+   * @param {number} t
+   * @param {number[]} pa @param {number} ia
+   * @param {number[]} pb @param {number} ib
+   */
+  const resolve = (t, pa, ia, pb, ib) => {
+    if (Math.abs(pa[0] - pb[0]) < 2 && Math.abs(pa[1] - pb[1]) < 2) return;
+    const pm = [Math.trunc((pa[0] + pb[0]) / 2), Math.trunc((pa[1] + pb[1]) / 2)];
+    const im = pointIndex.get(key(t, pm[0], pm[1]));
+    if (im === undefined) return;
+    const va = values[ia];
+    const vb = values[ib];
+    values[im] = va.map((x, i) => 0.5 * (x + vb[i]));
+    resolve(t, pa, ia, pm, im);
+    resolve(t, pm, im, pb, ib);
+  };
+  for (const i of order) {
+    const leaf = leaves[i];
+    const pts = corners(leaf.cell);
+    for (let e = 0; e < 3; e++) {
+      const b = (e + 1) % 3;
+      resolve(leaf.triangle, pts[e], leaf.corners[e], pts[b], leaf.corners[b]);
+    }
+  }
+  const nodesAt = 2 + F;
+  const pointsAt = nodesAt + nodes.length;
+  const modelsAt = pointsAt + 3 * leaves.length;
+  const total = modelsAt + MODEL_FLOATS * values.length;
+  if (total > 0xffffffff) throw new Error('the lighting table is too large for 32-bit word indices');
+  const words = new Uint32Array(total);
+  words[0] = pointsAt;
+  words[1] = modelsAt;
+  for (let t = 0; t < F; t++) words[2 + t] = nodesAt + nodeStart[t];
+  words.set(nodes, nodesAt);
+  for (let l = 0; l < leaves.length; l++) words.set(leaves[l].corners, pointsAt + 3 * l);
+  const models = new Float32Array(words.buffer, 4 * modelsAt, MODEL_FLOATS * values.length);
+  for (let p = 0; p < values.length; p++) models.set(values[p], MODEL_FLOATS * p);
+  return words;
+}

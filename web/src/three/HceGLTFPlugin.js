@@ -1,0 +1,134 @@
+// A three.js GLTFLoader plugin for EXT_hce_baked_lighting (SPEC.md section 3): every
+// primitive linked to a container object gets that object refined by the hce runtime's
+// kernels (Loop for multiresolution objects, linear for flat ones) on the device of three.js's
+// WebGPURenderer, with the baked lighting as vertex colours. Registered the usual way:
+//
+//   const runtime = await HceGLTFPlugin.runtime(renderer, { wgslBase });
+//   loader.register((parser) => new HceGLTFPlugin(parser, runtime, { level: 3 }));
+//
+// Nothing global: the plugin works on the parser it is given and the meshes it built.
+import { BufferAttribute, BufferGeometry, MeshBasicMaterial } from 'three';
+import { readContainer } from '../container.js';
+import { checkObject } from '../tables.js';
+import { fetchWgsl, KernelSources } from '../wgsl.js';
+import { Kernels, destroyRefined, destroyUploaded } from '../kernels.js';
+import { FLAT_MAX_LEVEL } from '../scene.js';
+
+const EXT = 'EXT_hce_baked_lighting';
+
+/**
+ * @typedef {object} PluginOptions
+ * @property {number | ((object: import('../container.js').HceObject) => number)} [level] the Loop
+ *   level of multiresolution objects (default 3); flat objects are split to their tree depth
+ * @property {import('../kernels.js').Reconstruction} [reconstruction] default 'smooth'
+ * @property {boolean} [unlit] replace each refined mesh's material by an unlit one showing the
+ *   baked lighting (default true: the colours already hold the light)
+ */
+
+export class HceGLTFPlugin {
+  /**
+   * The kernels on three.js's device: call once per renderer, after `await renderer.init()`.
+   * @param {{ backend: any }} renderer a three.js WebGPURenderer
+   * @param {{ wgslBase: string | URL, progress?: (done: number, total: number, label: string) => void }} options
+   */
+  static async runtime(renderer, options) {
+    const device = /** @type {GPUDevice | undefined} */ (renderer.backend?.device);
+    if (!device) throw new Error('HceGLTFPlugin needs a WebGPURenderer on a WebGPU backend (await renderer.init() first)');
+    const sources = new KernelSources(await fetchWgsl(options.wgslBase));
+    return Kernels.create(device, sources, options.progress);
+  }
+
+  /**
+   * @param {any} parser the GLTFLoader's parser
+   * @param {Kernels} kernels from {@link HceGLTFPlugin.runtime}
+   * @param {PluginOptions} [options]
+   */
+  constructor(parser, kernels, options = {}) {
+    this.name = EXT;
+    this.parser = parser;
+    this.kernels = kernels;
+    this.options = options;
+    /** What the last load did, per object: level, vertices, triangles. @type {{ name: string, level: number, vertices: number, triangles: number }[]} */
+    this.report = [];
+  }
+
+  /**
+   * Replaces the geometry of every linked primitive by its refined, coloured surface.
+   * @param {{ scene: any, scenes: any[] }} result
+   */
+  async afterRoot(result) {
+    const json = this.parser.json;
+    const root = json.extensions?.[EXT];
+    if (!root) return;
+    const view = await this.parser.getDependency('bufferView', root.bufferView);
+    const container = readContainer(new Uint8Array(view));
+    /** @type {Map<string, { object: import('../container.js').HceObject, first: number }>} */
+    const links = new Map();
+    (json.meshes ?? []).forEach((/** @type {any} */ mesh, /** @type {number} */ m) => {
+      (mesh.primitives ?? []).forEach((/** @type {any} */ prim, /** @type {number} */ p) => {
+        const ext = prim.extensions?.[EXT];
+        const object = ext && container.objects[ext.object];
+        if (object) links.set(`${m}/${p}`, { object, first: ext.firstTriangle ?? 0 });
+      });
+    });
+    // One refinement per object, shared by its primitives and instances.
+    /** @type {Map<number, Promise<{ level: number, positions: Float32Array, normals: Float32Array | null, colours: Float32Array, indices: Uint32Array }>>} */
+    const refined = new Map();
+    const refine = (/** @type {import('../container.js').HceObject} */ object) => {
+      let p = refined.get(object.index);
+      if (!p) {
+        p = (async () => {
+          const level = object.kind === 'flat'
+            ? Math.min(checkObject(object).treeDepth, FLAT_MAX_LEVEL)
+            : typeof this.options.level === 'function' ? this.options.level(object) : this.options.level ?? 3;
+          const uploaded = this.kernels.upload(object, this.options.reconstruction ?? 'smooth');
+          const buffers = this.kernels.refine(uploaded, level);
+          const mesh = await this.kernels.readBack(buffers);
+          destroyRefined(buffers);
+          destroyUploaded(uploaded);
+          this.report.push({ name: object.name, level, vertices: mesh.positions.length / 3, triangles: mesh.indices.length / 3 });
+          return { ...mesh, level };
+        })();
+        refined.set(object.index, p);
+      }
+      return p;
+    };
+    /** @type {Map<string, BufferGeometry>} */
+    const geometries = new Map();
+    /** @type {any[]} */
+    const meshes = [];
+    for (const scene of result.scenes) scene.traverse((/** @type {any} */ o) => { if (o.isMesh) meshes.push(o); });
+    for (const mesh of meshes) {
+      const assoc = this.parser.associations.get(mesh);
+      if (!assoc || assoc.meshes === undefined || assoc.primitives === undefined) continue;
+      const key = `${assoc.meshes}/${assoc.primitives}`;
+      const link = links.get(key);
+      if (!link) continue;
+      let geometry = geometries.get(key);
+      if (!geometry) {
+        const r = await refine(link.object);
+        const prim = json.meshes[assoc.meshes].primitives[assoc.primitives];
+        const coarse = json.accessors[prim.indices ?? prim.attributes.POSITION].count / 3;
+        // The primitive's refined triangles: those of its coarse range (SPEC.md 2.3).
+        const per = 4 ** r.level;
+        const indices = r.indices.subarray(3 * link.first * per, 3 * (link.first + coarse) * per);
+        geometry = new BufferGeometry();
+        geometry.setAttribute('position', new BufferAttribute(r.positions, 3));
+        if (r.normals) geometry.setAttribute('normal', new BufferAttribute(r.normals, 3));
+        else geometry.computeVertexNormals();
+        // Linear radiance, r, g, b, 1 per vertex.
+        geometry.setAttribute('color', new BufferAttribute(r.colours, 4));
+        geometry.setIndex(new BufferAttribute(indices, 1));
+        geometry.userData.hce = { object: link.object.name, level: r.level };
+        geometries.set(key, geometry);
+      }
+      mesh.geometry.dispose();
+      mesh.geometry = geometry;
+      if (this.options.unlit ?? true) {
+        mesh.material = new MeshBasicMaterial({ vertexColors: true, side: mesh.material?.side, name: `${mesh.material?.name ?? ''} (hce baked lighting)` });
+      } else {
+        mesh.material.vertexColors = true;
+      }
+    }
+  }
+}
