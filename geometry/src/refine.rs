@@ -1,12 +1,14 @@
 //! One object refined to a level as the runtime draws it: Loop subdivision for
-//! multiresolution objects ([`crate::subdivide`](mod@crate::subdivide)), the linear 1-to-4
+//! multiresolution objects ([`crate::subdivide`](mod@crate::subdivide)) with the vertices split
+//! at sharp edges ([`crate::split`]), the linear 1-to-4
 //! split for flat ones ([`crate::flat`], SPEC.md A.7), then its baked colours
 //! ([`crate::colour`]). This is what `hce subdivide BAKED` writes and what
 //! `hce render --cpu-reference` draws.
 
-use hce_format::{Object, ObjectKind};
+use hce_format::{ControlMesh, Object, ObjectKind};
 
 use crate::flat::{refine_flat_cpu, FlatTopology};
+use crate::split::SplitTables;
 use crate::subdivide::{subdivide, Refined};
 
 /// One object refined to a level: what the runtime draws, plus normals.
@@ -32,12 +34,23 @@ pub fn refine_object_with(
     reconstruction: crate::lighting::Reconstruction,
 ) -> Result<RefinedObject, String> {
     let mesh = match object.kind {
-        ObjectKind::Multiresolution => subdivide(&object.mesh, level).map_err(|e| e.to_string())?,
+        ObjectKind::Multiresolution => subdivide_split(&object.name, &object.mesh, level)?,
         ObjectKind::Flat => refine_linear(object, level)?,
     };
     let colours = crate::colour::apply_baked_colours_with(object, &mesh, level, reconstruction)
         .map_err(|e| e.to_string())?;
     Ok(RefinedObject { mesh, colours })
+}
+
+/// Loop subdivision of a multiresolution object's control mesh to `level` with its vertices
+/// split at sharp edges (SPEC.md F.5, F.6): the mesh the runtime draws and the reference
+/// path-traces.
+pub fn subdivide_split(name: &str, mesh: &ControlMesh, level: u32) -> Result<Refined, String> {
+    let mut refined = subdivide(mesh, level).map_err(|e| e.to_string())?;
+    SplitTables::new(name, mesh)
+        .map_err(|e| e.to_string())?
+        .apply(mesh, &mut refined)?;
+    Ok(refined)
 }
 
 /// The flat kernel's CPU twin, as a [`Refined`] (normals: per vertex, area-weighted).

@@ -179,6 +179,10 @@ impl GpuContext {
         if timestamps {
             required_features |= wgpu::Features::TIMESTAMP_QUERY;
         }
+        // Lets the renderer multisample its 32-bit float target where the adapter can (WebGPU
+        // alone does not promise it).
+        required_features |=
+            adapter.features() & wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
         // Ask for what the adapter offers on buffer sizes: refined meshes are large.
         let adapter_limits = adapter.limits();
         let required_limits = wgpu::Limits {

@@ -508,6 +508,10 @@ impl GpuScene {
                     });
                 }
                 subdivide_into(&object.mesh, level, scratch).map_err(|e| invalid(&name, e))?;
+                hce_geometry::split::SplitTables::new(&name, &object.mesh)
+                    .map_err(|e| invalid(&name, e))?
+                    .apply(&object.mesh, scratch)
+                    .map_err(|e| invalid(&name, e))?;
                 let colours = hce_geometry::colour::apply_baked_colours_with(
                     object,
                     scratch,
@@ -732,6 +736,8 @@ pub struct AssetRenderOptions {
     pub scene: SceneOptions,
     /// Linear background colour. Default black.
     pub background: [f32; 3],
+    /// Multisamples per pixel, as [`RenderParams::samples`]. Default 4.
+    pub samples: u32,
 }
 
 impl Default for AssetRenderOptions {
@@ -745,6 +751,7 @@ impl Default for AssetRenderOptions {
             max_triangles: 16_000_000,
             scene: SceneOptions::default(),
             background: [0.0; 3],
+            samples: 4,
         }
     }
 }
@@ -839,6 +846,7 @@ pub fn render_asset(
             height: options.height,
             framing: Framing::Camera(camera),
             background: options.background,
+            samples: options.samples,
         },
     )?;
     let objects = levels

@@ -69,6 +69,21 @@ pub struct RenderArgs {
     /// geometric normals, averaged at element corners and interpolated; normals ignored).
     #[arg(long, default_value = "smooth", value_parser = parse_reconstruction)]
     pub reconstruction: hce_geometry::lighting::Reconstruction,
+    /// Multisample anti-aliasing: samples per pixel, 1 (none), 2, 4, 8 or 16. The adapter's
+    /// largest supported count up to this is used (printed). `hce reference --msaa` traces
+    /// rays through the same sample positions.
+    #[arg(long, default_value_t = 4, value_parser = parse_msaa)]
+    pub msaa: u32,
+}
+
+/// Parses a multisample count: 1, 2, 4, 8 or 16 (the counts with standard sample positions).
+pub fn parse_msaa(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(n @ (1 | 2 | 4 | 8 | 16)) => Ok(n),
+        _ => Err(format!(
+            "'{s}': expected 1, 2, 4, 8 or 16 samples per pixel"
+        )),
+    }
 }
 
 pub fn parse_reconstruction(s: &str) -> Result<hce_geometry::lighting::Reconstruction, String> {
@@ -241,10 +256,18 @@ fn write_image(args: &RenderArgs, image: &hce_runtime::gpu::RenderedImage) -> Re
         Format::Exr => write_exr(&args.output, w, h, &image.pixels)?,
     }
     println!(
-        "wrote {} ({w}x{h}, camera {})",
+        "wrote {} ({w}x{h}, {} samples per pixel, camera {})",
         args.output.display(),
+        image.samples,
         camera_text(&image.camera)
     );
+    if image.samples < args.msaa {
+        eprintln!(
+            "note: the adapter multisamples this image at most {}x; compare it with \
+             `hce reference --msaa {}`",
+            image.samples, image.samples
+        );
+    }
     Ok(())
 }
 
@@ -320,6 +343,7 @@ fn run_baked(
                 reconstruction: args.reconstruction,
                 ..Default::default()
             },
+            samples: args.msaa,
             ..Default::default()
         },
     )?;
@@ -499,6 +523,7 @@ fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Resul
             height,
             framing: Framing::Camera(view),
             background: [0.0; 3],
+            samples: args.msaa,
         },
     )?;
     write_image(args, &image)

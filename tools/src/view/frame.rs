@@ -107,7 +107,7 @@ impl FrameRenderer {
         let egui = egui_wgpu::Renderer::new(device, format, egui_wgpu::RendererOptions::default());
         Self {
             format,
-            scene: MeshPipeline::new(ctx, HDR_FORMAT),
+            scene: MeshPipeline::new(ctx, HDR_FORMAT, 1),
             tone,
             tone_layout,
             tone_params,
