@@ -2,22 +2,11 @@
 //! cameras kept; multiresolution objects Loop-subdivided, flat ones split linearly (their
 //! geometry does not move), each baked primitive with NORMAL and COLOR_0.
 
+mod common;
+
 use hce_format::gltf::{Asset, EXTENSION_NAME};
 use serde_json::{json, Value};
 use std::path::Path;
-use std::process::Command;
-
-fn hce(args: &[&str]) {
-    let out = Command::new(env!("CARGO_BIN_EXE_hce"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "hce {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
 
 fn json_of(path: &Path) -> Value {
     Asset::parse(&std::fs::read(path).unwrap()).unwrap().json
@@ -44,7 +33,7 @@ fn baked_cornell_box_keeps_its_scene_and_flat_blocks_stay_boxes() {
     let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("../samples/cornell-box.glb");
     let baked = dir.path().join("cornell.glb");
     let out = dir.path().join("cornell-l2.glb");
-    hce(&[
+    common::hce_ok(&[
         "bake",
         sample.to_str().unwrap(),
         "-o",
@@ -52,7 +41,7 @@ fn baked_cornell_box_keeps_its_scene_and_flat_blocks_stay_boxes() {
         "--bf-epsilon",
         "0.05",
     ]);
-    hce(&[
+    common::hce_ok(&[
         "subdivide",
         baked.to_str().unwrap(),
         "-l",
@@ -118,7 +107,7 @@ fn nodes_sharing_a_mesh_still_share_the_refined_mesh() {
     )
     .unwrap();
     let out = dir.path().join("two-l1.gltf");
-    hce(&[
+    common::hce_ok(&[
         "subdivide",
         input.to_str().unwrap(),
         "-l",

@@ -48,7 +48,7 @@ pub struct ReferenceArgs {
     #[arg(short, long)]
     pub output: PathBuf,
     /// Loop subdivision level of every multiresolution object (as `hce render --level`).
-    #[arg(long)]
+    #[arg(long, value_parser = super::bake::level_parser())]
     pub level: u32,
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, default_value = "800x600")]
@@ -57,8 +57,8 @@ pub struct ReferenceArgs {
     /// file's camera when it has one, else `auto`.
     #[arg(long)]
     pub camera: Option<String>,
-    /// Paths per pixel.
-    #[arg(long, default_value_t = 256)]
+    /// Paths per pixel (at least 1).
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..))]
     pub samples: u32,
     /// Also write a mask PNG: white on pixels whose neighbourhood sees one multiresolution
     /// object instance (see --mask-margin), black elsewhere.
@@ -74,7 +74,7 @@ pub struct ReferenceArgs {
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub exposure: f32,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = super::bake::thread_count_parser())]
     pub threads: Option<usize>,
     /// No progress bar.
     #[arg(long, short = 'q')]
@@ -96,16 +96,6 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
         }
     }
     let (width, height) = parse_size(&args.size)?;
-    if args.level > hce_geometry::subdivide::MAX_LOOP_LEVEL {
-        bail!(
-            "--level {} is out of range; use 0..={}",
-            args.level,
-            hce_geometry::subdivide::MAX_LOOP_LEVEL
-        );
-    }
-    if args.samples == 0 {
-        bail!("--samples must be at least 1");
-    }
     let choice = super::render::camera_choice(args.camera.as_deref())?;
     let asset = match Asset::open(&args.file) {
         Ok(a) => a,
@@ -139,9 +129,6 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
 
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = args.threads {
-        if n == 0 {
-            bail!("--threads must be at least 1");
-        }
         pool = pool.num_threads(n);
     }
     let pool = pool.build().context("cannot start the worker threads")?;
