@@ -149,7 +149,10 @@ fn reference_explains_bad_input() {
     let (code, _, err) = common::hce(&["reference", s(&plain), "--level", "9", "-o", s(&out)]);
     // Out of range: clap's usage error (2), naming the flag and the range.
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("'9' for '--level") && err.contains("0..=6"), "{err}");
+    assert!(
+        err.contains("'9' for '--level") && err.contains("0..=6"),
+        "{err}"
+    );
     let (code, _, err) = common::hce(&["reference", s(&plain), "--level", "0", "-o", "out.jpg"]);
     assert_ne!(code, 0);
     assert!(err.contains(".exr"), "{err}");

@@ -19,6 +19,7 @@ const LOOP_WGSL: &str = include_str!("loop.wgsl");
 const LOOP_WORKGROUP_WGSL: &str = include_str!("loop_workgroup.wgsl");
 const LOOP_NORMALS_TEMPLATE: &str = include_str!("loop_normals.wgsl");
 const FLAT_WGSL: &str = include_str!("flat.wgsl");
+#[cfg(any(test, feature = "testing"))]
 const DECODE_WGSL: &str = include_str!("decode.wgsl");
 
 /// The placeholder of `loop_normals.wgsl`: the prefix of a patch memory's accessors.
@@ -35,7 +36,8 @@ pub(crate) fn flat_source() -> String {
     refinement_source(FLAT_WGSL)
 }
 
-/// The colour-decoding kernel: the tree walk, then `decode.wgsl`.
+/// The colour-decoding kernel (`gpu::testing`): the tree walk, then `decode.wgsl`.
+#[cfg(any(test, feature = "testing"))]
 pub(crate) fn decode_source() -> String {
     format!("{TREE_WGSL}\n{DECODE_WGSL}")
 }
