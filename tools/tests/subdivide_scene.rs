@@ -128,3 +128,44 @@ fn nodes_sharing_a_mesh_still_share_the_refined_mesh() {
     assert_eq!(count(&prim["attributes"]["POSITION"]), 6);
     assert_eq!(count(&prim["attributes"]["COLOR_0"]), 6);
 }
+
+/// `NORMAL` of a multiresolution object in the scene output is the F.6 normal bit for bit (as
+/// `--merge` writes it and the conformance probes list it), not normalised a second time.
+#[test]
+fn scene_normals_are_the_f6_normals_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let container = hce_format::example::grid(3, 2);
+    let object = &container.objects[0];
+    assert_eq!(object.kind, hce_format::ObjectKind::Multiresolution);
+    let input = dir.path().join("grid.hce");
+    std::fs::write(&input, hce_format::write(&container).unwrap()).unwrap();
+    let out = dir.path().join("grid-l2.glb");
+    common::hce_ok(&[
+        "subdivide",
+        input.to_str().unwrap(),
+        "-l",
+        "2",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let (doc, buffers, _) = gltf::import_slice(std::fs::read(&out).unwrap()).unwrap();
+    let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
+    let reader = prim.reader(|b| Some(&buffers[b.index()][..]));
+    let normals: Vec<[f32; 3]> = reader.read_normals().unwrap().collect();
+    let f6 = hce_geometry::refine::refine_object(object, 2)
+        .unwrap()
+        .mesh
+        .normals;
+    let bits =
+        |v: &[[f32; 3]]| -> Vec<[u32; 3]> { v.iter().map(|n| n.map(f32::to_bits)).collect() };
+    assert_eq!(bits(&normals), bits(&f6));
+    // The bumpy grid has normals that a second normalisation would change: the test can fail.
+    let renormalised: Vec<[f32; 3]> = f6
+        .iter()
+        .map(|&n| {
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            n.map(|x| x / len)
+        })
+        .collect();
+    assert_ne!(bits(&renormalised), bits(&f6));
+}
