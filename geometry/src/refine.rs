@@ -7,9 +7,29 @@
 
 use hce_format::{ControlMesh, Object, ObjectKind};
 
+use crate::colour::ColourError;
 use crate::flat::{refine_flat_cpu, FlatTopology};
 use crate::split::SplitTables;
-use crate::subdivide::{subdivide, Refined};
+use crate::subdivide::{subdivide, Refined, SubdivError};
+use crate::tables::InvalidObject;
+
+/// Why an object could not be refined; each cause keeps its type, so a caller can tell a level
+/// out of range ([`SubdivError::Level`]) from a bad object.
+#[derive(Debug, thiserror::Error)]
+pub enum RefineError {
+    /// Loop subdivision failed, or the level is out of range (for either kind of object).
+    #[error(transparent)]
+    Subdiv(#[from] SubdivError),
+    /// The flat object's tables are inconsistent.
+    #[error(transparent)]
+    Object(#[from] InvalidObject),
+    /// The baked colours could not be applied.
+    #[error(transparent)]
+    Colour(#[from] ColourError),
+    /// The refined vertices could not be split at the sharp edges (SPEC.md F.5).
+    #[error("{0}")]
+    Split(String),
+}
 
 /// One object refined to a level: what the runtime draws, plus normals.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -23,7 +43,7 @@ pub struct RefinedObject {
 /// Refines `object` to `level` the way the runtime draws it: Loop subdivision for
 /// multiresolution objects, the linear 1-to-4 split for flat ones; then its baked colours, with
 /// the default (smooth) reconstruction.
-pub fn refine_object(object: &Object, level: u32) -> Result<RefinedObject, String> {
+pub fn refine_object(object: &Object, level: u32) -> Result<RefinedObject, RefineError> {
     refine_object_with(object, level, crate::lighting::Reconstruction::default())
 }
 
@@ -32,36 +52,32 @@ pub fn refine_object_with(
     object: &Object,
     level: u32,
     reconstruction: crate::lighting::Reconstruction,
-) -> Result<RefinedObject, String> {
+) -> Result<RefinedObject, RefineError> {
     let mesh = match object.kind {
         ObjectKind::Multiresolution => subdivide_split(&object.name, &object.mesh, level)?,
         ObjectKind::Flat => refine_linear(object, level)?,
     };
-    let colours = crate::colour::apply_baked_colours_with(object, &mesh, level, reconstruction)
-        .map_err(|e| e.to_string())?;
+    let colours = crate::colour::apply_baked_colours_with(object, &mesh, level, reconstruction)?;
     Ok(RefinedObject { mesh, colours })
 }
 
 /// Loop subdivision of a multiresolution object's control mesh to `level` with its vertices
 /// split at sharp edges (SPEC.md F.5, F.6): the mesh the runtime draws and the reference
 /// path-traces.
-pub fn subdivide_split(name: &str, mesh: &ControlMesh, level: u32) -> Result<Refined, String> {
-    let mut refined = subdivide(mesh, level).map_err(|e| e.to_string())?;
-    SplitTables::new(name, mesh)
-        .map_err(|e| e.to_string())?
-        .apply(mesh, &mut refined)?;
+pub fn subdivide_split(name: &str, mesh: &ControlMesh, level: u32) -> Result<Refined, RefineError> {
+    let mut refined = subdivide(mesh, level)?;
+    SplitTables::new(name, mesh)?
+        .apply(mesh, &mut refined)
+        .map_err(RefineError::Split)?;
     Ok(refined)
 }
 
 /// The flat kernel's CPU twin, as a [`Refined`] (normals: per vertex, area-weighted).
-fn refine_linear(object: &Object, level: u32) -> Result<Refined, String> {
+fn refine_linear(object: &Object, level: u32) -> Result<Refined, RefineError> {
     if level > crate::subdivide::MAX_LOOP_LEVEL {
-        return Err(format!(
-            "level {level} is out of range; use 0..={}",
-            crate::subdivide::MAX_LOOP_LEVEL
-        ));
+        return Err(SubdivError::Level(level).into());
     }
-    let topo = FlatTopology::new(&object.name, &object.mesh).map_err(|e| e.to_string())?;
+    let topo = FlatTopology::new(&object.name, &object.mesh)?;
     let flat = refine_flat_cpu(object, &topo, level);
     let positions: Vec<[f32; 3]> = flat
         .positions

@@ -153,6 +153,13 @@ pub fn cases(cornell_baked: Vec<u8>) -> Vec<Case> {
         hce(&c),
         "rule 3: the sharp bit on one spoke of the interior edge only",
     ));
+    let mut c = example::two_triangles();
+    c.objects[0].mesh.spoke_flags[0] |= 4;
+    out.push(case(
+        "invalid/spoke-flag-unknown-bit.hce",
+        hce(&c),
+        "rule 3 and A.5: spoke flag bit 2 set; new spoke-flag bits are a major-version change",
+    ));
     let mut b = hce(&example::single_triangle());
     b.extend_from_slice(&[0u8; 256]);
     let len = b.len() as u64;
@@ -341,6 +348,64 @@ pub fn probes(file: &str, bytes: &[u8]) -> Value {
     json!(out)
 }
 
+/// The level of the `scene` entry of baked glTF cases.
+pub const SCENE_LEVEL: u32 = 1;
+
+/// What `hce subdivide FILE -l SCENE_LEVEL -o out.glb` writes for a baked glTF case (SPEC.md
+/// F.9): per linked primitive, its vertex count and the `NORMAL` and `COLOR_0` (after the
+/// scene's one exposure) of probe vertices, numbered as the output numbers them (flat objects'
+/// vertices split per coarse triangle).
+pub fn scene(file: &str, bytes: &[u8]) -> Value {
+    use hce_runtime::asset::{Asset as RuntimeAsset, GltfSource, OpenOptions};
+    let scratch = tempfile::tempdir().expect("a scratch folder");
+    let input = scratch
+        .path()
+        .join(Path::new(file).file_name().expect("a file name"));
+    std::fs::write(&input, bytes).expect("the scratch copy");
+    let source = GltfSource::open_baked(&input)
+        .expect("suite GLBs open")
+        .expect("baked");
+    let asset = RuntimeAsset::from_gltf(&input, &source, &OpenOptions::default()).expect("valid");
+    let refined: Vec<RefinedObject> = asset
+        .objects
+        .iter()
+        .map(|o| refine_object(&o.object, SCENE_LEVEL).expect("valid objects refine"))
+        .collect();
+    let output = scratch.path().join("scene.glb");
+    hce_bake::output::refined_scene::write_refined_scene(
+        &output,
+        &asset,
+        Some((&source.json, source.buffers.as_slice())),
+        &refined,
+    )
+    .expect("the scene writes");
+    let (doc, buffers, _) =
+        gltf::import_slice(std::fs::read(&output).expect("the scene")).expect("the scene reads");
+    let mut out = Vec::new();
+    for mesh in doc.meshes() {
+        for prim in mesh.primitives() {
+            let reader = prim.reader(|b| Some(&buffers[b.index()][..]));
+            let (Some(normals), Some(colours)) = (reader.read_normals(), reader.read_colors(0))
+            else {
+                continue;
+            };
+            let normals: Vec<[f32; 3]> = normals.collect();
+            let colours: Vec<[f32; 3]> = colours.into_rgb_f32().collect();
+            let probes: Vec<Value> = probe_vertices(normals.len())
+                .into_iter()
+                .map(|v| json!({ "vertex": v, "normal": vector(normals[v]), "colour": vector(colours[v]) }))
+                .collect();
+            out.push(json!({
+                "mesh": mesh.index(),
+                "primitive": prim.index(),
+                "vertex_count": normals.len(),
+                "probes": probes,
+            }));
+        }
+    }
+    json!({ "level": SCENE_LEVEL, "primitives": out })
+}
+
 /// The manifest of `cases`.
 pub fn manifest(cases: &[Case]) -> Value {
     let entries: Vec<Value> = cases
@@ -360,6 +425,9 @@ pub fn manifest(cases: &[Case]) -> Value {
             }
             if valid {
                 e["refined"] = probes(&c.file, &c.bytes);
+                if !c.file.ends_with(".hce") {
+                    e["scene"] = scene(&c.file, &c.bytes);
+                }
             }
             e
         })

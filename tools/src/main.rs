@@ -5,17 +5,11 @@
 use clap::{Parser, Subcommand};
 
 mod cmd;
+mod exit;
 #[cfg(feature = "gpu")]
 mod view;
 
-/// Exit statuses shared by every subcommand (also in SPEC.md Appendix E and README.md).
-const EXIT_CODES: &str = "\
-Exit status:
-  0  success (for `validate`: the file is valid)
-  1  internal or other error (also: no GPU adapter, or no display for `view`)
-  2  usage error (bad arguments)
-  3  invalid input (unreadable bytes, failed validation)
-  4  I/O error (file missing, unreadable or unwritable)";
+use exit::EXIT_CODES;
 
 #[derive(Parser)]
 #[command(name = "hce", version, about, long_about = None, after_help = EXIT_CODES)]
@@ -82,9 +76,16 @@ fn quiet_on_broken_pipe() {
     }));
 }
 
-fn main() {
+fn main() -> std::process::ExitCode {
     quiet_on_broken_pipe();
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            // Help and version go to stdout with 0; bad arguments to stderr with 2.
+            let _ = e.print();
+            return std::process::ExitCode::from(e.exit_code().clamp(0, 255) as u8);
+        }
+    };
     let result = match cli.command {
         Command::Bake(args) => cmd::bake::run(args),
         Command::Render(args) => cmd::render::run(args),
@@ -99,37 +100,8 @@ fn main() {
         Command::View(args) => cmd::view::run(args),
         Command::Serve(args) => cmd::serve::run(args),
     };
-    if let Err(e) = result {
-        eprintln!("error: {e:#}");
-        std::process::exit(exit_status(&e));
-    }
-}
-
-/// The documented exit status (see [`EXIT_CODES`]) of a command's error: 4 when reading or
-/// writing a file failed, 3 when input bytes were read but are not acceptable, 1 otherwise.
-fn exit_status(e: &anyhow::Error) -> i32 {
-    let asset_io = |c: &(dyn std::error::Error + 'static)| {
-        matches!(
-            c.downcast_ref::<hce_runtime::AssetError>(),
-            Some(hce_runtime::AssetError::Io { .. })
-        )
-    };
-    if e.chain().any(|c| c.is::<std::io::Error>() || asset_io(c)) {
-        return 4;
-    }
-    let invalid_input = e.chain().any(|c| {
-        c.is::<hce_meshio::ImportError>()
-            || c.is::<hce_geometry::TopologyError>()
-            || c.is::<hce_geometry::SubdivError>()
-            || c.is::<hce_format::ReadError>()
-            || c.is::<hce_format::gltf::GltfError>()
-            || c.is::<hce_runtime::AssetError>()
-            || c.is::<hce_bake::import::ImportError>()
-            || c.is::<cmd::compare::InvalidImage>()
-    });
-    if invalid_input {
-        3
-    } else {
-        1
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => exit::report(&e),
     }
 }

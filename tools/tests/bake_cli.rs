@@ -2,11 +2,12 @@
 //! stay silent when stderr is not a terminal, `-q` prints nothing, and `--threads 1` and
 //! `--threads 2` write the same bytes.
 
+mod common;
+
 use std::path::Path;
-use std::process::Command;
 
 fn bake(input: &Path, out: &Path, extra: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_hce"))
+    let out = common::command()
         .arg("bake")
         .arg(input)
         .arg("-o")

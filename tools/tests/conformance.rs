@@ -5,9 +5,10 @@
 //! library.
 //! Also checks that the suite is what its generator writes today.
 
+mod common;
+
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn suite() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../conformance")
@@ -24,7 +25,7 @@ fn hce_validate_gives_every_expected_outcome() {
     assert!(cases.len() >= 15, "{} cases", cases.len());
     for c in cases {
         let file = suite().join(c["file"].as_str().unwrap());
-        let out = Command::new(env!("CARGO_BIN_EXE_hce"))
+        let out = common::command()
             .arg("validate")
             .arg(&file)
             .output()
@@ -121,7 +122,7 @@ fn probes_match_hce_subdivide_at_levels_1_to_3() {
         for level in m["probe_levels"].as_array().unwrap() {
             let level = level.as_u64().unwrap();
             let out = dir.path().join(format!("l{level}.obj"));
-            let status = Command::new(env!("CARGO_BIN_EXE_hce"))
+            let status = common::command()
                 .args(["subdivide", "--merge", "-l", &level.to_string(), "-o"])
                 .arg(&out)
                 .arg(&file)

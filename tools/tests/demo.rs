@@ -6,8 +6,10 @@
 //! drivers from the loader: the demo must still write the baked file, name the package to
 //! install and exit non-zero.
 
+mod common;
+
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use hce_runtime::gpu::testing::{try_context, Unavailable};
 
@@ -16,7 +18,7 @@ const W: u32 = 240;
 const H: u32 = 180;
 
 fn demo(dir: &Path, env: &[(&str, &str)]) -> Output {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_hce"));
+    let mut cmd = common::command();
     cmd.args(["demo", "--size", "small", "-o"]).arg(dir);
     for (k, v) in env {
         cmd.env(k, v);

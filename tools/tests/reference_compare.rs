@@ -1,20 +1,11 @@
 //! `hce reference` and `hce compare` from the command line: known answers, determinism and the
 //! documented exit statuses (3 invalid input, 4 I/O).
 
-use std::path::Path;
-use std::process::Command;
+mod common;
 
-fn hce(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_hce"))
-        .args(args)
-        .output()
-        .expect("the hce binary runs");
-    (
-        out.status.code().expect("exited normally"),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use std::path::Path;
+
+use common::hce;
 
 fn write_exr(path: &Path, w: usize, h: usize, rgb: &[[f32; 3]]) {
     exr::prelude::write_rgba_file(path, w, h, |x, y| {
@@ -54,20 +45,20 @@ fn compare_gives_the_known_answer_and_explains_bad_input() {
     // pixel 1: sqrt(1 / 18) and bias 1 / 10.
     write_exr(&a, 2, 1, &[[1.0, 2.0, 2.0], [2.0, 2.0, 2.0]]);
     write_exr(&b, 2, 1, &[[1.0, 2.0, 2.0]; 2]);
-    let (code, out, err) = hce(&["compare", s(&a), s(&b), "--json"]);
+    let (code, out, err) = common::hce(&["compare", s(&a), s(&b), "--json"]);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["pixels"], 2);
     assert!((v["relative_rms"].as_f64().unwrap() - (1.0f64 / 18.0).sqrt()).abs() < 1e-9);
     assert!((v["relative_bias"].as_f64().unwrap() - 0.1).abs() < 1e-9);
-    let (code, out, _) = hce(&["compare", s(&a), s(&b)]);
+    let (code, out, _) = common::hce(&["compare", s(&a), s(&b)]);
     assert_eq!(code, 0);
     assert!(out.contains("relative RMS: 0.23570"), "{out}");
 
     // Sizes that differ, a mask of the wrong size, garbage and a missing file.
     let small = dir.path().join("small.exr");
     write_exr(&small, 1, 1, &[[1.0; 3]]);
-    let (code, _, err) = hce(&["compare", s(&a), s(&small)]);
+    let (code, _, err) = common::hce(&["compare", s(&a), s(&small)]);
     assert_eq!(code, 3, "{err}");
     assert!(err.contains("2x1") && err.contains("1x1"), "{err}");
     let mask = dir.path().join("mask.png");
@@ -77,15 +68,15 @@ fn compare_gives_the_known_answer_and_explains_bad_input() {
         .unwrap()
         .write_image_data(&[255])
         .unwrap();
-    let (code, _, err) = hce(&["compare", s(&a), s(&b), "--mask", s(&mask)]);
+    let (code, _, err) = common::hce(&["compare", s(&a), s(&b), "--mask", s(&mask)]);
     assert_eq!(code, 3, "{err}");
     assert!(err.contains("mask"), "{err}");
     let garbage = dir.path().join("garbage.exr");
     std::fs::write(&garbage, b"not an exr").unwrap();
-    let (code, _, err) = hce(&["compare", s(&garbage), s(&b)]);
+    let (code, _, err) = common::hce(&["compare", s(&garbage), s(&b)]);
     assert_eq!(code, 3, "{err}");
     assert!(err.contains("garbage.exr"), "{err}");
-    let (code, _, err) = hce(&["compare", s(&a), s(&dir.path().join("missing.exr"))]);
+    let (code, _, err) = common::hce(&["compare", s(&a), s(&dir.path().join("missing.exr"))]);
     assert_eq!(code, 4, "{err}");
     assert!(err.contains("missing.exr"), "{err}");
 }
@@ -95,11 +86,11 @@ fn reference_of_the_baked_cornell_box_is_deterministic_and_lit() {
     let dir = tempfile::tempdir().unwrap();
     let input = Path::new(env!("CARGO_MANIFEST_DIR")).join("../samples/cornell-box.glb");
     let baked = dir.path().join("baked.glb");
-    let (code, _, err) = hce(&["bake", s(&input), "-o", s(&baked), "-q"]);
+    let (code, _, err) = common::hce(&["bake", s(&input), "-o", s(&baked), "-q"]);
     assert_eq!(code, 0, "{err}");
     let run = |out: &Path, threads: &str| {
         let mask = out.with_extension("png");
-        let (code, stdout, err) = hce(&[
+        let (code, stdout, err) = common::hce(&[
             "reference",
             s(&baked),
             "--level",
@@ -149,10 +140,10 @@ fn reference_explains_bad_input() {
     let plain = Path::new(env!("CARGO_MANIFEST_DIR")).join("../samples/cornell-box.glb");
     let out = dir.path().join("out.exr");
     // Not baked: says to bake it first.
-    let (code, _, err) = hce(&["reference", s(&plain), "--level", "0", "-o", s(&out)]);
+    let (code, _, err) = common::hce(&["reference", s(&plain), "--level", "0", "-o", s(&out)]);
     assert_eq!(code, 3, "{err}");
     assert!(err.contains("hce bake"), "{err}");
-    let (code, _, err) = hce(&[
+    let (code, _, err) = common::hce(&[
         "reference",
         s(&dir.path().join("missing.glb")),
         "--level",
@@ -161,10 +152,14 @@ fn reference_explains_bad_input() {
         s(&out),
     ]);
     assert_eq!(code, 4, "{err}");
-    let (code, _, err) = hce(&["reference", s(&plain), "--level", "9", "-o", s(&out)]);
-    assert_ne!(code, 0);
-    assert!(err.contains("--level 9"), "{err}");
-    let (code, _, err) = hce(&["reference", s(&plain), "--level", "0", "-o", "out.jpg"]);
+    let (code, _, err) = common::hce(&["reference", s(&plain), "--level", "9", "-o", s(&out)]);
+    // Out of range: clap's usage error (2), naming the flag and the range.
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("'9' for '--level") && err.contains("0..=6"),
+        "{err}"
+    );
+    let (code, _, err) = common::hce(&["reference", s(&plain), "--level", "0", "-o", "out.jpg"]);
     assert_ne!(code, 0);
     assert!(err.contains(".exr"), "{err}");
     // Every multisample position needs a path; the counts are those with standard positions.
@@ -195,7 +190,7 @@ fn reference_explains_bad_input() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("1, 2, 4, 8 or 16"), "{err}");
     // --level is required.
-    let (code, _, _) = hce(&["reference", s(&plain), "-o", s(&out)]);
+    let (code, _, _) = common::hce(&["reference", s(&plain), "-o", s(&out)]);
     assert_eq!(code, 2);
     assert!(!out.exists());
 }
@@ -204,12 +199,12 @@ fn reference_explains_bad_input() {
 fn a_reader_closing_the_pipe_early_is_not_a_crash() {
     // `hce compare a.exr b.exr | head -1`: the reader goes away before hce has printed
     // everything; Rust's `println!` would panic on the broken pipe.
-    use std::process::{Command, Stdio};
+    use std::process::Stdio;
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (dir.path().join("a.exr"), dir.path().join("b.exr"));
     write_exr(&a, 2, 1, &[[1.0, 2.0, 2.0], [2.0, 2.0, 2.0]]);
     write_exr(&b, 2, 1, &[[1.0, 2.0, 2.0]; 2]);
-    let mut child = Command::new(env!("CARGO_BIN_EXE_hce"))
+    let mut child = common::command()
         .args(["compare", s(&a), s(&b)])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())

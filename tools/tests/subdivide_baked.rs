@@ -1,8 +1,9 @@
 //! `hce subdivide --merge` on a baked `.hce`: every object is refined from its stored control
 //! mesh and the objects are merged into one mesh carrying the applied colours as COLOR_0.
 
+mod common;
+
 use hce_format::{example, write};
-use std::process::Command;
 
 #[test]
 fn baked_hce_subdivides_to_a_glb_with_colours() {
@@ -13,7 +14,7 @@ fn baked_hce_subdivides_to_a_glb_with_colours() {
     c.objects.push(example::single_triangle().objects.remove(0));
     std::fs::write(&input, write(&c).unwrap()).unwrap();
     let output = dir.path().join("out.glb");
-    let out = Command::new(env!("CARGO_BIN_EXE_hce"))
+    let out = common::command()
         .args([
             "subdivide",
             input.to_str().unwrap(),
@@ -57,7 +58,7 @@ fn reconstruction_flag_chooses_the_colour_rule() {
     std::fs::write(&input, write(&example::single_triangle()).unwrap()).unwrap();
     let run = |rule: &str| {
         let output = dir.path().join(format!("{rule}.glb"));
-        let out = Command::new(env!("CARGO_BIN_EXE_hce"))
+        let out = common::command()
             .args([
                 "subdivide",
                 input.to_str().unwrap(),

@@ -2,22 +2,11 @@
 //! cameras kept; multiresolution objects Loop-subdivided, flat ones split linearly (their
 //! geometry does not move), each baked primitive with NORMAL and COLOR_0.
 
+mod common;
+
 use hce_format::gltf::{Asset, EXTENSION_NAME};
 use serde_json::{json, Value};
 use std::path::Path;
-use std::process::Command;
-
-fn hce(args: &[&str]) {
-    let out = Command::new(env!("CARGO_BIN_EXE_hce"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "hce {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
 
 fn json_of(path: &Path) -> Value {
     Asset::parse(&std::fs::read(path).unwrap()).unwrap().json
@@ -44,7 +33,7 @@ fn baked_cornell_box_keeps_its_scene_and_flat_blocks_stay_boxes() {
     let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("../samples/cornell-box.glb");
     let baked = dir.path().join("cornell.glb");
     let out = dir.path().join("cornell-l2.glb");
-    hce(&[
+    common::hce_ok(&[
         "bake",
         sample.to_str().unwrap(),
         "-o",
@@ -52,7 +41,7 @@ fn baked_cornell_box_keeps_its_scene_and_flat_blocks_stay_boxes() {
         "--bf-epsilon",
         "0.05",
     ]);
-    hce(&[
+    common::hce_ok(&[
         "subdivide",
         baked.to_str().unwrap(),
         "-l",
@@ -118,7 +107,7 @@ fn nodes_sharing_a_mesh_still_share_the_refined_mesh() {
     )
     .unwrap();
     let out = dir.path().join("two-l1.gltf");
-    hce(&[
+    common::hce_ok(&[
         "subdivide",
         input.to_str().unwrap(),
         "-l",
@@ -138,4 +127,45 @@ fn nodes_sharing_a_mesh_still_share_the_refined_mesh() {
     assert_eq!(count(&prim["indices"]), 12);
     assert_eq!(count(&prim["attributes"]["POSITION"]), 6);
     assert_eq!(count(&prim["attributes"]["COLOR_0"]), 6);
+}
+
+/// `NORMAL` of a multiresolution object in the scene output is the F.6 normal bit for bit (as
+/// `--merge` writes it and the conformance probes list it), not normalised a second time.
+#[test]
+fn scene_normals_are_the_f6_normals_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let container = hce_format::example::grid(3, 2);
+    let object = &container.objects[0];
+    assert_eq!(object.kind, hce_format::ObjectKind::Multiresolution);
+    let input = dir.path().join("grid.hce");
+    std::fs::write(&input, hce_format::write(&container).unwrap()).unwrap();
+    let out = dir.path().join("grid-l2.glb");
+    common::hce_ok(&[
+        "subdivide",
+        input.to_str().unwrap(),
+        "-l",
+        "2",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let (doc, buffers, _) = gltf::import_slice(std::fs::read(&out).unwrap()).unwrap();
+    let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
+    let reader = prim.reader(|b| Some(&buffers[b.index()][..]));
+    let normals: Vec<[f32; 3]> = reader.read_normals().unwrap().collect();
+    let f6 = hce_geometry::refine::refine_object(object, 2)
+        .unwrap()
+        .mesh
+        .normals;
+    let bits =
+        |v: &[[f32; 3]]| -> Vec<[u32; 3]> { v.iter().map(|n| n.map(f32::to_bits)).collect() };
+    assert_eq!(bits(&normals), bits(&f6));
+    // The bumpy grid has normals that a second normalisation would change: the test can fail.
+    let renormalised: Vec<[f32; 3]> = f6
+        .iter()
+        .map(|&n| {
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            n.map(|x| x / len)
+        })
+        .collect();
+    assert_ne!(bits(&renormalised), bits(&f6));
 }

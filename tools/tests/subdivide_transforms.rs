@@ -1,6 +1,6 @@
 //! `hce subdivide` on a glTF scene places every mesh instance where its node puts it.
 
-use std::process::Command;
+mod common;
 
 #[test]
 fn gltf_node_transforms_are_applied() {
@@ -21,7 +21,7 @@ fn gltf_node_transforms_are_applied() {
     let input = dir.path().join("scene.gltf");
     std::fs::write(&input, json).unwrap();
     let output = dir.path().join("out.obj");
-    let out = Command::new(env!("CARGO_BIN_EXE_hce"))
+    let out = common::command()
         .args(["subdivide", input.to_str().unwrap(), "--level", "1", "-o"])
         .arg(&output)
         .output()

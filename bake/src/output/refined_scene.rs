@@ -70,7 +70,9 @@ impl ObjectGeometry {
         if object.kind == ObjectKind::Multiresolution {
             return Self {
                 positions: m.positions.clone(),
-                normals: m.normals.iter().copied().map(unit_or_up).collect(),
+                // The F.6 normals as they are (unit, or (0, 0, 1)): normalising them again
+                // would change their last bits (SPEC.md F.9).
+                normals: m.normals.clone(),
                 radiosity: r.colours.clone(),
                 triangles: m.indices.clone(),
             };

@@ -166,12 +166,6 @@ impl ImportedObject {
         hce_format::geometry_hash(self.indices.iter().map(|&i| self.positions[i as usize]))
     }
 
-    /// World-space corners of triangle `t`.
-    pub fn world_triangle(&self, t: usize) -> [[f32; 3]; 3] {
-        let i = &self.indices[3 * t..3 * t + 3];
-        [0, 1, 2].map(|c| self.world_positions[i[c] as usize])
-    }
-
     /// UVs of triangle `t`'s corners, if the object has TEXCOORD_0.
     pub fn triangle_uvs(&self, t: usize) -> Option<[[f32; 2]; 3]> {
         let uv = self.uv0.as_ref()?;

@@ -11,7 +11,7 @@ use super::util::{
     bind_buffers, check_size, dispatch_size, read_back, storage_init, storage_output,
     LightingBuffers,
 };
-use super::wgsl::TREE_WGSL;
+use super::wgsl::decode_source;
 use super::{GpuContext, GpuError};
 use hce_geometry::decode::MAX_PATH_LEVEL;
 use hce_geometry::lighting::Reconstruction;
@@ -70,7 +70,7 @@ pub fn decode_colours(
         "decoded colours",
         (queries.len() * std::mem::size_of::<DecodedColour>()) as u64,
     )?;
-    let source = format!("{TREE_WGSL}\n{}", include_str!("decode.wgsl"));
+    let source = decode_source();
     let module = ctx
         .device
         .create_shader_module(wgpu::ShaderModuleDescriptor {

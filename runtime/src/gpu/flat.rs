@@ -14,7 +14,7 @@ use super::util::{
     bind_buffers_at, check_size, dispatch_size, pack_sections, read_back, storage_init,
     storage_output, LightingBuffers, PassTimer,
 };
-use super::wgsl::refinement_source;
+use super::wgsl::flat_source;
 use super::{GpuContext, GpuError};
 use hce_geometry::decode::MAX_PATH_LEVEL;
 use hce_geometry::flat::{FlatTopology, RefinedMesh};
@@ -24,24 +24,24 @@ use hce_geometry::tables::validate_tables;
 /// The kernel's uniform block (`Params` in `flat.wgsl`).
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
-struct Params {
-    level: u32,
-    n: u32,
-    coarse_vertices: u32,
-    edge_count: u32,
-    triangle_count: u32,
-    interior_per_triangle: u32,
-    vertex_total: u32,
-    fine_total: u32,
-    tri_off: u32,
-    edges_off: u32,
-    edge_verts_off: u32,
-    edge_side_offsets_off: u32,
-    edge_sides_off: u32,
-    vertex_corner_offsets_off: u32,
-    vertex_corners_off: u32,
+pub(super) struct Params {
+    pub(super) level: u32,
+    pub(super) n: u32,
+    pub(super) coarse_vertices: u32,
+    pub(super) edge_count: u32,
+    pub(super) triangle_count: u32,
+    pub(super) interior_per_triangle: u32,
+    pub(super) vertex_total: u32,
+    pub(super) fine_total: u32,
+    pub(super) tri_off: u32,
+    pub(super) edges_off: u32,
+    pub(super) edge_verts_off: u32,
+    pub(super) edge_side_offsets_off: u32,
+    pub(super) edge_sides_off: u32,
+    pub(super) vertex_corner_offsets_off: u32,
+    pub(super) vertex_corners_off: u32,
     /// 0 for the nearest-normal rule, 1 for the reconstructions that read the lighting table.
-    smooth: u32,
+    pub(super) smooth_light: u32,
 }
 
 /// The compiled pipelines of the three steps.
@@ -111,7 +111,7 @@ pub struct KernelTiming {
 
 impl FlatKernel {
     pub fn new(ctx: &GpuContext) -> Self {
-        let source = refinement_source(include_str!("flat.wgsl"));
+        let source = flat_source();
         let module = ctx
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -264,7 +264,7 @@ impl FlatKernel {
             edge_sides_off: s[4],
             vertex_corner_offsets_off: s[5],
             vertex_corners_off: s[6],
-            smooth: object.lighting.smooth_flag(),
+            smooth_light: object.lighting.smooth_flag(),
         };
         let uniform = super::util::uniform_init(ctx, "flat params", &params);
         let group = |pipeline: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| {

@@ -472,8 +472,8 @@ fn patch_main(@builtin(global_invocation_id) gid: vec3<u32>,
 }
 
 // ---------------------------------------------------------------------------------------------
-// Fine triangles, on the lattice of hce_lattice.wgsl (the recursive 1-to-4 split of subdivide.rs
-// `subtriangle_cells`). An edge's points are counted from the vertex of its owner, the
+// Fine triangles, on the lattice of hce_lattice.wgsl (the recursive 1-to-4 split of
+// `subtriangle_cells` in geometry/src/lattice.rs). An edge's points are counted from the vertex of its owner, the
 // triangle whose OWNS_EDGE flag is set.
 
 fn lattice_level() -> u32 {

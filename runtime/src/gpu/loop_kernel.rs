@@ -60,38 +60,38 @@ const SCRATCH_BUDGET: u64 = 256 << 20;
 /// The kernel's uniform block (`Params` in `loop.wgsl`).
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
-struct Params {
-    level: u32,
-    m: u32,
-    coarse_vertices: u32,
-    edge_count: u32,
-    triangle_count: u32,
-    per_edge: u32,
-    per_tri: u32,
-    vertex_total: u32,
-    fine_total: u32,
-    slots: u32,
-    square_floats: u32,
-    ring_cap: u32,
-    offsets: [u32; SECTIONS],
+pub(super) struct Params {
+    pub(super) level: u32,
+    pub(super) m: u32,
+    pub(super) coarse_vertices: u32,
+    pub(super) edge_count: u32,
+    pub(super) triangle_count: u32,
+    pub(super) per_edge: u32,
+    pub(super) per_tri: u32,
+    pub(super) vertex_total: u32,
+    pub(super) fine_total: u32,
+    pub(super) slots: u32,
+    pub(super) square_floats: u32,
+    pub(super) ring_cap: u32,
+    pub(super) offsets: [u32; SECTIONS],
     /// Always 1 (see `keep` in `loop.wgsl`).
-    exact: u32,
+    pub(super) exact: u32,
     /// 0 for the nearest-normal rule, 1 for the reconstructions that read the lighting table.
-    smooth: u32,
+    pub(super) smooth_light: u32,
     /// The first vertex appended by the split at sharp edges (SPEC.md F.5): the F.5 count.
-    split_base: u32,
+    pub(super) split_base: u32,
     /// Corner copies `X` of the split.
-    split_copies: u32,
+    pub(super) split_copies: u32,
 }
 
 /// Sections packed into the `topo` buffer, in this order (see [`LoopKernel::upload`]).
-const SECTIONS: usize = 17;
+pub(super) const SECTIONS: usize = 17;
 
 /// Bits of the per-triangle flags word (`OWNS_EDGE` … in `loop.wgsl`).
-const OWNS_EDGE: u32 = 1;
-const OWNS_VERTEX: u32 = 8;
-const INTERIOR: u32 = 64;
-const SHARP: u32 = 512;
+pub(super) const OWNS_EDGE: u32 = 1;
+pub(super) const OWNS_VERTEX: u32 = 8;
+pub(super) const INTERIOR: u32 = 64;
+pub(super) const SHARP: u32 = 512;
 
 /// Triangles per workgroup the cooperative kernel aims for at levels 0 to 5 (halved while their
 /// patches do not fit the workgroup memory): enough triangles that the 64 lanes have work at the
@@ -169,6 +169,22 @@ impl WgShape {
             self.level, self.tris, self.square_a, self.square_b, self.ring
         )
     }
+}
+
+/// The header of every workgroup variant a device with 32 KiB of workgroup memory compiles
+/// for triangles whose three rings hold 12 points (a regular mesh), by level, for the WGSL
+/// tests.
+#[cfg(test)]
+pub(super) fn workgroup_headers() -> Vec<(String, String)> {
+    (0..=hce_geometry::subdivide::MAX_LOOP_LEVEL)
+        .filter_map(|level| WgShape::new(level, 12, 32 * 1024).ok())
+        .map(|shape| {
+            (
+                format!("loop workgroup level {}", shape.level),
+                shape.header(),
+            )
+        })
+        .collect()
 }
 
 /// How one refinement runs step 1.
@@ -634,7 +650,7 @@ impl LoopKernel {
             ring_cap: object.max_valence,
             offsets: object.offsets,
             exact: 1,
-            smooth: object.lighting.smooth_flag(),
+            smooth_light: object.lighting.smooth_flag(),
             split_base: v - split_appended(object, level) as u32,
             split_copies: object.split_copies,
         };

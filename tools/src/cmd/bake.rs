@@ -11,7 +11,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use hce_bake::import::ImportOptions;
 use hce_bake::normal_sets::NormalSetParams;
-use hce_bake::pipeline::{bake_file, BakeOutcome, PipelineError, PipelineOptions};
+use hce_bake::pipeline::{bake_file, BakeOutcome, PipelineOptions};
 use hce_bake::BakeParams;
 use hce_format::ObjectKind;
 use hce_geometry::Creases;
@@ -31,16 +31,16 @@ pub struct BakeArgs {
     pub multires: Vec<String>,
     /// Deepest Loop subdivision level the normal sets serve (0..=6): the finest level a
     /// renderer will draw.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = level_parser())]
     pub max_level: u32,
     /// The old spelling of `--max-level`, accepted with a warning.
-    #[arg(long = "levels", hide = true, conflicts_with = "max_level")]
+    #[arg(long = "levels", hide = true, conflicts_with = "max_level", value_parser = level_parser())]
     pub levels_old: Option<u32>,
-    /// Most normals per coarse triangle besides its geometric normal.
-    #[arg(long, default_value_t = 7)]
+    /// Most normals per coarse triangle besides its geometric normal (0..=63).
+    #[arg(long, default_value_t = 7, value_parser = max_normals_parser())]
     pub max_normals: usize,
     /// Target angle (degrees) between any subtriangle normal and its representative.
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, value_parser = non_negative_degrees)]
     pub normal_tolerance: f32,
     /// Sharp creases of multiresolution objects: none, auto (split input normals) or angle=DEG.
     #[arg(long, default_value = "none")]
@@ -52,24 +52,39 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = 8)]
     pub visibility_rays: u32,
     /// Worker threads (default: all cores). The output is the same whatever the count.
-    #[arg(long)]
+    #[arg(long, value_parser = thread_count_parser())]
     pub threads: Option<usize>,
     /// No progress bars and no summary.
     #[arg(long, short = 'q')]
     pub quiet: bool,
 }
 
+/// A subdivision level, 0 to [`hce_geometry::subdivide::MAX_LOOP_LEVEL`].
+pub fn level_parser() -> clap::builder::RangedU64ValueParser<u32> {
+    clap::builder::RangedU64ValueParser::new()
+        .range(0..=hce_geometry::subdivide::MAX_LOOP_LEVEL as u64)
+}
+
+/// A worker-thread count, at least 1.
+pub fn thread_count_parser() -> clap::builder::RangedU64ValueParser<usize> {
+    clap::builder::RangedU64ValueParser::new().range(1..)
+}
+
+/// Normals per coarse triangle besides the geometric one: at most
+/// `MAX_NORMALS_PER_TRIANGLE - 1`.
+fn max_normals_parser() -> clap::builder::RangedU64ValueParser<usize> {
+    clap::builder::RangedU64ValueParser::new().range(0..hce_bake::MAX_NORMALS_PER_TRIANGLE as u64)
+}
+
+/// A finite, non-negative angle in degrees.
+fn non_negative_degrees(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("{s:?} is not a non-negative number of degrees")),
+    }
+}
+
 pub fn run(args: BakeArgs) -> Result<()> {
-    if args.max_normals + 1 > hce_bake::MAX_NORMALS_PER_TRIANGLE {
-        anyhow::bail!(
-            "--max-normals {} is too large; use at most {}",
-            args.max_normals,
-            hce_bake::MAX_NORMALS_PER_TRIANGLE - 1
-        );
-    }
-    if !(args.normal_tolerance.is_finite() && args.normal_tolerance >= 0.0) {
-        anyhow::bail!("--normal-tolerance must be a non-negative number of degrees");
-    }
     let options = PipelineOptions {
         import: ImportOptions {
             multires: args.multires.clone(),
@@ -96,39 +111,16 @@ pub fn run(args: BakeArgs) -> Result<()> {
     let progress = |phase: &str, done: usize, total: usize| bars.update(phase, done, total);
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(n) = args.threads {
-        if n == 0 {
-            anyhow::bail!("--threads must be at least 1");
-        }
         builder = builder.num_threads(n);
     }
     let pool = builder.build().context("cannot start the worker threads")?;
-    let outcome = match pool.install(|| bake_file(&args.input, &options, &progress)) {
-        Ok(o) => o,
-        Err(e) => {
-            bars.finish();
-            eprintln!("error: baking {}: {e}", args.input.display());
-            std::process::exit(exit_code(&e));
-        }
-    };
+    let outcome = pool.install(|| bake_file(&args.input, &options, &progress));
     bars.finish();
+    let outcome = outcome.with_context(|| format!("baking {}", args.input.display()))?;
     if !args.quiet {
         print_summary(&outcome, &args);
     }
     Ok(())
-}
-
-/// The documented exit status of a failed bake (see `hce --help`).
-fn exit_code(e: &PipelineError) -> i32 {
-    use hce_bake::import::ImportError;
-    match e {
-        PipelineError::OutputExtension { .. } | PipelineError::Levels(_) => 2,
-        PipelineError::Bake(hce_bake::BakeError::InvalidParameter(_)) => 2,
-        PipelineError::Import(ImportError::Io { .. }) => 4,
-        PipelineError::Write(_) | PipelineError::FileWrite(_) => 4,
-        PipelineError::Output(hce_bake::output::OutputError::Write(_)) => 4,
-        PipelineError::Import(_) | PipelineError::Bake(_) | PipelineError::Object { .. } => 3,
-        PipelineError::Output(_) => 1,
-    }
 }
 
 /// One progress bar per phase, replaced when the phase changes.

@@ -13,11 +13,6 @@ use serde_json::{json, Value};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// Exit status: the input is not a valid file (bad bytes, failed validation).
-pub const EXIT_INVALID: i32 = 3;
-/// Exit status: the file could not be read or written.
-pub const EXIT_IO: i32 = 4;
-
 #[derive(Args, Debug)]
 pub struct InspectArgs {
     /// A `.hce` container, or a `.glb` / `.gltf` asset that embeds one.
@@ -27,20 +22,17 @@ pub struct InspectArgs {
     pub json: bool,
 }
 
-/// Why a file could not be loaded: I/O (exit 4) or invalid content (exit 3).
+/// Why a file could not be loaded: I/O (exit 4) or invalid content (exit 3; the statuses are
+/// decided in `crate::exit`).
+#[derive(Debug, thiserror::Error)]
 pub enum LoadError {
+    #[error("{0}")]
     Io(String),
+    #[error("{0}")]
     Invalid(String),
 }
 
 impl LoadError {
-    pub fn exit_code(&self) -> i32 {
-        match self {
-            LoadError::Io(_) => EXIT_IO,
-            LoadError::Invalid(_) => EXIT_INVALID,
-        }
-    }
-
     pub fn message(&self) -> &str {
         match self {
             LoadError::Io(m) | LoadError::Invalid(m) => m,
@@ -387,7 +379,8 @@ pub fn emit(text: &str) {
         .and_then(|()| stdout.flush());
 }
 
-/// Runs the command; exits with a documented status on failure (see `hce --help`).
+/// Runs the command. A file that cannot be read is an error; so is one whose container is
+/// unreadable, after its report is printed.
 pub fn run(args: InspectArgs) -> anyhow::Result<()> {
     match inspect_json(&args.file) {
         Ok(v) => {
@@ -396,10 +389,11 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
             } else {
                 emit(&text_report(&v));
             }
-            if v["read_error"].is_null() {
-                Ok(())
-            } else {
-                std::process::exit(EXIT_INVALID)
+            match v["read_error"].as_str() {
+                None => Ok(()),
+                Some(e) => {
+                    Err(crate::exit::Invalid(format!("{}: {e}", args.file.display())).into())
+                }
             }
         }
         Err(e) => {
@@ -412,8 +406,7 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
                     }))?
                 );
             }
-            eprintln!("error: {}", e.message());
-            std::process::exit(e.exit_code())
+            Err(e.into())
         }
     }
 }

@@ -55,7 +55,7 @@ pub struct ReferenceArgs {
     #[arg(short, long)]
     pub output: PathBuf,
     /// Loop subdivision level of every multiresolution object (as `hce render --level`).
-    #[arg(long)]
+    #[arg(long, value_parser = super::bake::level_parser())]
     pub level: u32,
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, default_value = "800x600")]
@@ -65,7 +65,7 @@ pub struct ReferenceArgs {
     #[arg(long)]
     pub camera: Option<String>,
     /// Paths per pixel (at least --msaa).
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..))]
     pub samples: u32,
     /// Sample positions per pixel, as `hce render --msaa` (1 is the pixel centre).
     #[arg(long, default_value_t = 4, value_parser = super::render::parse_msaa)]
@@ -84,7 +84,7 @@ pub struct ReferenceArgs {
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub exposure: f32,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = super::bake::thread_count_parser())]
     pub threads: Option<usize>,
     /// No progress bar.
     #[arg(long, short = 'q')]
@@ -106,19 +106,12 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
         }
     }
     let (width, height) = parse_size(&args.size)?;
-    if args.level > hce_geometry::subdivide::MAX_LOOP_LEVEL {
-        bail!(
-            "--level {} is out of range; use 0..={}",
-            args.level,
-            hce_geometry::subdivide::MAX_LOOP_LEVEL
-        );
-    }
     if args.samples < args.msaa {
-        bail!(
+        return Err(crate::exit::Usage(format!(
             "--samples {} must be at least --msaa {}: every sample position needs a path",
-            args.samples,
-            args.msaa
-        );
+            args.samples, args.msaa
+        ))
+        .into());
     }
     let choice = super::render::camera_choice(args.camera.as_deref())?;
     let asset = match Asset::open(&args.file) {
@@ -155,9 +148,6 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
 
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = args.threads {
-        if n == 0 {
-            bail!("--threads must be at least 1");
-        }
         pool = pool.num_threads(n);
     }
     let pool = pool.build().context("cannot start the worker threads")?;

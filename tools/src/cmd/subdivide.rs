@@ -36,10 +36,10 @@ pub struct SubdivideArgs {
     /// transforms), or a baked .hce / .glb / .gltf (see below).
     pub input: PathBuf,
     /// Subdivision level, 1 to 6 (0 writes the welded, manifold control mesh itself).
-    #[arg(long, short = 'l', default_value_t = 1)]
+    #[arg(long, short = 'l', default_value_t = 1, value_parser = super::bake::level_parser())]
     pub level: u32,
     /// The old spelling of `--level`, accepted with a warning.
-    #[arg(long = "levels", hide = true, conflicts_with = "level")]
+    #[arg(long = "levels", hide = true, conflicts_with = "level", value_parser = super::bake::level_parser())]
     pub levels_old: Option<u32>,
     /// On a baked file, how baked colours become vertex colours: `smooth` (the default,
     /// SPEC.md Appendix G), `nearest` (the paper's nearest-normal rule) or `gouraud` (normals
@@ -177,9 +177,9 @@ fn run_baked(args: &SubdivideArgs, input: Baked) -> Result<()> {
         .objects
         .iter()
         .map(|o| {
-            refine_object_with(&o.object, args.level, args.reconstruction).map_err(|e| {
-                anyhow!(
-                    "{}: object {} '{}': {e}",
+            refine_object_with(&o.object, args.level, args.reconstruction).with_context(|| {
+                format!(
+                    "{}: object {} '{}'",
                     args.input.display(),
                     o.index,
                     o.name()

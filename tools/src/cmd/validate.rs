@@ -3,7 +3,7 @@
 //! triangle ranges inside their object and geometry hashes that still match the mesh.
 //! Prints one line per problem; the exit status says valid (0), invalid (3) or unreadable (4).
 
-use super::inspect::{LoadError, EXIT_INVALID};
+use super::inspect::LoadError;
 use clap::Args;
 use hce_format::{gltf, validate_bytes};
 use hce_runtime::asset::{buffer_files, GltfSource};
@@ -38,21 +38,13 @@ pub fn problems(args: &ValidateArgs) -> Result<Vec<String>, LoadError> {
     Ok(problems.iter().map(ToString::to_string).collect())
 }
 
-/// Runs the command; exits with a documented status on failure (see `hce --help`).
+/// Runs the command: prints every problem, and fails (status 3) when there is one.
 pub fn run(args: ValidateArgs) -> anyhow::Result<()> {
-    match problems(&args) {
-        Ok(p) if p.is_empty() => {
-            super::inspect::emit(&format!("{}: valid\n", args.file.display()));
-            Ok(())
-        }
-        Ok(p) => {
-            super::inspect::emit(&p.iter().map(|l| format!("{l}\n")).collect::<String>());
-            eprintln!("{}: {} problem(s)", args.file.display(), p.len());
-            std::process::exit(EXIT_INVALID)
-        }
-        Err(e) => {
-            eprintln!("error: {}", e.message());
-            std::process::exit(e.exit_code())
-        }
+    let p = problems(&args)?;
+    if p.is_empty() {
+        super::inspect::emit(&format!("{}: valid\n", args.file.display()));
+        return Ok(());
     }
+    super::inspect::emit(&p.iter().map(|l| format!("{l}\n")).collect::<String>());
+    Err(crate::exit::Invalid(format!("{}: {} problem(s)", args.file.display(), p.len())).into())
 }
