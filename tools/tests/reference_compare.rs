@@ -154,7 +154,7 @@ fn reference_explains_bad_input() {
         "{err}"
     );
     let (code, _, err) = common::hce(&["reference", s(&plain), "--level", "0", "-o", "out.jpg"]);
-    assert_ne!(code, 0);
+    assert_eq!(code, 2, "{err}");
     assert!(err.contains(".exr"), "{err}");
     // --level is required.
     let (code, _, _) = common::hce(&["reference", s(&plain), "-o", s(&out)]);
