@@ -10,7 +10,13 @@
 //! solution is split (that error weighed against every receiver that makes it: the whole
 //! coarse receiver triangle, so that a finely split receiver cannot hide it, BENCHMARKS.md,
 //! Cornell box; and the coarse triangles of the same object around it that see the source
-//! from about the same place, so that a finely tessellated object cannot either). The system is solved
+//! from about the same place, so that a finely tessellated object cannot either). Every leaf
+//! is drawn, so two rules judge a link against the radiance of its receiver rather than the
+//! scene's power: a receiver over which the link's form factor bends more than a linear
+//! function follows is split, and so is one that a shadow edge crosses (partial visibility).
+//! A link's coefficient is linear over its receiver (its values at the three corners), so that
+//! push hands each leaf the form factor over its own part (in a closed furnace, constant links
+//! left leaves by a wall 13% too bright). The system is solved
 //! by gathering over links and push-pull, and links are refined again against the solution.
 //! Instead of linking every pair of input triangles up front, receivers start from
 //! the top of a cluster hierarchy ([`crate::cluster`], after Smits et al. 1994) and open
@@ -172,6 +178,8 @@ struct RawLink {
     recv: ElemKey,
     src: Source,
     k_start: u32,
+    /// Fraction of the visibility rays that were clear.
+    visible: f32,
 }
 
 /// A resolved link inside a root's tree.
@@ -179,6 +187,7 @@ struct Link {
     recv: u32,
     src: SrcIdx,
     k_start: u32,
+    visible: f32,
 }
 
 #[derive(Clone, Copy)]
@@ -456,7 +465,7 @@ impl Ctx<'_> {
         let nn = self.nn(r);
         // Coefficients are a pure function of the pair: reuse those of the previous pass.
         let prev = &trees[r as usize];
-        let cache: std::collections::HashMap<(ElemKey, Source), usize> = prev
+        let cache: std::collections::HashMap<(ElemKey, Source), (usize, f32)> = prev
             .links
             .iter()
             .map(|l| {
@@ -466,7 +475,10 @@ impl Ctx<'_> {
                         Source::Elem(trees[root as usize].keys[node as usize])
                     }
                 };
-                ((prev.keys[l.recv as usize], src), l.k_start as usize)
+                (
+                    (prev.keys[l.recv as usize], src),
+                    (l.k_start as usize, l.visible),
+                )
             })
             .collect();
         let top = match self.clusters.top {
@@ -539,7 +551,7 @@ impl Ctx<'_> {
                         let (mut fmax, mut fmin) = (0.0f32, f32::MAX);
                         let mut bend = 0.0f32;
                         let inset = inset_corners(rt);
-                        for n in &root.normals {
+                        for (j, n) in root.normals.iter().enumerate() {
                             let f = |p: Vec3| point_to_polygon(p, *n, &st);
                             let centre = f(rc);
                             let at = inset.map(f);
@@ -549,11 +561,14 @@ impl Ctx<'_> {
                             }
                             // Against the plane through the three corner samples: at the
                             // centre, and between each two corners (a source corner touching
-                            // the receiver's side peaks there).
-                            bend = bend.max((centre - (at[0] + at[1] + at[2]) / 3.0).abs());
-                            for (a, b) in [(0, 1), (1, 2), (2, 0)] {
-                                let mid = f((inset[a] + inset[b]) * 0.5);
-                                bend = bend.max((mid - (at[a] + at[b]) * 0.5).abs());
+                            // the receiver's side peaks there). The bend is the geometry's,
+                            // alike for every normal: the geometric one judges it.
+                            if j == 0 {
+                                bend = (centre - (at[0] + at[1] + at[2]) / 3.0).abs();
+                                for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+                                    let mid = f((inset[a] + inset[b]) * 0.5);
+                                    bend = bend.max((mid - (at[a] + at[b]) * 0.5).abs());
+                                }
                             }
                         }
                         est = fmax * l * r_area * std::f32::consts::PI;
@@ -661,12 +676,15 @@ impl Ctx<'_> {
                     // As for near elements below: split a receiver over which the cluster's
                     // form factor bends more than a linear link follows.
                     if self.splittable(recv, r_area) {
-                        let mut bend = 0.0f32;
-                        for n in &root.normals {
-                            let centre = self.cluster_form_factor(c, rc, *n);
-                            let at = inset_corners(rt).map(|p| self.cluster_form_factor(c, p, *n));
-                            bend = bend.max((centre - (at[0] + at[1] + at[2]) / 3.0).abs());
-                        }
+                        // With the geometric normal: the bend is the geometry's.
+                        let f = |p: Vec3| {
+                            let mut f = [0.0f32];
+                            self.cluster_form_factors(c, p, &[root.normal], &mut f);
+                            f[0]
+                        };
+                        let centre = f(rc);
+                        let at = inset_corners(rt).map(f);
+                        let bend = (centre - (at[0] + at[1] + at[2]) / 3.0).abs();
                         let recv_l = lum(trees[r as usize].l
                             [trees[r as usize].deepest_toward(recv) as usize * nn]);
                         if bend * l * lum(self.reflectance(recv)) > BEND_TOLERANCE * recv_l {
@@ -700,8 +718,8 @@ impl Ctx<'_> {
                 }
             }
             let k_start = ks.len() as u32;
-            let k = match cache.get(&(recv, src)) {
-                Some(&at) => prev.k[at..at + CORNERS * nn].to_vec(),
+            let (k, visible) = match cache.get(&(recv, src)) {
+                Some(&(at, visible)) => (prev.k[at..at + CORNERS * nn].to_vec(), visible),
                 None => {
                     // A link far below the threshold carries little light: a few rays
                     // bound its visibility error well enough (the error it can add is a
@@ -718,14 +736,41 @@ impl Ctx<'_> {
             if k.iter().all(|&v| v <= 0.0) {
                 continue;
             }
+            // Part of the source hidden from part of the receiver: a shadow's edge crosses the
+            // receiver (under a block standing on the floor, or a face in the block's shadow),
+            // and the link spreads its light evenly over both sides. Split the receiver while
+            // the light put on the wrong side is a visible fraction of what the receiver
+            // gets. Judged against the light this link brings as well as the receiver's own
+            // radiance, so that the first pass, before any light has arrived, resolves the
+            // shadows the emitters cast.
+            if visible > 0.0 && visible < 1.0 && self.splittable(recv, r_area) {
+                let gathered = lum(self.reflectance(recv))
+                    * lum(self.src_radiance(trees, cl, src))
+                    * (k[0] + k[nn] + k[2 * nn])
+                    / 3.0;
+                let wrong = gathered * (1.0 - visible).min(visible) / visible;
+                let recv_l =
+                    lum(trees[r as usize].l[trees[r as usize].deepest_toward(recv) as usize * nn]);
+                if wrong > SHADOW_TOLERANCE * recv_l.max(gathered) {
+                    for c in (0..4).rev() {
+                        stack.push((recv.child(c), src));
+                    }
+                    continue;
+                }
+            }
             ks.extend(k);
-            links.push(RawLink { recv, src, k_start });
+            links.push(RawLink {
+                recv,
+                src,
+                k_start,
+                visible,
+            });
         }
         (links, ks)
     }
 
     /// Form factor times visibility from receiver `recv` to `src`, per receiver normal.
-    fn link_coefficients(&self, recv: ElemKey, src: Source, nv: u32) -> Vec<f32> {
+    fn link_coefficients(&self, recv: ElemKey, src: Source, nv: u32) -> (Vec<f32>, f32) {
         let root = &self.roots[recv.root as usize];
         let nn = root.normals.len();
         let rt = self.elem_corners(recv);
@@ -760,12 +805,8 @@ impl Ctx<'_> {
                 }
                 let inv = 1.0 / pts.len() as f32;
                 k.iter_mut().for_each(|v| *v *= inv);
-                let at_corners: Vec<[f32; CORNERS]> = root
-                    .normals
-                    .iter()
-                    .map(|n| inset_corners(rt).map(|p| point_to_polygon(p, *n, &st)))
-                    .collect();
-                k = linear_over_receiver(&k, &at_corners);
+                let at_corners = inset_corners(rt).map(|p| point_to_polygon(p, root.normal, &st));
+                k = linear_over_receiver(&k, at_corners);
                 let sn = self.roots[sk.root as usize].normal;
                 geometric_first(&root.normals, |normals| {
                     visible_fraction(nv, |i| {
@@ -778,16 +819,13 @@ impl Ctx<'_> {
                 })
             }
             Source::Cluster(c) => {
-                let disc = |p: Vec3, n: Vec3| self.cluster_form_factor(c, p, n);
-                for (kj, n) in k.iter_mut().zip(&root.normals) {
-                    *kj = disc(rc, *n);
-                }
-                let at_corners: Vec<[f32; CORNERS]> = root
-                    .normals
-                    .iter()
-                    .map(|n| inset_corners(rt).map(|p| disc(p, *n)))
-                    .collect();
-                k = linear_over_receiver(&k, &at_corners);
+                self.cluster_form_factors(c, rc, &root.normals, &mut k);
+                let at_corners = inset_corners(rt).map(|p| {
+                    let mut f = [0.0f32];
+                    self.cluster_form_factors(c, p, &[root.normal], &mut f);
+                    f[0]
+                });
+                k = linear_over_receiver(&k, at_corners);
                 geometric_first(&root.normals, |normals| {
                     visible_fraction(nv, |i| {
                         let mut rng = Rng::new(recv.id(), src_id, u64::from(i));
@@ -803,7 +841,7 @@ impl Ctx<'_> {
             }
         };
         k.iter_mut().for_each(|v| *v *= visible);
-        k
+        (k, visible)
     }
 
     /// Unoccluded form factor from a point `p` with normal `n` to the triangles of cluster
@@ -814,8 +852,8 @@ impl Ctx<'_> {
     /// there is 10-20% off, and more at the receiver's corners, which can lie closer (in a
     /// closed furnace, leaves near a cube's corners summed to 8% less or more than the
     /// whole hemisphere, issue 20). The link stays one link; only its coefficient is summed
-    /// finer.
-    fn cluster_form_factor(&self, c: u32, p: Vec3, n: Vec3) -> f32 {
+    /// finer. Adds the form factor for each of `normals` to `out`.
+    fn cluster_form_factors(&self, c: u32, p: Vec3, normals: &[Vec3], out: &mut [f32]) {
         let cluster = &self.clusters.clusters[c as usize];
         let d = cluster.centre - p;
         let d2 = d.length_squared().max(1e-20);
@@ -823,16 +861,22 @@ impl Ctx<'_> {
         if cluster.radius() < dist * CLUSTER_DISC_OPENING {
             let w = d / dist;
             let proj = cluster.projected_area(-w);
-            return (n.dot(w).max(0.0) * proj / (std::f32::consts::PI * d2 + proj)).min(1.0);
+            for (o, n) in out.iter_mut().zip(normals) {
+                *o += (n.dot(w).max(0.0) * proj / (std::f32::consts::PI * d2 + proj)).min(1.0);
+            }
+            return;
         }
-        cluster
-            .children
-            .iter()
-            .map(|ch| match *ch {
-                ClusterChild::Cluster(x) => self.cluster_form_factor(x, p, n),
-                ClusterChild::Root(x) => point_to_polygon(p, n, &self.roots[x as usize].corners),
-            })
-            .sum()
+        for ch in cluster.children {
+            match ch {
+                ClusterChild::Cluster(x) => self.cluster_form_factors(x, p, normals, out),
+                ClusterChild::Root(x) => {
+                    let tri = &self.roots[x as usize].corners;
+                    for (o, n) in out.iter_mut().zip(normals) {
+                        *o += point_to_polygon(p, *n, tri);
+                    }
+                }
+            }
+        }
     }
 
     /// Whether light can pass from a source point `q` (normal `sn`) to a receiver point `p`
@@ -1137,7 +1181,11 @@ const CORNERS: usize = 3;
 
 /// Largest error, relative to the receiver's radiance, that a link's bend over its receiver
 /// may put into it before the receiver is split (see `refine_root`).
-const BEND_TOLERANCE: f32 = 0.0005;
+const BEND_TOLERANCE: f32 = 0.001;
+
+/// Largest error, relative to the receiver's radiance, that a shadow edge crossing the
+/// receiver may put into it before the receiver is split (see `refine_root`).
+const SHADOW_TOLERANCE: f32 = 0.05;
 
 /// A cluster is one disc in a link's coefficient while its radius is below this fraction of
 /// its distance ([`Ctx::cluster_form_factor`]).
@@ -1153,21 +1201,29 @@ fn inset_corners(t: [Vec3; 3]) -> [Vec3; CORNERS] {
     t.map(|v| v + (c - v) * CORNER_INSET)
 }
 
-/// The linear function with mean `mean[j]` (the link's estimate over the whole receiver) and
-/// the slope of the values `at[j]` sampled at the inset corners, as corner values, never below
-/// zero. Node-major over corners: `out[c * nn + j]`.
-fn linear_over_receiver(mean: &[f32], at: &[[f32; CORNERS]]) -> Vec<f32> {
+/// The linear function over the receiver with mean `mean[j]` for each normal (the link's
+/// estimate over the whole receiver) and the relative slope of the geometric normal's values
+/// `at` sampled at the inset corners (the slope is the geometry's: distance and angle to the
+/// source change alike for every normal), as corner values, never below zero. Corner-major:
+/// `out[c * nn + j]`.
+fn linear_over_receiver(mean: &[f32], at: [f32; CORNERS]) -> Vec<f32> {
     let nn = mean.len();
     let mut out = vec![0.0f32; CORNERS * nn];
-    for (j, (&m, f)) in mean.iter().zip(at).enumerate() {
-        let fm = (f[0] + f[1] + f[2]) / 3.0;
-        let slope = f.map(|v| (v - fm) / (1.0 - CORNER_INSET));
-        // A slope steep enough to take a corner below zero is flattened until that corner
-        // is zero, keeping the mean (clamping the corner alone would add light).
-        let low = slope.iter().copied().fold(0.0f32, f32::min);
-        let scale = if m + low < 0.0 { m / -low } else { 1.0 };
+    let fm = (at[0] + at[1] + at[2]) / 3.0;
+    // Relative change at each corner; none when the geometric normal sees nothing (a source
+    // below the coarse plane that only tilted normals see).
+    let slope = if fm > 0.0 {
+        at.map(|v| (v - fm) / (fm * (1.0 - CORNER_INSET)))
+    } else {
+        [0.0; CORNERS]
+    };
+    // A slope steep enough to take a corner below zero is flattened until that corner is zero,
+    // keeping the mean (clamping the corner alone would add light).
+    let low = slope.iter().copied().fold(0.0f32, f32::min);
+    let scale = if low < -1.0 { 1.0 / -low } else { 1.0 };
+    for (j, &m) in mean.iter().enumerate() {
         for c in 0..CORNERS {
-            out[c * nn + j] = (m + slope[c] * scale).max(0.0);
+            out[c * nn + j] = (m * (1.0 + slope[c] * scale)).max(0.0);
         }
     }
     out
@@ -1412,6 +1468,7 @@ pub fn bake_with_progress(
                         },
                     },
                     k_start: l.k_start,
+                    visible: l.visible,
                 })
                 .collect();
             new_trees[r].links = resolved;

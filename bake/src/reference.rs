@@ -558,29 +558,55 @@ impl<'a> PathTracer<'a> {
         (l.to_array(), hit)
     }
 
-    /// An image: pixel `(x, y)` (rows top to bottom) is [`Self::radiance_along`] the ray
-    /// `ray(x, y)` gives, seeded by `(seed, pixel index)`. Rows run in parallel; `row_done` is
-    /// called once per finished row (from any thread). Deterministic for any thread count.
+    /// An image: pixel `(x, y)` (rows top to bottom) is the mean over its `positions` sample
+    /// positions `s` of [`Self::radiance_along`] the ray `ray(x, y, s)` gives, the `paths`
+    /// shared out among them (the first `paths % positions` get one more), all seeded by
+    /// `(seed, pixel index)`; with one position, the ray's radiance over all `paths`. The hit is
+    /// the one every position sees (same object and side), else `None`. Rows run in parallel;
+    /// `row_done` is called once per finished row (from any thread). Deterministic for any
+    /// thread count.
+    #[allow(clippy::too_many_arguments)]
     pub fn render(
         &self,
         width: u32,
         height: u32,
         paths: u32,
+        positions: usize,
         seed: u64,
-        ray: impl Fn(u32, u32) -> ([f64; 3], [f64; 3]) + Sync,
+        ray: impl Fn(u32, u32, usize) -> ([f64; 3], [f64; 3]) + Sync,
         row_done: impl Fn() + Sync,
     ) -> Vec<([f32; 3], Option<Hit>)> {
+        let positions = positions.max(1);
         (0..height)
             .into_par_iter()
             .flat_map_iter(|y| {
                 let row: Vec<([f32; 3], Option<Hit>)> = (0..width)
                     .map(|x| {
-                        let (o, d) = ray(x, y);
                         let pixel = u64::from(y) * u64::from(width) + u64::from(x);
                         let mut rng = Pcg::new(seed ^ PIXEL_STREAM, pixel);
-                        let (l, hit) =
-                            self.radiance_with(DVec3::from(o), DVec3::from(d), paths, &mut rng);
-                        (l.as_vec3().to_array(), hit)
+                        let mut sum = DVec3::ZERO;
+                        let mut shared: Option<Option<Hit>> = None;
+                        for s in 0..positions {
+                            let (o, d) = ray(x, y, s);
+                            // Paths shared out: the first `paths % positions` get one more.
+                            let n = paths / positions as u32
+                                + u32::from((s as u32) < paths % positions as u32);
+                            let (l, hit) =
+                                self.radiance_with(DVec3::from(o), DVec3::from(d), n, &mut rng);
+                            sum += l;
+                            let same = |a: &Option<Hit>| match (a, &hit) {
+                                (Some(a), Some(h)) => a.object == h.object && a.back == h.back,
+                                (None, None) => true,
+                                _ => false,
+                            };
+                            shared = match shared {
+                                None => Some(hit),
+                                Some(first) if same(&first) => Some(first),
+                                Some(_) => Some(None),
+                            };
+                        }
+                        let l = sum / positions as f64;
+                        (l.as_vec3().to_array(), shared.flatten())
                     })
                     .collect();
                 row_done();
@@ -792,7 +818,7 @@ mod tests {
         let (l, hit) = pt.radiance_along([0.1, 2.0, 0.1], [0.0, -1.0, 0.0], 16, 1, 0);
         assert!(hit.unwrap().back && l == [0.0; 3]);
         // A small image, the same bits on one thread as on all.
-        let ray = |x: u32, y: u32| {
+        let ray = |x: u32, y: u32, _: usize| {
             let d = DVec3::new(
                 0.3 * f64::from(x) / 7.0 - 0.15,
                 0.15 - 0.3 * f64::from(y) / 5.0,
@@ -800,16 +826,39 @@ mod tests {
             );
             ([0.278, 0.273, -0.8], d.normalize().to_array())
         };
-        let all = pt.render(8, 6, 8, 5, ray, || {});
+        let all = pt.render(8, 6, 8, 1, 5, ray, || {});
         let one = rayon::ThreadPoolBuilder::new()
             .num_threads(1)
             .build()
             .unwrap()
-            .install(|| pt.render(8, 6, 8, 5, ray, || {}));
+            .install(|| pt.render(8, 6, 8, 1, 5, ray, || {}));
         assert_eq!(all, one);
         assert!(all.iter().all(|(l, _)| l.iter().all(|c| c.is_finite())));
         assert!(all.iter().filter(|(_, h)| h.is_some()).count() == 48);
         assert!(all.iter().any(|(l, _)| l[0] > 0.05));
+        // Four sample positions along the same ray share the eight paths out, two each, from
+        // the pixel's one random stream: the same paths as one position, in the same order,
+        // so the mean over positions of two-path means is the eight-path mean.
+        let four = pt.render(8, 6, 8, 4, 5, ray, || {});
+        for ((a, ha), (b, hb)) in all.iter().zip(&four) {
+            assert_eq!(ha, hb);
+            for c in 0..3 {
+                assert!(
+                    (a[c] - b[c]).abs() <= 1e-6 * a[c].abs().max(1.0),
+                    "{a:?} {b:?}"
+                );
+            }
+        }
+        // A pixel whose positions see different objects has no shared hit.
+        let split = |x: u32, y: u32, s: usize| {
+            if s == 0 {
+                ([0.278, 0.01, 0.2795], [0.0, 1.0, 0.0])
+            } else {
+                ray(x, y, s)
+            }
+        };
+        let mixed = pt.render(2, 1, 4, 2, 5, split, || {});
+        assert!(mixed.iter().all(|(_, h)| h.is_none()), "{mixed:?}");
     }
 
     #[test]

@@ -177,7 +177,15 @@ fn worst_node(scene: &Scene) -> (f32, String) {
     let res = bake(scene, &BakeParams::default()).expect("bakes");
     let expect = EMISSION / (1.0 - RHO);
     let mut worst = (0.0f32, String::new());
-    for o in &res.objects {
+    for (oi, o) in res.objects.iter().enumerate() {
+        let (mut lo, mut hi) = (f32::MAX, f32::MIN);
+        for sol in &o.triangles {
+            for c in &sol.colours {
+                lo = lo.min(c[0] / expect - 1.0);
+                hi = hi.max(c[0] / expect - 1.0);
+            }
+        }
+        println!("  object {oi}: {:+.3}% .. {:+.3}%", lo * 100.0, hi * 100.0);
         for (t, sol) in o.triangles.iter().enumerate() {
             let nn = sol.normals.len();
             for (i, c) in sol.colours.iter().enumerate() {
@@ -186,9 +194,20 @@ fn worst_node(scene: &Scene) -> (f32, String) {
                 if err.abs() > worst.0.abs() {
                     let (level, path) = sol.nodes[i / nn];
                     let leaf = !sol.subdivided[i / nn];
+                    let normal = i % nn;
+                    let key = hce_bake::element::ElemKey {
+                        root: 0,
+                        level,
+                        path,
+                    };
+                    let cs = key.corners(scene.objects[oi].corners(t));
+                    let centre = (cs[0] + cs[1] + cs[2]) / 3.0;
                     worst = (
                         err,
-                        format!("triangle {t} level {level} path {path} leaf {leaf}"),
+                        format!(
+                            "object {oi} triangle {t} level {level} path {path} normal {normal} \
+                             leaf {leaf}, centre {centre:.3}"
+                        ),
                     );
                 }
             }
@@ -280,4 +299,77 @@ fn multiresolution_normal_sets() {
         })
         .collect();
     check("multiresolution box", object);
+}
+
+/// An outward-facing octahedron, each face a barycentric grid, centred at `c` with radius
+/// `r`.
+fn octahedron(b: &mut Builder, c: Vec3, r: f32, n: u32) {
+    let v = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z].map(|d| c + d * r);
+    for (i, j, k) in [
+        (0, 2, 4),
+        (2, 1, 4),
+        (1, 3, 4),
+        (3, 0, 4),
+        (2, 0, 5),
+        (1, 2, 5),
+        (3, 1, 5),
+        (0, 3, 5),
+    ] {
+        let start = b.triangles.len();
+        b.triangle_grid(v[i], v[j], v[k], n);
+        // Facing outwards: away from the octahedron's centre.
+        for t in &mut b.triangles[start..] {
+            let [p, q, s] = t.map(|x| Vec3::from(b.positions[x as usize]));
+            if (q - p).cross(s - p).dot((p + q + s) / 3.0 - c) < 0.0 {
+                t.swap(1, 2);
+            }
+        }
+    }
+}
+
+/// Objects inside the furnace: a multiresolution octahedron (with tilted normals) floating
+/// in a closed box and a second one resting on its floor. Everything emits and reflects
+/// alike, so the objects too must read `E / (1 − ρ)`, on the sides facing the walls, under
+/// them where they face the floor closely, and for every normal.
+///
+/// Open: the floor's leaves next to the resting octahedron's point of contact are 6.6% off
+/// (too bright on one side, 5.8% too dark on another). A link from a larger receiver keeps one
+/// visibility fraction over all of it, and many small links that each pass the shadow rule add
+/// their errors with one sign next to a contact (BENCHMARKS.md, "Leaves against a path
+/// tracer"). Run it with `--ignored`.
+#[test]
+#[ignore = "open (issue 20): leaves next to a contact are 6.6% off"]
+fn objects_inside_a_closed_room() {
+    let room = closed_box(Vec3::new(2.0, 2.0, 1.5), 11, |_| Tessellation::Grid {
+        n: 3,
+        jitter: 0.3,
+    });
+    let mut b = Builder::new(Vec3::ZERO, 12);
+    octahedron(&mut b, Vec3::new(0.6, 0.7, 0.8), 0.35, 2);
+    octahedron(&mut b, Vec3::new(1.4, 1.2, 0.3), 0.3, 2);
+    let mut object = b.object();
+    object.multires = true;
+    object.normal_sets = (0..object.triangles.len())
+        .map(|t| {
+            let [a, b, c] = object.corners(t);
+            let n = (b - a).cross(c - a).normalize();
+            let side = (b - a).normalize();
+            let tilt = |deg: f32, dir: Vec3| {
+                let r = deg.to_radians();
+                (n * r.cos() + dir * r.sin()).to_array()
+            };
+            vec![n.to_array(), tilt(25.0, side), tilt(25.0, -side)]
+        })
+        .collect();
+    let scene = Scene {
+        objects: vec![room, object],
+        lights: Vec::new(),
+    };
+    let (err, at) = worst_node(&scene);
+    println!("objects in a room: worst {:+.3}% at {at}", err * 100.0);
+    assert!(
+        err.abs() <= TOLERANCE,
+        "a node is {:+.2}% off at {at}",
+        err * 100.0
+    );
 }

@@ -11,6 +11,7 @@
 //! * [`lattice`]: the 1-to-4 lattice of a refined triangle and its vertex numbering.
 //! * [`subdivide`](mod@subdivide): Loop subdivision, the CPU reference of the GPU Loop kernel.
 //! * [`flat`]: flat (linear) refinement, the CPU reference of the GPU flat kernel.
+//! * [`split`]: a multiresolution object's refined vertices split at sharp edges (SPEC.md F.5).
 //! * [`decode`]: the paper's per-subtriangle colour (tree walk, nearest representative normal).
 //! * [`lighting`], [`colour`]: the reconstruction of baked lighting on a refined mesh
 //!   (SPEC.md, Appendix G).
@@ -33,6 +34,8 @@ pub mod lighting;
 mod os;
 #[forbid(unsafe_code)]
 pub mod refine;
+#[forbid(unsafe_code)]
+pub mod split;
 #[forbid(unsafe_code)]
 pub mod subdivide;
 #[forbid(unsafe_code)]

@@ -1,13 +1,15 @@
 //! One object refined to a level as the runtime draws it: Loop subdivision for
-//! multiresolution objects ([`crate::subdivide`](mod@crate::subdivide)), the linear 1-to-4
+//! multiresolution objects ([`crate::subdivide`](mod@crate::subdivide)) with the vertices split
+//! at sharp edges ([`crate::split`]), the linear 1-to-4
 //! split for flat ones ([`crate::flat`], SPEC.md A.7), then its baked colours
 //! ([`crate::colour`]). This is what `hce subdivide BAKED` writes and what
 //! `hce render --cpu-reference` draws.
 
-use hce_format::{Object, ObjectKind};
+use hce_format::{ControlMesh, Object, ObjectKind};
 
 use crate::colour::ColourError;
 use crate::flat::{refine_flat_cpu, FlatTopology};
+use crate::split::SplitTables;
 use crate::subdivide::{subdivide, Refined, SubdivError};
 use crate::tables::InvalidObject;
 
@@ -24,6 +26,9 @@ pub enum RefineError {
     /// The baked colours could not be applied.
     #[error(transparent)]
     Colour(#[from] ColourError),
+    /// The refined vertices could not be split at the sharp edges (SPEC.md F.5).
+    #[error("{0}")]
+    Split(String),
 }
 
 /// One object refined to a level: what the runtime draws, plus normals.
@@ -49,11 +54,22 @@ pub fn refine_object_with(
     reconstruction: crate::lighting::Reconstruction,
 ) -> Result<RefinedObject, RefineError> {
     let mesh = match object.kind {
-        ObjectKind::Multiresolution => subdivide(&object.mesh, level)?,
+        ObjectKind::Multiresolution => subdivide_split(&object.name, &object.mesh, level)?,
         ObjectKind::Flat => refine_linear(object, level)?,
     };
     let colours = crate::colour::apply_baked_colours_with(object, &mesh, level, reconstruction)?;
     Ok(RefinedObject { mesh, colours })
+}
+
+/// Loop subdivision of a multiresolution object's control mesh to `level` with its vertices
+/// split at sharp edges (SPEC.md F.5, F.6): the mesh the runtime draws and the reference
+/// path-traces.
+pub fn subdivide_split(name: &str, mesh: &ControlMesh, level: u32) -> Result<Refined, RefineError> {
+    let mut refined = subdivide(mesh, level)?;
+    SplitTables::new(name, mesh)?
+        .apply(mesh, &mut refined)
+        .map_err(RefineError::Split)?;
+    Ok(refined)
 }
 
 /// The flat kernel's CPU twin, as a [`Refined`] (normals: per vertex, area-weighted).

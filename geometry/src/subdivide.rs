@@ -542,6 +542,13 @@ impl Patch {
     }
 }
 
+/// A vertex normal's sum normalised as SPEC.md F.6 says (`(0, 0, 1)` without a direction): the
+/// one normalisation of refined multiresolution normals, split ones included
+/// ([`crate::split`]).
+pub(crate) fn unit_normal(s: [f32; 3]) -> [f32; 3] {
+    normalize(P::from_array(s))
+}
+
 fn normalize(s: P) -> Out {
     let l = (s.x * s.x + s.y * s.y + s.z * s.z).sqrt();
     if l > 0.0 && l.is_finite() {

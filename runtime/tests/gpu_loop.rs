@@ -19,6 +19,7 @@ use std::path::Path;
 use hce_format::{ControlMesh, Object, ObjectKind};
 use hce_geometry::colour::apply_baked_colours_with;
 use hce_geometry::lighting::Reconstruction;
+use hce_geometry::refine::subdivide_split;
 use hce_geometry::subdivide::subdivide;
 use hce_geometry::topology::{build_control_mesh, Creases, Topology, TopologyConfig};
 use hce_runtime::gpu::testing::{context_or_skip, random_object, RandomTrees};
@@ -159,7 +160,8 @@ fn compare_with(
     let mut outs: Vec<_> = kernels.iter().map(|_| None).collect();
     let mut reports = vec![Report::default(); kernels.len()];
     for &level in levels {
-        let cpu = subdivide(&object.mesh, level).unwrap();
+        // The drawn mesh: Loop subdivision split at sharp edges (SPEC.md F.5).
+        let cpu = subdivide_split(&object.name, &object.mesh, level).unwrap();
         let cpu_colours = apply_baked_colours_with(object, &cpu, level, reconstruction).unwrap();
         let brightest = cpu_colours.iter().flatten().fold(0f32, |a, &b| a.max(b));
         for (k, kernel) in kernels.iter().enumerate() {

@@ -3,7 +3,9 @@
 #![cfg(feature = "gpu")]
 
 use hce_runtime::gpu::testing::{context_or_skip, octahedron, random_object, RandomTrees};
-use hce_runtime::gpu::{refine_flat, render_mesh, Camera, Framing, RenderParams};
+use hce_runtime::gpu::{
+    refine_flat, render_mesh, sample_positions, supported_samples, Camera, Framing, RenderParams,
+};
 
 #[test]
 fn renders_refined_colours_and_background() {
@@ -30,6 +32,7 @@ fn renders_refined_colours_and_background() {
         height: 48,
         framing: Framing::Auto,
         background: [0.0, 0.1, 0.0],
+        samples: 1,
     };
     let image = render_mesh(&ctx, &mesh.positions, &mesh.colours, &mesh.indices, &params).unwrap();
     assert_eq!(image.pixels.len(), 64 * 48 * 4);
@@ -71,8 +74,69 @@ fn depth_test_keeps_the_nearer_surface() {
             fov_y_degrees: 30.0,
         }),
         background: [0.0; 3],
+        samples: 1,
     };
     let image = render_mesh(&ctx, &positions, &colours, &indices, &params).unwrap();
     let centre = &image.pixels[4 * (16 * 32 + 16)..4 * (16 * 32 + 16) + 3];
     assert_eq!(centre, [0.0, 1.0, 0.0]);
+}
+
+#[test]
+fn multisampling_averages_coverage_at_the_standard_positions() {
+    let Some(ctx) = context_or_skip("multisampling_averages_coverage_at_the_standard_positions")
+    else {
+        return;
+    };
+    // A white rectangle facing the camera whose right edge crosses pixel column 16 at 0.4 of its
+    // width (normalised x = 0.8/32), left of its centre: of the standard 4-sample positions
+    // (x = 0.375, 0.875, 0.125, 0.625 of the pixel), two lie left of it.
+    let fov = 30.0f32;
+    let f = 1.0 / (fov.to_radians() * 0.5).tan();
+    let edge = 0.8 * 5.0 / (32.0 * f);
+    let positions = [
+        -3.0, -3.0, 0.0, edge, -3.0, 0.0, edge, 3.0, 0.0, -3.0, 3.0, 0.0,
+    ];
+    let colours = [[1.0f32; 4]; 4].concat();
+    let indices = [0, 1, 2, 0, 2, 3];
+    let mut params = RenderParams {
+        width: 32,
+        height: 32,
+        framing: Framing::Camera(Camera {
+            eye: [0.0, 0.0, 5.0],
+            target: [0.0, 0.0, 0.0],
+            fov_y_degrees: fov,
+        }),
+        background: [0.0; 3],
+        samples: 4,
+    };
+    let image = render_mesh(&ctx, &positions, &colours, &indices, &params).unwrap();
+    assert_eq!(image.samples, supported_samples(&ctx, 4));
+    let px = |image: &hce_runtime::gpu::RenderedImage, x: usize| image.pixels[4 * (16 * 32 + x)];
+    assert_eq!((px(&image, 15), px(&image, 17)), (1.0, 0.0));
+    if image.samples == 4 {
+        assert_eq!(px(&image, 16), 0.5);
+        let xs: Vec<f32> = sample_positions(4).unwrap().iter().map(|p| p[0]).collect();
+        assert_eq!(xs.iter().filter(|&&x| x < 0.4).count(), 2);
+    }
+    // Colours falling to zero at the edge: pixel 16, covered in part, is shaded inside the
+    // covered part, not at its centre beyond the edge, so nothing is extrapolated below zero.
+    let gradient = [
+        [1.0f32; 4],
+        [0.0, 0.0, 0.0, 1.0],
+        [0.0, 0.0, 0.0, 1.0],
+        [1.0; 4],
+    ]
+    .concat();
+    let shaded = render_mesh(&ctx, &positions, &gradient, &indices, &params).unwrap();
+    assert!(
+        shaded.pixels.iter().all(|&v| (0.0..=1.0).contains(&v)),
+        "{:?}",
+        shaded.pixels.iter().find(|&&v| !(0.0..=1.0).contains(&v))
+    );
+    // One sample is the pixel centre, right of the edge: uncovered.
+    params.samples = 1;
+    let single = render_mesh(&ctx, &positions, &colours, &indices, &params).unwrap();
+    assert_eq!(single.samples, 1);
+    assert_eq!(px(&single, 16), 0.0);
+    assert_eq!((px(&single, 15), px(&single, 17)), (1.0, 0.0));
 }

@@ -10,7 +10,10 @@
 use std::path::Path;
 
 use hce_format::gltf::{validate_asset, Asset, EXTENSION_NAME};
-use hce_format::{example, validate_bytes, write, Container, Problem, SPOKE_SHARP};
+use hce_format::{
+    example, validate_bytes, write, Container, Problem, RULE_CORNER, RULE_CREASE, RULE_SMOOTH,
+    SPOKE_SHARP, VERTEX_BOUNDARY, VERTEX_RULE_SHIFT,
+};
 use hce_geometry::colour::{apply_baked_colours_with, Reconstruction};
 use hce_geometry::refine::{refine_object, RefinedObject};
 use serde_json::{json, Value};
@@ -58,6 +61,36 @@ fn vector(p: [f32; 3]) -> Value {
     })
 }
 
+/// `example::grid(3, 2)` with the interior line `x = 1` made a crease: both spokes of each of
+/// its edges sharp, the vertex rules as Appendix C rule 3 ties them to the spokes (crease inside,
+/// corner where the line meets the boundary). Refined, its vertices split per side (SPEC.md F.5).
+fn creased_grid() -> Container {
+    let mut c = example::grid(3, 2);
+    let m = &mut c.objects[0].mesh;
+    let on_line = |m: &hce_format::ControlMesh, v: u32| m.positions[3 * v as usize] == 1.0;
+    for v in 0..m.vertex_count() {
+        let (a, b) = (m.ring_offsets[v] as usize, m.ring_offsets[v + 1] as usize);
+        for s in a..b {
+            if on_line(m, v as u32) && on_line(m, m.ring[s]) {
+                m.spoke_flags[s] |= SPOKE_SHARP;
+            }
+        }
+        let sharp = (a..b)
+            .filter(|&s| m.spoke_flags[s] & SPOKE_SHARP != 0)
+            .count();
+        let boundary = m.vertex_flags[v] & VERTEX_BOUNDARY != 0;
+        let rule = if (boundary && b - a == 2) || sharp >= 3 {
+            RULE_CORNER
+        } else if sharp == 2 {
+            RULE_CREASE
+        } else {
+            RULE_SMOOTH
+        };
+        m.vertex_flags[v] = (m.vertex_flags[v] & VERTEX_BOUNDARY) | (rule << VERTEX_RULE_SHIFT);
+    }
+    c
+}
+
 /// Every case, valid ones first. `cornell` is the bundled Cornell box, already baked.
 pub fn cases(cornell_baked: Vec<u8>) -> Vec<Case> {
     let case = |file: &str, bytes: Vec<u8>, description: &str| Case {
@@ -82,6 +115,12 @@ pub fn cases(cornell_baked: Vec<u8>) -> Vec<Case> {
             "valid/grid.hce",
             hce(&example::grid(3, 2)),
             "a 3 x 3 grid (18 triangles), trees 2 deep",
+        ),
+        case(
+            "valid/creased-grid.hce",
+            hce(&creased_grid()),
+            "the grid with the line x = 1 a crease: its refined vertices split per side \
+             (SPEC.md F.5), the last probes are copies",
         ),
         case(
             "valid/triangle.glb",

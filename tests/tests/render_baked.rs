@@ -163,7 +163,8 @@ mod gpu {
         let object = &asset.objects[i].object;
         let check = |scene: &GpuScene, level: u32| {
             let got = scene.read_back(ctx, i).unwrap();
-            let refined = hce_geometry::subdivide(&object.mesh, level).unwrap();
+            let refined =
+                hce_geometry::refine::subdivide_split(&object.name, &object.mesh, level).unwrap();
             let colours =
                 hce_geometry::colour::apply_baked_colours(object, &refined, level).unwrap();
             assert_eq!(got.level, level);

@@ -10,7 +10,7 @@ use std::process::ExitCode;
 pub const EXIT_CODES: &str = "\
 Exit status:
   0  success (for `validate`: the file is valid)
-  1  internal or other error
+  1  internal or other error (also: no GPU adapter, or no display for `view`)
   2  usage error (bad arguments)
   3  invalid input (unreadable bytes, failed validation)
   4  I/O error (file missing, unreadable or unwritable)";
@@ -111,7 +111,9 @@ fn decisive(c: &(dyn std::error::Error + 'static)) -> Option<Status> {
     if let Some(e) = c.downcast_ref::<RefineError>() {
         return Some(match e {
             RefineError::Subdiv(s) => subdiv_status(s),
-            RefineError::Object(_) | RefineError::Colour(_) => Status::Invalid,
+            RefineError::Object(_) | RefineError::Colour(_) | RefineError::Split(_) => {
+                Status::Invalid
+            }
         });
     }
     None

@@ -1,11 +1,13 @@
-//! `hce`: bake, inspect, validate, subdivide, render and demo assets with baked global illumination;
-//! path-trace references and compare images with them.
+//! `hce`: bake, inspect, validate, subdivide, render, view and demo assets with baked global
+//! illumination; path-trace references and compare images with them.
 #![forbid(unsafe_code)]
 
 use clap::{Parser, Subcommand};
 
 mod cmd;
 mod exit;
+#[cfg(feature = "gpu")]
+mod view;
 
 use exit::EXIT_CODES;
 
@@ -46,6 +48,10 @@ enum Command {
     /// Check a .hce, .glb or .gltf file deeply; one line per problem.
     #[command(after_help = EXIT_CODES)]
     Validate(cmd::validate::ValidateArgs),
+    /// Open a baked asset in a window (or preview a mesh) and move around it, with each
+    /// object's level chosen live from the view; `--frames N` for scripted runs.
+    #[command(after_help = EXIT_CODES)]
+    View(cmd::view::ViewArgs),
     /// Serve the browser viewer (WebGPU) for a baked file on 127.0.0.1 and print its URL.
     #[command(after_help = EXIT_CODES)]
     Serve(cmd::serve::ServeArgs),
@@ -91,6 +97,7 @@ fn main() -> std::process::ExitCode {
         Command::Subdivide(args) => cmd::subdivide::run(args),
         Command::Inspect(args) => cmd::inspect::run(args),
         Command::Validate(args) => cmd::validate::run(args),
+        Command::View(args) => cmd::view::run(args),
         Command::Serve(args) => cmd::serve::run(args),
     };
     match result {

@@ -5,6 +5,8 @@ mod common;
 
 use std::path::Path;
 
+use common::hce;
+
 fn write_exr(path: &Path, w: usize, h: usize, rgb: &[[f32; 3]]) {
     exr::prelude::write_rgba_file(path, w, h, |x, y| {
         let p = rgb[y * w + x];
@@ -97,6 +99,10 @@ fn reference_of_the_baked_cornell_box_is_deterministic_and_lit() {
             "24x18",
             "--samples",
             "4",
+            // One ray per pixel centre: at 24 x 18 pixels the light covers no pixel's four
+            // multisample positions, and it must show at full strength below.
+            "--msaa",
+            "1",
             "--threads",
             threads,
             "-o",
@@ -156,6 +162,33 @@ fn reference_explains_bad_input() {
     let (code, _, err) = common::hce(&["reference", s(&plain), "--level", "0", "-o", "out.jpg"]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains(".exr"), "{err}");
+    // Every multisample position needs a path; the counts are those with standard positions.
+    let (code, _, err) = hce(&[
+        "reference",
+        s(&plain),
+        "--level",
+        "0",
+        "--samples",
+        "2",
+        "--msaa",
+        "4",
+        "-o",
+        s(&out),
+    ]);
+    assert_ne!(code, 0);
+    assert!(err.contains("--msaa 4"), "{err}");
+    let (code, _, err) = hce(&[
+        "reference",
+        s(&plain),
+        "--level",
+        "0",
+        "--msaa",
+        "3",
+        "-o",
+        s(&out),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("1, 2, 4, 8 or 16"), "{err}");
     // --level is required.
     let (code, _, _) = common::hce(&["reference", s(&plain), "-o", s(&out)]);
     assert_eq!(code, 2);

@@ -5,7 +5,7 @@
 // limit of 8 storage buffers per stage.
 import { HceError } from './errors.js';
 import { checkObject, MAX_LOOP_LEVEL, MAX_PATH_LEVEL } from './tables.js';
-import { flatTopology, loopTables } from './topology.js';
+import { flatTopology, loopTables, splitTables } from './topology.js';
 import { lightingWords } from './lighting.js';
 
 /** @typedef {import('./container.js').HceObject} HceObject */
@@ -68,6 +68,7 @@ const recordsWords = (o) => o.records;
  * @property {number} treeDepth
  * @property {import('./topology.js').FlatTopology} topology
  * @property {ReturnType<typeof loopTables> | null} loop
+ * @property {import('./topology.js').SplitTables | null} split the split at sharp edges (Loop only)
  * @property {number[]} offsets where the packed sections start in `topo`
  * @property {Record<string, GPUBuffer>} buffers
  */
@@ -155,13 +156,18 @@ export class Kernels {
     const topology = flatTopology(object, checked);
     const m = object.mesh;
     let loop = null;
+    let split = null;
     let packed;
     if (object.kind === 'multiresolution') {
       loop = loopTables(object, checked);
+      // The split at sharp edges (SPEC.md F.5): its slot lists replace the vertex and edge
+      // incidence, as loop_kernel.rs `upload_with` packs them.
+      split = splitTables(object, topology);
       packed = packSections([
         m.triangles, m.ringOffsets, m.ring, m.spokeFlags, m.vertexFlags, m.cornerSpokes, m.edges,
-        loop.triFlags, loop.crease, loop.weights, topology.edgeSideOffsets, topology.edgeSides,
-        topology.vertexCornerOffsets, topology.vertexCorners,
+        loop.triFlags, loop.crease, loop.weights, split.edgeSlotOffsets, split.edgeSlotSides,
+        split.cornerSlotOffsets, split.cornerSlotCorners, split.cornerCopy, split.edgeCopy,
+        split.slotSplit,
       ]);
     } else {
       packed = packSections([
@@ -181,6 +187,7 @@ export class Kernels {
       treeDepth: checked.treeDepth,
       topology,
       loop,
+      split,
       offsets: packed.offsets,
       buffers: {
         positions: this.storage('coarse positions', m.positions),
@@ -205,10 +212,12 @@ export class Kernels {
     const t = u.topology;
     const n = 2 ** level;
     const perTri = ((n - 1) * Math.max(n - 2, 0)) / 2;
-    const v = t.vertexCount + t.edgeCount * (n - 1) + t.triangleCount * perTri;
+    // Vertices appended by the split at sharp edges (F.5): X + S (n − 1).
+    const appended = u.split ? u.split.copies + u.split.splitEdges * (n - 1) : 0;
+    const v = t.vertexCount + t.edgeCount * (n - 1) + t.triangleCount * perTri + appended;
     const f = t.triangleCount * 4 ** level;
     if (v > 0xffffffff || 3 * f > 0xffffffff) throw new HceError('', `level ${level} of '${u.object.name}' needs more than 2^32 vertices or indices`);
-    return { v, f };
+    return { v, f, appended };
   }
 
   /** @param {number} threads @returns {[number, number]} */
@@ -230,7 +239,7 @@ export class Kernels {
    * @returns {RefinedBuffers}
    */
   refine(u, level, out = null) {
-    const { v, f } = this.counts(u, level);
+    const { v, f, appended } = this.counts(u, level);
     const d = this.device;
     const isLoop = u.loop !== null;
     const output = (/** @type {string} */ label, /** @type {number} */ bytes, /** @type {number} */ extra) =>
@@ -293,7 +302,8 @@ export class Kernels {
       }
       const params = new Uint32Array([
         level, n, t.vertexCount, t.edgeCount, t.triangleCount, n - 1, ((n - 1) * Math.max(n - 2, 0)) / 2, v, f,
-        slots, square, loop.maxValence, ...u.offsets, 1, smooth,
+        slots, square, loop.maxValence, ...u.offsets, 1, smooth, v - appended,
+        u.split ? u.split.copies : 0,
       ]);
       uniform = d.createBuffer({ label: 'loop params', size: params.byteLength, usage: UNIFORM | COPY_DST });
       d.queue.writeBuffer(uniform, 0, params);
@@ -302,7 +312,7 @@ export class Kernels {
       steps = [
         [p.loop_patch, [[0, uniform], [1, b.positions], [2, b.topo], [7, o.scratch], [8, o.positions], [9, normals]], this.dispatchSize(slots)],
         [p.loop_faces, [[0, uniform], [2, b.topo], [3, b.records], [4, b.bits], [5, b.normals], [6, b.colours], [8, o.positions], [10, o.indices], [11, o.faces]], this.dispatchSize(f)],
-        [p.loop_colours, [[0, uniform], [2, b.topo], [9, normals], [11, o.faces], [12, o.colours], [13, b.light]], this.dispatchSize(v)],
+        [p.loop_colours, [[0, uniform], [2, b.topo], [8, o.positions], [9, normals], [11, o.faces], [12, o.colours], [13, b.light]], this.dispatchSize(v)],
       ];
     }
     // One pass per step: each sees the previous one's writes.

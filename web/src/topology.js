@@ -125,3 +125,138 @@ export function loopTables(o, checked) {
     ringPoints,
   };
 }
+
+/**
+ * The split at sharp edges of a multiresolution object (SPEC.md F.5, geometry/src/split.rs
+ * `SplitTables::from_topology`): the regions of each control point (its corners joined across
+ * interior edges that are not sharp), the copies appended for every region but the owner's and
+ * for the far side of every sharp interior edge, and the slot lists that replace the vertex and
+ * edge incidence in the Loop kernel's topology (V + X corner slots, E + S edge slots).
+ * @param {HceObject} o
+ * @param {FlatTopology} t
+ */
+export function splitTables(o, t) {
+  const m = o.mesh;
+  const F = t.triangleCount;
+  const V = t.vertexCount;
+  const E = t.edgeCount;
+  const NO_COPY = 0xffffffff;
+  // Sides joined to their neighbour: it exists and the side's spoke is not sharp (G.2).
+  const joined = new Uint8Array(3 * F);
+  for (let s = 0; s < 3 * F; s++) {
+    const u = m.neighbours[s];
+    if (u === NO_NEIGHBOUR || u >= F) continue;
+    const spoke = m.ringOffsets[m.triangles[s]] + m.cornerSpokes[s];
+    joined[s] = m.spokeFlags[spoke] & SPOKE_SHARP ? 0 : 1;
+  }
+  // Groups of corners (union-find; the smaller root wins).
+  const up = new Uint32Array(3 * F);
+  for (let i = 0; i < 3 * F; i++) up[i] = i;
+  const find = (/** @type {number} */ a) => {
+    while (up[a] !== a) {
+      up[a] = up[up[a]];
+      a = up[a];
+    }
+    return a;
+  };
+  for (let tr = 0; tr < F; tr++) {
+    for (let e = 0; e < 3; e++) {
+      if (!joined[3 * tr + e]) continue;
+      const u = m.neighbours[3 * tr + e];
+      for (const c of [e, (e + 1) % 3]) {
+        const v = m.triangles[3 * tr + c];
+        for (let cu = 0; cu < 3; cu++) {
+          if (m.triangles[3 * u + cu] !== v) continue;
+          const ra = find(3 * tr + c);
+          const rb = find(3 * u + cu);
+          if (ra < rb) up[rb] = ra;
+          else if (rb < ra) up[ra] = rb;
+          break;
+        }
+      }
+    }
+  }
+  const cornerCopy = new Uint32Array(3 * F).fill(NO_COPY);
+  /** @type {number[][]} */
+  const ownerLists = [];
+  /** @type {number[][]} */
+  const copyLists = [];
+  const splitVertex = new Uint8Array(V);
+  for (let v = 0; v < V; v++) {
+    /** @type {number[]} */
+    const own = [];
+    /** @type {number[]} */
+    const roots = [];
+    /** @type {number[]} */
+    const ranks = [];
+    for (let q = t.vertexCornerOffsets[v]; q < t.vertexCornerOffsets[v + 1]; q++) {
+      const c = t.vertexCorners[q];
+      const g = find(c);
+      let r = roots.indexOf(g);
+      if (r < 0) {
+        roots.push(g);
+        r = roots.length - 1;
+        if (r > 0) {
+          ranks.push(copyLists.length);
+          copyLists.push([]);
+        }
+      }
+      if (r === 0) own.push(c);
+      else {
+        copyLists[ranks[r - 1]].push(c);
+        cornerCopy[c] = ranks[r - 1];
+      }
+    }
+    ownerLists.push(own);
+    splitVertex[v] = roots.length > 1 ? 1 : 0;
+  }
+  const cornerSlotOffsets = [0];
+  /** @type {number[]} */
+  const cornerSlotCorners = [];
+  for (const list of [...ownerLists, ...copyLists]) {
+    cornerSlotCorners.push(...list);
+    cornerSlotOffsets.push(cornerSlotCorners.length);
+  }
+  const edgeCopy = new Uint32Array(E).fill(NO_COPY);
+  const edgeSlotOffsets = [0];
+  /** @type {number[]} */
+  const edgeSlotSides = [];
+  /** @type {number[]} */
+  const copySides = [];
+  const splitEdge = new Uint8Array(E);
+  for (let id = 0; id < E; id++) {
+    const sides = t.edgeSides.subarray(t.edgeSideOffsets[id], t.edgeSideOffsets[id + 1]);
+    if (sides.length === 2 && !joined[sides[0]]) {
+      edgeCopy[id] = copySides.length;
+      splitEdge[id] = 1;
+      edgeSlotSides.push(sides[0]);
+      copySides.push(sides[1]);
+    } else {
+      edgeSlotSides.push(...sides);
+    }
+    edgeSlotOffsets.push(edgeSlotSides.length);
+  }
+  for (const s of copySides) {
+    edgeSlotSides.push(s);
+    edgeSlotOffsets.push(edgeSlotSides.length);
+  }
+  const slotSplit = Uint32Array.from([
+    ...splitVertex,
+    ...copyLists.map(() => 1),
+    ...splitEdge,
+    ...copySides.map(() => 1),
+  ]);
+  return {
+    copies: copyLists.length,
+    splitEdges: copySides.length,
+    cornerSlotOffsets: Uint32Array.from(cornerSlotOffsets),
+    cornerSlotCorners: Uint32Array.from(cornerSlotCorners),
+    edgeSlotOffsets: Uint32Array.from(edgeSlotOffsets),
+    edgeSlotSides: Uint32Array.from(edgeSlotSides),
+    cornerCopy,
+    edgeCopy,
+    slotSplit,
+  };
+}
+
+/** @typedef {ReturnType<typeof splitTables>} SplitTables */

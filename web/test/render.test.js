@@ -34,7 +34,8 @@ test('the viewer draws what hce render draws', { timeout: 600_000 }, async (t) =
     for (const [file, level, what] of cases) {
       const name = path.basename(file);
       const png = path.join(dir, `${name}.png`);
-      runHce(hce, ['render', file, '-o', png, '--size', `${W}x${H}`, '--level', level]);
+      // One sample per pixel, as the viewer draws (hce render multisamples by default).
+      runHce(hce, ['render', file, '-o', png, '--size', `${W}x${H}`, '--level', level, '--msaa', '1']);
       await b.page.goto(`${b.url}/web/viewer.html?url=/files/${name}&size=${W}x${H}&level=${level}`);
       await b.page.waitForFunction(() => /** @type {any} */ (window).hceViewer.frames > 0 || /** @type {any} */ (window).hceViewer.state === 'error', null, { timeout: 300_000 });
       /** @type {any} */

@@ -126,14 +126,47 @@ impl GpuContext {
 
     /// The asynchronous form of [`GpuContext::new`], for callers that own an executor.
     pub async fn new_async(options: &ContextOptions) -> Result<Self, GpuError> {
+        Self::on_instance_async(&Self::instance(), options, None).await
+    }
+
+    /// The wgpu instance [`GpuContext::new`] chooses its adapter from: Vulkan, without
+    /// validation layers unless the environment asks for them (`WGPU_VALIDATION`). A windowed
+    /// viewer creates its surface on this instance and passes both to
+    /// [`GpuContext::on_instance`].
+    pub fn instance() -> wgpu::Instance {
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = wgpu::Backends::VULKAN;
         // Validation layers are for development; they slow lavapipe down several times.
         desc.flags = wgpu::InstanceFlags::empty().with_env();
-        let instance = wgpu::Instance::new(desc);
+        wgpu::Instance::new(desc)
+    }
+
+    /// [`GpuContext::new`] on the caller's `instance`, among the adapters that can present to
+    /// `compatible_surface` when one is given (a window's).
+    pub fn on_instance(
+        instance: &wgpu::Instance,
+        options: &ContextOptions,
+        compatible_surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<Self, GpuError> {
+        pollster::block_on(Self::on_instance_async(
+            instance,
+            options,
+            compatible_surface,
+        ))
+    }
+
+    /// The asynchronous form of [`GpuContext::on_instance`].
+    pub async fn on_instance_async(
+        instance: &wgpu::Instance,
+        options: &ContextOptions,
+        compatible_surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<Self, GpuError> {
         let mut adapters = instance.enumerate_adapters(wgpu::Backends::all()).await;
         if options.force_software {
             adapters.retain(|a| a.get_info().device_type == wgpu::DeviceType::Cpu);
+        }
+        if let Some(surface) = compatible_surface {
+            adapters.retain(|a| a.is_surface_supported(surface));
         }
         // Stable sort: among equals, keep the driver's own order.
         adapters.sort_by_key(|a| rank(a.get_info().device_type));
@@ -146,6 +179,10 @@ impl GpuContext {
         if timestamps {
             required_features |= wgpu::Features::TIMESTAMP_QUERY;
         }
+        // Lets the renderer multisample its 32-bit float target where the adapter can (WebGPU
+        // alone does not promise it).
+        required_features |=
+            adapter.features() & wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
         // Ask for what the adapter offers on buffer sizes: refined meshes are large.
         let adapter_limits = adapter.limits();
         let required_limits = wgpu::Limits {

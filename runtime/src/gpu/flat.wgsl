@@ -73,6 +73,15 @@ fn lattice_edge_base(t: u32, e: u32) -> u32 {
     return params.coarse_vertices + topo[params.edges_off + 3u * t + e] * (params.n - 1u);
 }
 
+// Flat objects are not split at sharp edges (SPEC.md F.5): nothing is appended.
+fn lattice_split_base() -> u32 {
+    return params.vertex_total;
+}
+
+fn lattice_split_copies() -> u32 {
+    return 0u;
+}
+
 fn lattice_interior_base(t: u32) -> u32 {
     return params.coarse_vertices + params.edge_count * (params.n - 1u) + t * params.interior_per_triangle;
 }

@@ -4,7 +4,9 @@
 // writer per vertex and a fixed order of summation, so the result does not depend on scheduling.
 //
 // This file is prepended after hce_tree.wgsl, hce_light.wgsl and hce_lattice.wgsl to a kernel
-// that declares, with these names:
+// that provides lattice_split_base() (the first vertex the split at sharp edges appends, SPEC.md
+// F.5; the vertex count where nothing is split) and lattice_split_copies() (its corner copies X),
+// and declares, with these names:
 //   params:     the kernel's uniform, with `level`, `coarse_vertices`, `edge_count`,
 //               `edge_side_offsets_off`, `edge_sides_off`, `vertex_corner_offsets_off`,
 //               `vertex_corners_off` (sections of `topo`) and `smooth_light`
@@ -64,44 +66,104 @@ fn gather(acc: ptr<function, Acc>, t: u32, b: i32, c: i32) {
     }
 }
 
-// Step 3: the colour of output vertex v with unit normal `normal`. A coarse vertex gathers from
-// every coarse triangle at it, an edge point from both sides of its coarse edge, an interior
-// point from its one triangle.
-fn vertex_colour(v: u32, normal: vec3<f32>) -> vec3<f32> {
+// Step 3: the points a vertex gathers from, its slot. A coarse vertex (or a copy of one, SPEC.md
+// F.5) gathers from the corners of its corner slot, an edge point (or a copy) from the sides of
+// its edge slot, an interior point from its one triangle. The incidence sections are the
+// split's slot lists (geometry/src/split.rs): V + X corner slots, E + S edge slots; a kernel
+// that does not split has X = S = 0 and plain vertex and edge incidence.
+const SLOT_CORNER: u32 = 0u;
+const SLOT_EDGE: u32 = 1u;
+const SLOT_INTERIOR: u32 = 2u;
+
+struct Slot {
+    kind: u32,
+    // Corner or edge slot number; the triangle of an interior point.
+    index: u32,
+    // Edge point k counted from the owner's v_e; the interior point's (b, c).
+    k: i32,
+    b: i32,
+    c: i32,
+    // The range of the slot's corners or sides.
+    first: u32,
+    end: u32,
+}
+
+fn vertex_slot(v: u32) -> Slot {
     let n = i32(lattice_n());
     let ep = lattice_n() - 1u;
     let edge_base = params.coarse_vertices;
     let interior_base = edge_base + params.edge_count * ep;
-    var acc = Acc(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, normal);
-    if (v < edge_base) {
-        let s = topo[params.vertex_corner_offsets_off + v];
-        let e = topo[params.vertex_corner_offsets_off + v + 1u];
-        for (var k = s; k < e; k++) {
-            let cr = topo[params.vertex_corners_off + k];
-            let l = corner_lattice(n, cr % 3u);
-            gather(&acc, cr / 3u, l.x, l.y);
+    let split_base = lattice_split_base();
+    let copies = lattice_split_copies();
+    var s = Slot(SLOT_INTERIOR, 0u, 0, 0, 0, 0u, 1u);
+    if (v < edge_base || (v >= split_base && v < split_base + copies)) {
+        s.kind = SLOT_CORNER;
+        s.index = select(v, edge_base + v - split_base, v >= split_base);
+        s.first = topo[params.vertex_corner_offsets_off + s.index];
+        s.end = topo[params.vertex_corner_offsets_off + s.index + 1u];
+    } else if (v < interior_base || v >= split_base) {
+        var local = v - edge_base;
+        var id_base = 0u;
+        if (v >= split_base) {
+            local = v - split_base - copies;
+            id_base = params.edge_count;
         }
-    } else if (v < interior_base) {
-        let id = (v - edge_base) / ep;
-        let kk = i32((v - edge_base) % ep) + 1;
-        let s = topo[params.edge_side_offsets_off + id];
-        let e = topo[params.edge_side_offsets_off + id + 1u];
-        for (var q = s; q < e; q++) {
-            let side = topo[params.edge_sides_off + q];
-            let t = side / 3u;
-            let ed = side % 3u;
-            var k = kk;
-            if (!edge_from_owner(t, ed)) {
-                k = n - kk;
-            }
-            let l = edge_lattice(n, ed, k);
-            gather(&acc, t, l.x, l.y);
-        }
+        s.kind = SLOT_EDGE;
+        s.index = id_base + local / ep;
+        s.k = i32(local % ep) + 1;
+        s.first = topo[params.edge_side_offsets_off + s.index];
+        s.end = topo[params.edge_side_offsets_off + s.index + 1u];
     } else {
         let local = v - interior_base;
         let per_tri = (lattice_n() - 1u) * (lattice_n() - 2u) / 2u;
         let l = interior_coords(local % per_tri);
-        gather(&acc, local / per_tri, l.x, l.y);
+        s.index = local / per_tri;
+        s.b = l.x;
+        s.c = l.y;
+    }
+    return s;
+}
+
+// Entry q of slot s as (coarse triangle, b, c).
+fn slot_point(s: Slot, q: u32) -> vec3<i32> {
+    let n = i32(lattice_n());
+    if (s.kind == SLOT_CORNER) {
+        let cr = topo[params.vertex_corners_off + q];
+        let l = corner_lattice(n, cr % 3u);
+        return vec3<i32>(i32(cr / 3u), l.x, l.y);
+    }
+    if (s.kind == SLOT_EDGE) {
+        let side = topo[params.edge_sides_off + q];
+        let t = side / 3u;
+        let ed = side % 3u;
+        var k = s.k;
+        if (!edge_from_owner(t, ed)) {
+            k = n - s.k;
+        }
+        let l = edge_lattice(n, ed, k);
+        return vec3<i32>(i32(t), l.x, l.y);
+    }
+    return vec3<i32>(i32(s.index), s.b, s.c);
+}
+
+// The F.5 vertex a copy repeats: the control point of its corners, or the owner's point k of
+// its side's edge.
+fn slot_source(s: Slot) -> u32 {
+    let side = topo[select(params.edge_sides_off, params.vertex_corners_off, s.kind == SLOT_CORNER) + s.first];
+    if (s.kind == SLOT_CORNER) {
+        return corner(side / 3u, side % 3u);
+    }
+    let id = topo[params.edges_off + side];
+    return params.coarse_vertices + id * (lattice_n() - 1u) + u32(s.k - 1);
+}
+
+// Step 4: the colour of a slot's vertex with unit normal `normal`: the area-weighted mean over
+// the fine triangles at each of its points, in slot order.
+fn slot_colour(s: Slot, normal: vec3<f32>) -> vec3<f32> {
+    var acc = Acc(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, normal);
+    for (var q = s.first; q < s.end; q++) {
+        let p = slot_point(s, q);
+        gather(&acc, u32(p.x), p.y, p.z);
     }
     if (acc.area > 0.0) {
         return acc.weighted / acc.area;
@@ -109,4 +171,50 @@ fn vertex_colour(v: u32, normal: vec3<f32>) -> vec3<f32> {
         return acc.plain / acc.count;
     }
     return vec3<f32>(0.0);
+}
+
+fn vertex_colour(v: u32, normal: vec3<f32>) -> vec3<f32> {
+    return slot_colour(vertex_slot(v), normal);
+}
+
+// Step 5: the normal (unnormalised) of a region of a split vertex (SPEC.md F.6): the normals
+// (q − p) × (r − p) of the fine triangles at each of its points, in the order of step 2's
+// gather, measured on the F.5 vertices (whose positions the copies repeat).
+fn fine_normal(t: u32, path: u32) -> vec3<f32> {
+    let cs = fine_corners(path);
+    let p = out_position(vertex_index(t, cs[0].x, cs[0].y));
+    let u = out_position(vertex_index(t, cs[1].x, cs[1].y)) - p;
+    let w = out_position(vertex_index(t, cs[2].x, cs[2].y)) - p;
+    return vec3<f32>(u.y * w.z - u.z * w.y, u.z * w.x - u.x * w.z, u.x * w.y - u.y * w.x);
+}
+
+fn region_normal(s: Slot) -> vec3<f32> {
+    let n = i32(lattice_n());
+    var sum = vec3<f32>(0.0);
+    var first = true;
+    for (var q = s.first; q < s.end; q++) {
+        let pt = slot_point(s, q);
+        let t = u32(pt.x);
+        let b = pt.y;
+        let c = pt.z;
+        var ups = array<vec2<i32>, 3>(vec2<i32>(b, c), vec2<i32>(b - 1, c), vec2<i32>(b, c - 1));
+        for (var k = 0; k < 3; k++) {
+            let u = ups[k];
+            if (u.x >= 0 && u.y >= 0 && u.x + u.y < n) {
+                let x = fine_normal(t, locate(vec2<i32>(3 * u.x + 1, 3 * u.y + 1)));
+                sum = select(sum + x, x, first);
+                first = false;
+            }
+        }
+        var downs = array<vec2<i32>, 3>(vec2<i32>(b, c), vec2<i32>(b + 1, c), vec2<i32>(b, c + 1));
+        for (var k = 0; k < 3; k++) {
+            let d = downs[k];
+            if (d.x >= 1 && d.y >= 1 && d.x + d.y <= n) {
+                let x = fine_normal(t, locate(vec2<i32>(3 * d.x - 1, 3 * d.y - 1)));
+                sum = select(sum + x, x, first);
+                first = false;
+            }
+        }
+    }
+    return sum;
 }

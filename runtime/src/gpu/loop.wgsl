@@ -57,11 +57,23 @@ struct Params {
     edge_sides_off: u32,
     vertex_corner_offsets_off: u32,
     vertex_corners_off: u32,
+    // The split at sharp edges (SPEC.md F.5, geometry/src/split.rs): per corner its region's
+    // copy (or NO_COPY), per edge id its rank among the split edges (or NO_COPY), per corner
+    // slot then per edge slot 1 where the slot is a region of a split vertex. The incidence
+    // sections above are the split's slot lists: V + X corner slots, E + S edge slots.
+    corner_copy_off: u32,
+    edge_copy_off: u32,
+    slot_split_off: u32,
     // Always 1: the opaque condition of `keep`.
     exact: u32,
     // 1: smooth reconstruction (hce_light.wgsl), 0: the paper's nearest normal.
     smooth_light: u32,
+    // The first appended vertex (the F.5 count) and the number X of corner copies.
+    split_base: u32,
+    split_copies: u32,
 }
+
+const NO_COPY: u32 = 0xffffffffu;
 
 // Bits of the per-triangle flags word the Rust side derives from the tables.
 const OWNS_EDGE: u32 = 1u;       // << e: the triangle owns edge e (writes its points)
@@ -484,6 +496,47 @@ fn lattice_interior_base(t: u32) -> u32 {
     return params.coarse_vertices + params.edge_count * params.per_edge + t * params.per_tri;
 }
 
+fn lattice_split_base() -> u32 {
+    return params.split_base;
+}
+
+fn lattice_split_copies() -> u32 {
+    return params.split_copies;
+}
+
+// The vertex that fine triangles of t use at lattice point (b, c), whose F.5 number is i: the
+// copy of t's region where the point's vertex is split (SPEC.md F.5), else i.
+fn split_index(t: u32, b: i32, c: i32, i: u32) -> u32 {
+    let n = i32(params.m);
+    let a = n - b - c;
+    if (i < params.coarse_vertices) {
+        var k = 0u;
+        if (a == 0 && c == 0) {
+            k = 1u;
+        } else if (a == 0 && b == 0) {
+            k = 2u;
+        }
+        let copy = topo[params.corner_copy_off + 3u * t + k];
+        if (copy != NO_COPY) {
+            return params.split_base + copy;
+        }
+    } else if (i < params.coarse_vertices + params.edge_count * params.per_edge) {
+        var e = 0u;
+        if (a == 0) {
+            e = 1u;
+        } else if (b == 0) {
+            e = 2u;
+        }
+        let local = i - params.coarse_vertices;
+        let copy = topo[params.edge_copy_off + local / params.per_edge];
+        if (copy != NO_COPY && (topo[params.tri_flags_off + t] & (OWNS_EDGE << e)) == 0u) {
+            return params.split_base + params.split_copies + copy * params.per_edge
+                + local % params.per_edge;
+        }
+    }
+    return i;
+}
+
 // Step 2 (one invocation per fine triangle): its indices, then its area and, for the paper's
 // rule, its colour from the positions of step 1: the tree node along its path and the
 // representative normal with the largest dot product with its (unnormalised) face normal, as
@@ -502,9 +555,11 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
     let i0 = vertex_index(t, cs[0].x, cs[0].y);
     let i1 = vertex_index(t, cs[1].x, cs[1].y);
     let i2 = vertex_index(t, cs[2].x, cs[2].y);
-    out_indices[3u * g] = i0;
-    out_indices[3u * g + 1u] = i1;
-    out_indices[3u * g + 2u] = i2;
+    // Drawn with the split vertices; measured with the F.5 ones, whose positions step 1 wrote
+    // (the copies get theirs in step 3).
+    out_indices[3u * g] = split_index(t, cs[0].x, cs[0].y, i0);
+    out_indices[3u * g + 1u] = split_index(t, cs[1].x, cs[1].y, i1);
+    out_indices[3u * g + 2u] = split_index(t, cs[2].x, cs[2].y, i2);
 
     let p0 = out_position(i0);
     let x = cross3(out_position(i1) - p0, out_position(i2) - p0);
@@ -516,8 +571,10 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
     out_faces[g] = vec4<f32>(rgb, 0.5 * len);
 }
 
-// Step 3 (one invocation per output vertex): the area-weighted mean colour of the incident fine
-// triangles (hce_gather.wgsl), the smooth field evaluated for the vertex's normal.
+// Step 3 (one invocation per output vertex, copies of the split included): a copy takes its
+// original's position; a region of a split vertex its own region's normal (SPEC.md F.6); then
+// the area-weighted mean colour of the fine triangles of its region (hce_gather.wgsl), the
+// smooth field evaluated for the vertex's normal.
 @compute @workgroup_size(64)
 fn colours_main(@builtin(global_invocation_id) gid: vec3<u32>,
                 @builtin(num_workgroups) groups: vec3<u32>) {
@@ -525,9 +582,28 @@ fn colours_main(@builtin(global_invocation_id) gid: vec3<u32>,
     if (v >= params.vertex_total) {
         return;
     }
-    var normal = vec3<f32>(0.0);
-    if (params.smooth_light == 1u) {
-        normal = vec3<f32>(out_normals[3u * v], out_normals[3u * v + 1u], out_normals[3u * v + 2u]);
+    let slot = vertex_slot(v);
+    if (v >= params.split_base) {
+        let p = out_position(slot_source(slot));
+        out_positions[3u * v] = p.x;
+        out_positions[3u * v + 1u] = p.y;
+        out_positions[3u * v + 2u] = p.z;
     }
-    out_colours[v] = vec4<f32>(vertex_colour(v, normal), 1.0);
+    var normal = vec3<f32>(out_normals[3u * v], out_normals[3u * v + 1u], out_normals[3u * v + 2u]);
+    var split = 0u;
+    if (slot.kind == SLOT_CORNER) {
+        split = topo[params.slot_split_off + slot.index];
+    } else if (slot.kind == SLOT_EDGE) {
+        split = topo[params.slot_split_off + params.coarse_vertices + params.split_copies + slot.index];
+    }
+    if (split != 0u) {
+        normal = normalize_or_z(region_normal(slot));
+        out_normals[3u * v] = normal.x;
+        out_normals[3u * v + 1u] = normal.y;
+        out_normals[3u * v + 2u] = normal.z;
+    }
+    if (params.smooth_light == 0u) {
+        normal = vec3<f32>(0.0);
+    }
+    out_colours[v] = vec4<f32>(slot_colour(slot, normal), 1.0);
 }

@@ -49,6 +49,7 @@ use super::wgsl::{loop_source, loop_workgroup_source};
 use super::{AdapterKind, GpuContext, GpuError};
 use hce_geometry::flat::{FlatTopology, RefinedMesh};
 use hce_geometry::lighting::Reconstruction;
+use hce_geometry::split::{joined_sides, SplitTables};
 use hce_geometry::subdivide::{prepare, MAX_LOOP_LEVEL};
 use hce_geometry::tables::validate_tables;
 
@@ -77,10 +78,14 @@ pub(super) struct Params {
     pub(super) exact: u32,
     /// 0 for the nearest-normal rule, 1 for the reconstructions that read the lighting table.
     pub(super) smooth_light: u32,
+    /// The first vertex appended by the split at sharp edges (SPEC.md F.5): the F.5 count.
+    pub(super) split_base: u32,
+    /// Corner copies `X` of the split.
+    pub(super) split_copies: u32,
 }
 
 /// Sections packed into the `topo` buffer, in this order (see [`LoopKernel::upload`]).
-pub(super) const SECTIONS: usize = 14;
+pub(super) const SECTIONS: usize = 17;
 
 /// Bits of the per-triangle flags word (`OWNS_EDGE` … in `loop.wgsl`).
 pub(super) const OWNS_EDGE: u32 = 1;
@@ -209,6 +214,9 @@ pub struct LoopObject {
     vertex_count: u32,
     edge_count: u32,
     pub(crate) triangle_count: u32,
+    /// Corner copies and split edges of the split at sharp edges (SPEC.md F.5).
+    split_copies: u32,
+    split_edges: u32,
     /// Largest valence (ring length) of the control mesh: the ring capacity of a scratch slot.
     max_valence: u32,
     /// Largest sum of the valences of a triangle's three corners, rounded up to a multiple of 8
@@ -426,6 +434,9 @@ impl LoopKernel {
         let mesh = &object.mesh;
         let prep = prepare(mesh).map_err(|e| invalid(e.to_string()))?;
         let topology = FlatTopology::new(&object.name, mesh)?;
+        // The split at sharp edges (SPEC.md F.5): its slot lists replace the topology's vertex
+        // and edge incidence, so that each region of a split vertex gathers its own side only.
+        let split = SplitTables::from_topology(mesh, &topology, &joined_sides(mesh));
         let nv = mesh.vertex_count();
         let nf = mesh.triangle_count();
         let max_valence = (0..nv)
@@ -486,10 +497,13 @@ impl LoopKernel {
                 &tri_flags,
                 &crease,
                 &weights,
-                &topology.edge_side_offsets,
-                &topology.edge_sides,
-                &topology.vertex_corner_offsets,
-                &topology.vertex_corners,
+                &split.edge_slot_offsets,
+                &split.edge_slot_sides,
+                &split.corner_slot_offsets,
+                &split.corner_slot_corners,
+                &split.corner_copy,
+                &split.edge_copy,
+                &split.slot_split,
             ],
         )?;
         check_size(ctx, "coarse positions", mesh.positions.len() as u64 * 4)?;
@@ -498,6 +512,8 @@ impl LoopKernel {
             vertex_count: topology.vertex_count,
             edge_count: topology.edge_count,
             triangle_count: topology.triangle_count,
+            split_copies: split.copies,
+            split_edges: split.split_edges,
             max_valence,
             ring_points,
             coarse_positions: storage_init(ctx, "coarse positions", &mesh.positions),
@@ -635,6 +651,8 @@ impl LoopKernel {
             offsets: object.offsets,
             exact: 1,
             smooth_light: object.lighting.smooth_flag(),
+            split_base: v - split_appended(object, level) as u32,
+            split_copies: object.split_copies,
         };
         let uniform = super::util::uniform_init(ctx, "loop params", &params);
         let group = |pipeline: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| {
@@ -694,6 +712,7 @@ impl LoopKernel {
             &[
                 (0, &uniform),
                 (2, &object.topo),
+                (8, &o.positions),
                 (9, &o.normals),
                 (11, &o.faces),
                 (12, &o.colours),
@@ -767,6 +786,11 @@ fn scratch_shape(
 
 /// Output vertex and triangle counts at `level`, checked to fit 32-bit indices as
 /// [`hce_geometry::subdivide`] checks them.
+/// Vertices the split at sharp edges appends at `level` (SPEC.md F.5): `X + S (2^level − 1)`.
+fn split_appended(object: &LoopObject, level: u32) -> u64 {
+    u64::from(object.split_copies) + u64::from(object.split_edges) * ((1u64 << level) - 1)
+}
+
 fn counts(object: &LoopObject, level: u32) -> Result<(u32, u32), GpuError> {
     if level > MAX_LOOP_LEVEL {
         return Err(GpuError::LevelTooHigh {
@@ -778,7 +802,8 @@ fn counts(object: &LoopObject, level: u32) -> Result<(u32, u32), GpuError> {
     let per_tri = (m - 1) * m.saturating_sub(2) / 2;
     let v = u64::from(object.vertex_count)
         + u64::from(object.edge_count) * (m - 1)
-        + u64::from(object.triangle_count) * per_tri;
+        + u64::from(object.triangle_count) * per_tri
+        + split_appended(object, level);
     let f = u64::from(object.triangle_count) << (2 * level);
     let too_large = |what, needed| GpuError::TooLarge {
         what,

@@ -48,8 +48,8 @@ pub use hce_geometry::flat::RefinedMesh;
 pub use lod::{choose_level, Camera, LodParams};
 pub use loop_kernel::{LoopKernel, LoopObject, LoopOutput, PatchScheme};
 pub use render::{
-    mesh_bounds, render_gpu_mesh, render_mesh, tone_map_aces, view_projection, Framing, GpuMesh,
-    RenderParams, RenderedImage,
+    mesh_bounds, render_gpu_mesh, render_mesh, sample_positions, supported_samples, tone_map_aces,
+    view_projection, Framing, GpuMesh, MeshDraw, MeshPipeline, RenderParams, RenderedImage,
 };
 pub use scene::{
     render_asset, resolve_camera, AssetRender, AssetRenderOptions, CameraChoice, CameraSource,

@@ -6,6 +6,16 @@
 //! `f(x) = x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14)` per channel, clamped to `[0, 1]`, then
 //! the sRGB transfer function (IEC 61966-2-1) and rounding to 8 bits. EXR output skips all of
 //! this and stores the linear values.
+//!
+//! Anti-aliasing: multisampling ([`RenderParams::samples`], default 4). The colour target stays
+//! 32-bit float, which WebGPU does not promise to multisample or resolve, so the count is the
+//! largest the adapter supports for it (with `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`, which
+//! [`GpuContext::new`] asks for) and `render_resolve.wgsl` averages the samples itself. The
+//! fragment stage runs once per pixel and triangle, at the pixel centre where the triangle covers
+//! every sample, else inside the covered samples (centroid interpolation: colours are never
+//! extrapolated beyond a triangle's edge); coverage is tested at
+//! the standard sample positions of Vulkan, Direct3D and WebGPU ([`sample_positions`]), which is
+//! where `hce reference --msaa` traces its rays, so the two images still line up pixel for pixel.
 
 use glam::{Mat4, Vec3, Vec4};
 
@@ -31,6 +41,9 @@ pub struct RenderParams {
     pub framing: Framing,
     /// Linear background colour. Default black.
     pub background: [f32; 3],
+    /// Multisamples per pixel (1, 2, 4, 8 or 16). Default 4. The image is drawn with the
+    /// largest count the adapter supports up to this ([`RenderedImage::samples`] says which).
+    pub samples: u32,
 }
 
 impl Default for RenderParams {
@@ -40,9 +53,87 @@ impl Default for RenderParams {
             height: 600,
             framing: Framing::Auto,
             background: [0.0; 3],
+            samples: 4,
         }
     }
 }
+
+/// The standard sample positions of `count`-sample multisampling (Vulkan
+/// `standardSampleLocations`, Direct3D and WebGPU share them), in pixel units from the pixel's
+/// top-left corner, rows downwards; `None` for a count without a standard pattern. One sample
+/// is the pixel centre.
+pub fn sample_positions(count: u32) -> Option<&'static [[f32; 2]]> {
+    const ONE: [[f32; 2]; 1] = [[0.5, 0.5]];
+    const TWO: [[f32; 2]; 2] = [[0.75, 0.75], [0.25, 0.25]];
+    const FOUR: [[f32; 2]; 4] = [
+        [0.375, 0.125],
+        [0.875, 0.375],
+        [0.125, 0.625],
+        [0.625, 0.875],
+    ];
+    const EIGHT: [[f32; 2]; 8] = [
+        [0.5625, 0.3125],
+        [0.4375, 0.6875],
+        [0.8125, 0.5625],
+        [0.3125, 0.1875],
+        [0.1875, 0.8125],
+        [0.0625, 0.4375],
+        [0.6875, 0.9375],
+        [0.9375, 0.0625],
+    ];
+    const SIXTEEN: [[f32; 2]; 16] = [
+        [0.5625, 0.5625],
+        [0.4375, 0.3125],
+        [0.3125, 0.625],
+        [0.75, 0.4375],
+        [0.1875, 0.375],
+        [0.625, 0.8125],
+        [0.8125, 0.6875],
+        [0.6875, 0.1875],
+        [0.375, 0.875],
+        [0.5, 0.0625],
+        [0.25, 0.125],
+        [0.125, 0.75],
+        [0.0, 0.5],
+        [0.9375, 0.25],
+        [0.875, 0.9375],
+        [0.0625, 0.0],
+    ];
+    match count {
+        1 => Some(&ONE),
+        2 => Some(&TWO),
+        4 => Some(&FOUR),
+        8 => Some(&EIGHT),
+        16 => Some(&SIXTEEN),
+        _ => None,
+    }
+}
+
+/// The multisample count [`RenderParams::samples`] `requested` gets on this device: the largest
+/// of 16, 8, 4, 2 not above it that the 32-bit float colour target and the depth buffer both
+/// support, else 1.
+pub fn supported_samples(ctx: &GpuContext, requested: u32) -> u32 {
+    if !ctx
+        .device
+        .features()
+        .contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES)
+    {
+        return 1;
+    }
+    let colour = ctx.adapter.get_texture_format_features(COLOUR_FORMAT).flags;
+    let depth = ctx
+        .adapter
+        .get_texture_format_features(MeshPipeline::DEPTH_FORMAT)
+        .flags;
+    [16, 8, 4, 2]
+        .into_iter()
+        .find(|&n| {
+            n <= requested && colour.sample_count_supported(n) && depth.sample_count_supported(n)
+        })
+        .unwrap_or(1)
+}
+
+const COLOUR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 /// A rendered image: linear RGBA f32, rows top to bottom.
 #[derive(Clone, Debug, PartialEq)]
@@ -52,6 +143,8 @@ pub struct RenderedImage {
     pub pixels: Vec<f32>,
     /// The camera actually used (useful after auto-framing).
     pub camera: Camera,
+    /// Multisamples per pixel the image was drawn with ([`supported_samples`]).
+    pub samples: u32,
 }
 
 impl RenderedImage {
@@ -245,12 +338,135 @@ pub fn render_gpu_mesh(
 
 /// One draw of a scene: a mesh on the GPU (`positions` f32 ×3, linear `colours` f32 ×4, `u32`
 /// indices) placed in the world by `transform` (object to world).
-pub(crate) struct MeshDraw<'a> {
+#[derive(Clone, Copy, Debug)]
+pub struct MeshDraw<'a> {
     pub positions: &'a wgpu::Buffer,
     pub colours: &'a wgpu::Buffer,
     pub indices: &'a wgpu::Buffer,
     pub index_count: u32,
     pub transform: Mat4,
+}
+
+impl<'a> From<&super::SceneDraw<'a>> for MeshDraw<'a> {
+    fn from(d: &super::SceneDraw<'a>) -> Self {
+        Self {
+            positions: d.positions,
+            colours: d.colours,
+            indices: d.indices,
+            index_count: d.index_count,
+            transform: d.transform,
+        }
+    }
+}
+
+/// The pipeline that draws placed meshes with their linear colours and no lighting
+/// (`render.wgsl`) into a colour target of `format` with a [`MeshPipeline::DEPTH_FORMAT`] depth
+/// buffer: the headless renderer's, and a windowed viewer's (`hce view`), which draws into its
+/// own pass.
+pub struct MeshPipeline {
+    pipeline: wgpu::RenderPipeline,
+}
+
+impl MeshPipeline {
+    /// The depth attachment's format; clear it to 1.0 (nearer surfaces have smaller depths).
+    pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+    /// `samples`: the colour and depth targets' sample count (1, or one that
+    /// [`supported_samples`] gives).
+    pub fn new(ctx: &GpuContext, format: wgpu::TextureFormat, samples: u32) -> Self {
+        let module = ctx
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("hce render"),
+                source: wgpu::ShaderSource::Wgsl(include_str!("render.wgsl").into()),
+            });
+        let pipeline = ctx
+            .device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("hce render"),
+                layout: None,
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[
+                        Some(wgpu::VertexBufferLayout {
+                            array_stride: 12,
+                            step_mode: wgpu::VertexStepMode::Vertex,
+                            attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+                        }),
+                        Some(wgpu::VertexBufferLayout {
+                            array_stride: 16,
+                            step_mode: wgpu::VertexStepMode::Vertex,
+                            attributes: &wgpu::vertex_attr_array![1 => Float32x4],
+                        }),
+                    ],
+                },
+                primitive: wgpu::PrimitiveState {
+                    // Baked assets may be open surfaces: draw both sides.
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: Self::DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: wgpu::MultisampleState {
+                    count: samples,
+                    ..Default::default()
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+        Self { pipeline }
+    }
+
+    /// Records `draws` into `pass` (which must target this pipeline's formats), seen through
+    /// `view_proj` ([`view_projection`]).
+    pub fn draw(
+        &self,
+        ctx: &GpuContext,
+        pass: &mut wgpu::RenderPass<'_>,
+        view_proj: Mat4,
+        draws: &[MeshDraw<'_>],
+    ) {
+        // One uniform per draw: the shader's matrix is view-projection times the draw's
+        // transform.
+        let layout = self.pipeline.get_bind_group_layout(0);
+        pass.set_pipeline(&self.pipeline);
+        for d in draws {
+            if d.index_count == 0 {
+                continue;
+            }
+            let uniform = uniform_init(
+                ctx,
+                "view projection",
+                &(view_proj * d.transform).to_cols_array(),
+            );
+            pass.set_bind_group(
+                0,
+                &bind_buffers(ctx, "hce render", &layout, &[&uniform]),
+                &[],
+            );
+            pass.set_vertex_buffer(0, d.positions.slice(..));
+            pass.set_vertex_buffer(1, d.colours.slice(..));
+            pass.set_index_buffer(d.indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..d.index_count, 0, 0..1);
+        }
+    }
 }
 
 /// Draws several placed meshes into one image and reads it back. `bounds` (world space) place
@@ -287,108 +503,51 @@ pub(crate) fn render_draws(
     }
     let view_proj = view_projection(&camera, lo, hi, aspect);
 
-    let format = wgpu::TextureFormat::Rgba32Float;
     let extent = wgpu::Extent3d {
         width: w,
         height: h,
         depth_or_array_layers: 1,
     };
-    let colour_target = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("hce colour target"),
-        size: extent,
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
-    let depth = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("hce depth"),
-        size: extent,
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Depth32Float,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
-    });
-    let module = ctx
-        .device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("hce render"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("render.wgsl").into()),
-        });
-    let pipeline = ctx
-        .device
-        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("hce render"),
-            layout: None,
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[
-                    Some(wgpu::VertexBufferLayout {
-                        array_stride: 12,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![0 => Float32x3],
-                    }),
-                    Some(wgpu::VertexBufferLayout {
-                        array_stride: 16,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![1 => Float32x4],
-                    }),
-                ],
-            },
-            primitive: wgpu::PrimitiveState {
-                // Baked assets may be open surfaces: draw both sides.
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-    // One uniform per draw: the shader's matrix is view-projection times the draw's transform.
-    let layout = pipeline.get_bind_group_layout(0);
-    let bind_groups: Vec<wgpu::BindGroup> = draws
-        .iter()
-        .map(|d| {
-            let uniform = uniform_init(
-                ctx,
-                "view projection",
-                &(view_proj * d.transform).to_cols_array(),
-            );
-            bind_buffers(ctx, "hce render", &layout, &[&uniform])
+    // The resolve writes one storage buffer of the whole image; an image too large for one
+    // binding is drawn with one sample.
+    let image_bytes = u64::from(w) * u64::from(h) * 16;
+    let limits = ctx.device.limits();
+    let samples = if image_bytes > limits.max_storage_buffer_binding_size
+        || image_bytes > limits.max_buffer_size
+    {
+        1
+    } else {
+        supported_samples(ctx, params.samples)
+    };
+    let target = |label, format, usage| {
+        ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: extent,
+            mip_level_count: 1,
+            sample_count: samples,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
         })
-        .collect();
+    };
+    let colour_target = target(
+        "hce colour target",
+        COLOUR_FORMAT,
+        wgpu::TextureUsages::RENDER_ATTACHMENT
+            | if samples > 1 {
+                wgpu::TextureUsages::TEXTURE_BINDING
+            } else {
+                wgpu::TextureUsages::COPY_SRC
+            },
+    );
+    let depth = target(
+        "hce depth",
+        MeshPipeline::DEPTH_FORMAT,
+        wgpu::TextureUsages::RENDER_ATTACHMENT,
+    );
+    let pipeline = MeshPipeline::new(ctx, COLOUR_FORMAT, samples);
 
-    let row_bytes = u64::from(w) * 16;
-    let padded_row = row_bytes.next_multiple_of(u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT));
-    let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("hce image read-back"),
-        size: padded_row * u64::from(h),
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
     let colour_view = colour_target.create_view(&Default::default());
     let depth_view = depth.create_view(&Default::default());
     let mut encoder = ctx
@@ -419,21 +578,41 @@ pub(crate) fn render_draws(
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&pipeline);
-        for (d, bind_group) in draws.iter().zip(&bind_groups) {
-            if d.index_count == 0 {
-                continue;
-            }
-            pass.set_bind_group(0, bind_group, &[]);
-            pass.set_vertex_buffer(0, d.positions.slice(..));
-            pass.set_vertex_buffer(1, d.colours.slice(..));
-            pass.set_index_buffer(d.indices.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..d.index_count, 0, 0..1);
-        }
+        pipeline.draw(ctx, &mut pass, view_proj, draws);
     }
+    let pixels = if samples > 1 {
+        resolve(ctx, encoder, &colour_view, w, h, samples)?
+    } else {
+        read_single(ctx, encoder, &colour_target, w, h)?
+    };
+    Ok(RenderedImage {
+        width: w,
+        height: h,
+        pixels,
+        camera,
+        samples,
+    })
+}
+
+/// Copies a one-sample colour target back (rows padded as copies require).
+fn read_single(
+    ctx: &GpuContext,
+    mut encoder: wgpu::CommandEncoder,
+    colour_target: &wgpu::Texture,
+    w: u32,
+    h: u32,
+) -> Result<Vec<f32>, GpuError> {
+    let row_bytes = u64::from(w) * 16;
+    let padded_row = row_bytes.next_multiple_of(u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT));
+    let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("hce image read-back"),
+        size: padded_row * u64::from(h),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
     encoder.copy_texture_to_buffer(
         wgpu::TexelCopyTextureInfo {
-            texture: &colour_target,
+            texture: colour_target,
             mip_level: 0,
             origin: wgpu::Origin3d::ZERO,
             aspect: wgpu::TextureAspect::All,
@@ -446,21 +625,146 @@ pub(crate) fn render_draws(
                 rows_per_image: Some(h),
             },
         },
-        extent,
+        colour_target.size(),
     );
     ctx.queue.submit([encoder.finish()]);
-    let pixels = super::util::map_and_copy(ctx, &readback, readback.size(), |bytes| {
+    super::util::map_and_copy(ctx, &readback, readback.size(), |bytes| {
         let mut out = Vec::with_capacity((w * h * 4) as usize);
         for row in bytes.chunks_exact(padded_row as usize) {
             out.extend_from_slice(bytemuck::cast_slice::<u8, f32>(&row[..row_bytes as usize]));
         }
         out
-    })?;
-    Ok(RenderedImage {
-        width: w,
-        height: h,
-        pixels,
-        camera,
+    })
+}
+
+/// The resolve's uniform block (`Params` in `render_resolve.wgsl`).
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+struct ResolveParams {
+    width: u32,
+    height: u32,
+    samples: u32,
+    pad: u32,
+}
+
+/// Averages the samples of a multisampled colour target into a buffer (`render_resolve.wgsl`)
+/// and reads it back.
+fn resolve(
+    ctx: &GpuContext,
+    mut encoder: wgpu::CommandEncoder,
+    colour_view: &wgpu::TextureView,
+    w: u32,
+    h: u32,
+    samples: u32,
+) -> Result<Vec<f32>, GpuError> {
+    let bytes = u64::from(w) * u64::from(h) * 16;
+    let device = &ctx.device;
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("hce resolve"),
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: true,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 2,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: false },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+        ],
+    });
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("hce resolve"),
+        source: wgpu::ShaderSource::Wgsl(include_str!("render_resolve.wgsl").into()),
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("hce resolve"),
+        layout: Some(
+            &device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("hce resolve"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            }),
+        ),
+        module: &module,
+        entry_point: Some("resolve_main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let uniform = uniform_init(
+        ctx,
+        "hce resolve",
+        &ResolveParams {
+            width: w,
+            height: h,
+            samples,
+            pad: 0,
+        },
+    );
+    let resolved = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("hce resolved image"),
+        size: bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let readback = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("hce image read-back"),
+        size: bytes,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("hce resolve"),
+        layout: &layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniform.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::TextureView(colour_view),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: resolved.as_entire_binding(),
+            },
+        ],
+    });
+    {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("hce resolve"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+    }
+    encoder.copy_buffer_to_buffer(&resolved, 0, &readback, 0, bytes);
+    ctx.queue.submit([encoder.finish()]);
+    super::util::map_and_copy(ctx, &readback, bytes, |b| {
+        bytemuck::cast_slice::<u8, f32>(b).to_vec()
     })
 }
 

@@ -11,9 +11,12 @@ struct Uniforms {
 
 @group(0) @binding(0) var<uniform> uniforms: Uniforms;
 
+// Centroid interpolation: with multisampling, a pixel that a triangle covers only in part is
+// shaded at a point inside the covered part, not at the pixel centre beyond the triangle's edge,
+// where the interpolated colours would be extrapolated (and can turn negative).
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
-    @location(0) colour: vec3<f32>,
+    @location(0) @interpolate(perspective, centroid) colour: vec3<f32>,
 }
 
 // Step 1: project each vertex; pass its linear colour through for interpolation.

@@ -314,6 +314,15 @@ impl GpuScene {
         self.objects.get(object).map(|o| o.name.as_str())
     }
 
+    pub fn object_kind(&self, object: usize) -> Option<ObjectKind> {
+        self.objects.get(object).map(|o| o.kind)
+    }
+
+    /// How many times `object` is drawn (its instances in the scene).
+    pub fn instance_count(&self, object: usize) -> usize {
+        self.objects.get(object).map_or(0, |o| o.instances.len())
+    }
+
     /// The level `choice` gives `object` (flat objects: their capped tree depth).
     pub fn level_for(&self, object: usize, choice: &LevelChoice) -> Option<u32> {
         let o = self.objects.get(object)?;
@@ -351,6 +360,63 @@ impl GpuScene {
         self.buffers(object).map(|b| b.level)
     }
 
+    /// The level `choice` gives every object that has instances (`None` for the others),
+    /// lowered to keep at most `max_triangles` fine triangles drawn, instances counted: the
+    /// object drawing the most triangles loses a level first. A [`LevelChoice::Fixed`] level is
+    /// not lowered (flat objects' are); when that is not enough, the error says so. Returns the
+    /// levels and a note per level lowered.
+    pub fn levels_within(
+        &self,
+        choice: &LevelChoice,
+        max_triangles: u64,
+    ) -> Result<(Vec<Option<u32>>, Vec<String>), GpuError> {
+        let forced = matches!(choice, LevelChoice::Fixed(_));
+        let mut levels: Vec<Option<u32>> = (0..self.objects.len())
+            .map(|i| {
+                (!self.objects[i].instances.is_empty())
+                    .then(|| self.level_for(i, choice))
+                    .flatten()
+            })
+            .collect();
+        let drawn =
+            |i: usize, l: u32| self.triangles_at(i, l) * self.objects[i].instances.len() as u64;
+        let total = |levels: &[Option<u32>]| -> u64 {
+            levels
+                .iter()
+                .enumerate()
+                .filter_map(|(i, l)| l.map(|l| drawn(i, l)))
+                .sum()
+        };
+        let mut notes = Vec::new();
+        while total(&levels) > max_triangles {
+            // Lower the object with the most triangles drawn; a forced level is not lowered.
+            let worst = levels
+                .iter()
+                .enumerate()
+                .filter(|(i, l)| {
+                    l.is_some_and(|l| l > 0)
+                        && (!forced || self.objects[*i].kind == ObjectKind::Flat)
+                })
+                .max_by_key(|(i, l)| drawn(*i, l.unwrap_or(0)))
+                .map(|(i, _)| i);
+            let Some(i) = worst else {
+                return Err(GpuError::InvalidParams(format!(
+                    "{} triangles at the requested level exceed the budget of {max_triangles}; \
+                     choose a lower level or raise the budget",
+                    total(&levels)
+                )));
+            };
+            if let Some(l) = levels[i].as_mut() {
+                *l -= 1;
+                notes.push(format!(
+                    "{}: level lowered to {l} to stay under {max_triangles} triangles",
+                    self.objects[i].name
+                ));
+            }
+        }
+        Ok((levels, notes))
+    }
+
     /// Refines every object that has instances to the level `choice` gives it. Returns the
     /// levels, `None` for objects not drawn.
     pub fn refine_all(
@@ -382,6 +448,20 @@ impl GpuScene {
     /// Refines one object to `level`. Does nothing when it is already there; reuses its output
     /// buffers when they are large enough.
     pub fn refine(&mut self, ctx: &GpuContext, object: usize, level: u32) -> Result<(), GpuError> {
+        self.refine_timed(ctx, object, level, false).map(|_| ())
+    }
+
+    /// [`GpuScene::refine`], which with `measure` returns the GPU time of the kernels' dispatches
+    /// in seconds when the adapter has timestamp queries (waiting for the GPU); `None` without
+    /// `measure` or timestamps, on the CPU reference path, and when the object was already at
+    /// `level`.
+    pub fn refine_timed(
+        &mut self,
+        ctx: &GpuContext,
+        object: usize,
+        level: u32,
+        measure: bool,
+    ) -> Result<Option<f64>, GpuError> {
         let count = self.objects.len();
         let o = self.objects.get_mut(object).ok_or_else(|| {
             GpuError::InvalidParams(format!("object {object} does not exist ({count} objects)"))
@@ -390,23 +470,27 @@ impl GpuScene {
         match &mut o.refiner {
             Refiner::Flat { object, out } => {
                 if out.as_ref().is_some_and(|b| b.level == level) {
-                    return Ok(());
+                    return Ok(None);
                 }
                 let kernel = self
                     .flat
                     .as_ref()
                     .ok_or_else(|| invalid(&name, "the flat kernel was not created"))?;
-                kernel.refine_into(ctx, object, level, out, false)?;
+                return Ok(kernel
+                    .refine_into(ctx, object, level, out, measure)?
+                    .gpu_seconds);
             }
             Refiner::Loop { object, out } => {
                 if out.as_ref().is_some_and(|b| b.level == level) {
-                    return Ok(());
+                    return Ok(None);
                 }
                 let kernel = self
                     .loop_kernel
                     .as_ref()
                     .ok_or_else(|| invalid(&name, "the Loop kernel was not created"))?;
-                kernel.refine_into(ctx, object, level, out, false)?;
+                return Ok(kernel
+                    .refine_into(ctx, object, level, out, measure)?
+                    .gpu_seconds);
             }
             Refiner::CpuReference {
                 reconstruction,
@@ -415,7 +499,7 @@ impl GpuScene {
                 out,
             } => {
                 if out.as_ref().is_some_and(|b| b.level == level) {
-                    return Ok(());
+                    return Ok(None);
                 }
                 if level > hce_geometry::subdivide::MAX_LOOP_LEVEL {
                     return Err(GpuError::LevelTooHigh {
@@ -424,6 +508,10 @@ impl GpuScene {
                     });
                 }
                 subdivide_into(&object.mesh, level, scratch).map_err(|e| invalid(&name, e))?;
+                hce_geometry::split::SplitTables::new(&name, &object.mesh)
+                    .map_err(|e| invalid(&name, e))?
+                    .apply(&object.mesh, scratch)
+                    .map_err(|e| invalid(&name, e))?;
                 let colours = hce_geometry::colour::apply_baked_colours_with(
                     object,
                     scratch,
@@ -434,7 +522,7 @@ impl GpuScene {
                 *out = Some(upload_cpu(ctx, out.take(), scratch, &colours, level)?);
             }
         }
-        Ok(())
+        Ok(None)
     }
 
     /// The current buffers of `object`, `None` before its first refinement.
@@ -648,6 +736,8 @@ pub struct AssetRenderOptions {
     pub scene: SceneOptions,
     /// Linear background colour. Default black.
     pub background: [f32; 3],
+    /// Multisamples per pixel, as [`RenderParams::samples`]. Default 4.
+    pub samples: u32,
 }
 
 impl Default for AssetRenderOptions {
@@ -661,6 +751,7 @@ impl Default for AssetRenderOptions {
             max_triangles: 16_000_000,
             scene: SceneOptions::default(),
             background: [0.0; 3],
+            samples: 4,
         }
     }
 }
@@ -745,52 +836,7 @@ pub fn render_asset(
             lod: options.lod,
         },
     };
-    let mut levels: Vec<Option<u32>> = (0..scene.object_count())
-        .map(|i| {
-            (!scene.objects[i].instances.is_empty())
-                .then(|| scene.level_for(i, &choice))
-                .flatten()
-        })
-        .collect();
-    let total = |levels: &[Option<u32>]| -> u64 {
-        levels
-            .iter()
-            .enumerate()
-            .filter_map(|(i, l)| {
-                l.map(|l| scene.triangles_at(i, l) * scene.objects[i].instances.len() as u64)
-            })
-            .sum()
-    };
-    let mut notes = Vec::new();
-    while total(&levels) > options.max_triangles {
-        // Lower the object with the most triangles drawn; a forced level is not lowered.
-        let worst = levels
-            .iter()
-            .enumerate()
-            .filter(|(i, l)| {
-                l.is_some_and(|l| l > 0)
-                    && (options.level.is_none() || scene.objects[*i].kind == ObjectKind::Flat)
-            })
-            .max_by_key(|(i, l)| {
-                scene.triangles_at(*i, l.unwrap_or(0)) * scene.objects[*i].instances.len() as u64
-            })
-            .map(|(i, _)| i);
-        let Some(i) = worst else {
-            return Err(GpuError::InvalidParams(format!(
-                "{} triangles at the requested level exceed the budget of {}; choose a lower \
-                 level or raise the budget",
-                total(&levels),
-                options.max_triangles
-            )));
-        };
-        if let Some(l) = levels[i].as_mut() {
-            *l -= 1;
-            notes.push(format!(
-                "{}: level lowered to {l} to stay under {} triangles",
-                scene.objects[i].name, options.max_triangles
-            ));
-        }
-    }
+    let (levels, notes) = scene.levels_within(&choice, options.max_triangles)?;
     scene.refine_to(ctx, &levels)?;
     let image = scene.render(
         ctx,
@@ -800,6 +846,7 @@ pub fn render_asset(
             height: options.height,
             framing: Framing::Camera(camera),
             background: options.background,
+            samples: options.samples,
         },
     )?;
     let objects = levels

@@ -11,6 +11,7 @@ pub mod render;
 pub mod serve;
 pub mod subdivide;
 pub mod validate;
+pub mod view;
 
 /// The value of a flag given under its old name, with a warning naming the new one (the level
 /// flags were unified: `--level` for one level, `--max-level` for the deepest, `--levels` only

@@ -3,7 +3,8 @@
 //!
 //! Geometry is what the renderer draws: the baked asset opened with
 //! [`hce_runtime::asset::Asset`], every multiresolution object Loop-subdivided to `--level` on
-//! the CPU ([`hce_geometry::subdivide`], from the file's control mesh, as `hce render
+//! the CPU with its vertices split at sharp edges ([`hce_geometry::refine::subdivide_split`],
+//! from the file's control mesh, as `hce render
 //! --cpu-reference` does), flat objects as they are (their refinement is linear), each instance
 //! placed by its node's world transform. Materials and lights are the baker's: the same file read
 //! by [`hce_bake::import::import_scene`] (reflectance and emission per coarse triangle, which
@@ -13,11 +14,17 @@
 //! ([`hce_bake::reference`]).
 //!
 //! The camera and the pixel grid are the renderer's: the same camera choice
-//! ([`hce_runtime::gpu::resolve_camera`]) and one ray per pixel through its centre, from
-//! the inverse of the renderer's own view-projection matrix, so each pixel looks at the point
-//! the rasteriser samples. A pixel holds the outgoing radiance `Le + ρ E / π` there, averaged
-//! over `--samples` paths: the units of the baked colours, which `hce render -o x.exr` writes
-//! unchanged. Background and triangle backs are black; alpha is 1, as in `hce render`.
+//! ([`hce_runtime::gpu::resolve_camera`]) and rays from the inverse of the renderer's own
+//! view-projection matrix through the pixel's multisample positions
+//! ([`hce_runtime::gpu::sample_positions`] of `--msaa`, default 4 as `hce render`; 1 is the
+//! pixel centre), so each pixel covers what the rasteriser covers: at a silhouette both images
+//! average the same sample positions, and inside a surface both are that surface's light. The
+//! `--samples` paths of a pixel are shared out among its sample positions (the first ones get
+//! one more when they do not divide evenly), each position's radiance averaged over its paths
+//! and the pixel the mean of its positions, as the renderer's resolve averages its samples. A
+//! pixel holds the outgoing radiance `Le + ρ E / π`: the units of the baked colours, which
+//! `hce render -o x.exr` writes unchanged. Background and triangle backs are black; alpha is 1,
+//! as in `hce render`.
 //!
 //! `--mask PATH.png` writes where comparisons are meaningful: white where the pixel and every
 //! pixel within `--mask-margin` pixels (a square, default 2) see the front of the same instance
@@ -57,9 +64,12 @@ pub struct ReferenceArgs {
     /// file's camera when it has one, else `auto`.
     #[arg(long)]
     pub camera: Option<String>,
-    /// Paths per pixel (at least 1).
+    /// Paths per pixel (at least --msaa).
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..))]
     pub samples: u32,
+    /// Sample positions per pixel, as `hce render --msaa` (1 is the pixel centre).
+    #[arg(long, default_value_t = 4, value_parser = super::render::parse_msaa)]
+    pub msaa: u32,
     /// Also write a mask PNG: white on pixels whose neighbourhood sees one multiresolution
     /// object instance (see --mask-margin), black elsewhere.
     #[arg(long, value_name = "PATH.png")]
@@ -97,6 +107,12 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
         }
     }
     let (width, height) = parse_size(&args.size).map_err(usage)?;
+    if args.samples < args.msaa {
+        bail!(Usage(format!(
+            "--samples {} must be at least --msaa {}: every sample position needs a path",
+            args.samples, args.msaa
+        )));
+    }
     let choice = super::render::camera_choice(args.camera.as_deref()).map_err(usage)?;
     let asset = match Asset::open(&args.file) {
         Ok(a) => a,
@@ -126,7 +142,9 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
         }
     }
     let setup_s = t0.elapsed().as_secs_f64();
-    let ray = |x: u32, y: u32| pixel_ray(&inv, eye, width, height, x, y);
+    let positions = hce_runtime::gpu::sample_positions(args.msaa)
+        .context("--msaa has no standard sample positions")?;
+    let ray = |x: u32, y: u32, s: usize| pixel_ray(&inv, eye, width, height, x, y, positions[s]);
 
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = args.threads {
@@ -148,9 +166,17 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
     let rows = AtomicU64::new(0);
     let t1 = Instant::now();
     let pixels = pool.install(|| {
-        tracer.render(width, height, args.samples, args.seed, ray, || {
-            bar.set_position(rows.fetch_add(1, Ordering::Relaxed) + 1);
-        })
+        tracer.render(
+            width,
+            height,
+            args.samples,
+            positions.len(),
+            args.seed,
+            ray,
+            || {
+                bar.set_position(rows.fetch_add(1, Ordering::Relaxed) + 1);
+            },
+        )
     });
     bar.finish_and_clear();
     let trace_s = t1.elapsed().as_secs_f64();
@@ -220,11 +246,20 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
     Ok(())
 }
 
-/// The ray through the centre of pixel `(x, y)` (rows top to bottom), from the inverse of the
-/// renderer's view-projection matrix: origin the eye, unit direction.
-fn pixel_ray(inv: &DMat4, eye: DVec3, w: u32, h: u32, x: u32, y: u32) -> ([f64; 3], [f64; 3]) {
-    let nx = 2.0 * (f64::from(x) + 0.5) / f64::from(w) - 1.0;
-    let ny = 1.0 - 2.0 * (f64::from(y) + 0.5) / f64::from(h);
+/// The ray through the point `at` (pixel units from its top-left corner, rows downwards) of
+/// pixel `(x, y)` (rows top to bottom), from the inverse of the renderer's view-projection
+/// matrix: origin the eye, unit direction.
+fn pixel_ray(
+    inv: &DMat4,
+    eye: DVec3,
+    w: u32,
+    h: u32,
+    x: u32,
+    y: u32,
+    at: [f32; 2],
+) -> ([f64; 3], [f64; 3]) {
+    let nx = 2.0 * (f64::from(x) + f64::from(at[0])) / f64::from(w) - 1.0;
+    let ny = 1.0 - 2.0 * (f64::from(y) + f64::from(at[1])) / f64::from(h);
     let unproject = |z: f64| {
         let p = *inv * DVec4::new(nx, ny, z, 1.0);
         p.truncate() / p.w
@@ -277,7 +312,8 @@ fn build_scene(
         let multires = object.kind == ObjectKind::Multiresolution;
         let refined = if multires {
             Some(
-                hce_geometry::subdivide(&object.mesh, level)
+                hce_geometry::refine::subdivide_split(&object.name, &object.mesh, level)
+                    .map_err(anyhow::Error::msg)
                     .with_context(|| format!("object '{}': subdividing", object.name))?,
             )
         } else {

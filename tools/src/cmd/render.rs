@@ -69,6 +69,21 @@ pub struct RenderArgs {
     /// geometric normals, averaged at element corners and interpolated; normals ignored).
     #[arg(long, default_value = "smooth", value_parser = parse_reconstruction)]
     pub reconstruction: hce_geometry::lighting::Reconstruction,
+    /// Multisample anti-aliasing: samples per pixel, 1 (none), 2, 4, 8 or 16. The adapter's
+    /// largest supported count up to this is used (printed). `hce reference --msaa` traces
+    /// rays through the same sample positions.
+    #[arg(long, default_value_t = 4, value_parser = parse_msaa)]
+    pub msaa: u32,
+}
+
+/// Parses a multisample count: 1, 2, 4, 8 or 16 (the counts with standard sample positions).
+pub fn parse_msaa(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(n @ (1 | 2 | 4 | 8 | 16)) => Ok(n),
+        _ => Err(format!(
+            "'{s}': expected 1, 2, 4, 8 or 16 samples per pixel"
+        )),
+    }
 }
 
 pub fn parse_reconstruction(s: &str) -> Result<hce_geometry::lighting::Reconstruction, String> {
@@ -213,18 +228,24 @@ pub fn camera_choice(arg: Option<&str>) -> Result<hce_runtime::gpu::CameraChoice
 }
 
 #[cfg(feature = "gpu")]
-fn open_context(software: bool) -> Result<hce_runtime::gpu::GpuContext> {
-    use hce_runtime::gpu::{AdapterKind, ContextOptions, GpuContext};
+pub fn open_context(software: bool) -> Result<hce_runtime::gpu::GpuContext> {
+    use hce_runtime::gpu::{ContextOptions, GpuContext};
     let ctx = GpuContext::new(&ContextOptions {
         force_software: software,
     })?;
-    println!("adapter: {}", ctx.description);
-    if ctx.description.kind == AdapterKind::Software {
+    report_adapter(&ctx.description);
+    Ok(ctx)
+}
+
+/// Prints the adapter, and says so when it is a software rasteriser.
+#[cfg(feature = "gpu")]
+pub fn report_adapter(adapter: &hce_runtime::gpu::AdapterDescription) {
+    println!("adapter: {adapter}");
+    if adapter.kind == hce_runtime::gpu::AdapterKind::Software {
         println!(
             "note: rendering on a software rasteriser (no hardware GPU in use); expect it to be slow"
         );
     }
-    Ok(ctx)
 }
 
 #[cfg(feature = "gpu")]
@@ -235,10 +256,18 @@ fn write_image(args: &RenderArgs, image: &hce_runtime::gpu::RenderedImage) -> Re
         Format::Exr => write_exr(&args.output, w, h, &image.pixels)?,
     }
     println!(
-        "wrote {} ({w}x{h}, camera {})",
+        "wrote {} ({w}x{h}, {} samples per pixel, camera {})",
         args.output.display(),
+        image.samples,
         camera_text(&image.camera)
     );
+    if image.samples < args.msaa {
+        eprintln!(
+            "note: the adapter multisamples this image at most {}x; compare it with \
+             `hce reference --msaa {}`",
+            image.samples, image.samples
+        );
+    }
     Ok(())
 }
 
@@ -314,6 +343,7 @@ fn run_baked(
                 reconstruction: args.reconstruction,
                 ..Default::default()
             },
+            samples: args.msaa,
             ..Default::default()
         },
     )?;
@@ -344,20 +374,14 @@ fn run_baked(
     write_image(args, &result.image)
 }
 
-/// Previews a plain mesh as a flat object.
+/// A plain mesh (OBJ, or glTF without baked lighting) as the flat object its preview draws:
+/// one colour per coarse triangle, equal positions welded.
 #[cfg(feature = "gpu")]
-fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Result<()> {
-    use hce_runtime::gpu::{
-        auto_scene_camera, choose_level, mesh_bounds, render_gpu_mesh, CameraChoice, FlatKernel,
-        Framing, GpuMesh, LodParams, RenderParams,
-    };
-
+pub fn plain_object(file: &Path) -> Result<hce_format::Object> {
     use hce_meshio::plain as plain_mesh;
 
-    let (width, height) = parse_size(&args.size)?;
-    let mesh = plain_mesh::load_plain_mesh(&args.file)?;
-    let name = args
-        .file
+    let mesh = plain_mesh::load_plain_mesh(file)?;
+    let name = file
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
@@ -366,14 +390,91 @@ fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Resul
         eprintln!("note: {dropped} degenerate triangles dropped after welding equal positions");
     }
     if object.triangles.is_empty() {
+        bail!("{}: no non-degenerate triangles to render", file.display());
+    }
+    Ok(object)
+}
+
+/// How a plain mesh's preview is framed and refined: its bounds, its automatic camera and the
+/// level chosen for a view.
+#[cfg(feature = "gpu")]
+pub struct PlainView {
+    pub bounds: ([f32; 3], [f32; 3]),
+    mean_edge: f32,
+}
+
+#[cfg(feature = "gpu")]
+impl PlainView {
+    pub fn new(object: &hce_format::Object) -> Result<Self> {
+        let bounds = hce_runtime::gpu::mesh_bounds(&object.mesh.positions)
+            .context("mesh has no finite positions")?;
+        Ok(Self {
+            bounds,
+            mean_edge: mean_edge_length(&object.mesh.positions, &object.mesh.triangles),
+        })
+    }
+
+    /// [`hce_runtime::gpu::auto_scene_camera`] on the mesh.
+    pub fn auto_camera(
+        &self,
+        object: &hce_format::Object,
+        aspect: f32,
+    ) -> hce_runtime::gpu::Camera {
+        let m = &object.mesh;
+        let triangles: Vec<[[f32; 3]; 3]> = (0..m.triangle_count())
+            .map(|t| m.triangle(t).map(|v| m.position(v)))
+            .collect();
+        hce_runtime::gpu::auto_scene_camera(&triangles, self.bounds.0, self.bounds.1, aspect).0
+    }
+
+    /// The level [`hce_runtime::gpu::choose_level`] gives the mesh seen by `view`, lowered
+    /// (with a note) until it makes at most `max_triangles` from `coarse` triangles.
+    pub fn level(
+        &self,
+        view: &hce_runtime::gpu::Camera,
+        viewport_height: u32,
+        lod: &hce_runtime::gpu::LodParams,
+        coarse: u64,
+        max_triangles: u64,
+    ) -> (u32, Option<String>) {
+        let (lo, hi) = self.bounds;
+        let chosen =
+            hce_runtime::gpu::choose_level(lo, hi, self.mean_edge, view, viewport_height, lod);
+        let mut level = chosen;
+        while level > 0 && coarse << (2 * level) > max_triangles {
+            level -= 1;
+        }
+        let note = (level < chosen)
+            .then(|| format!("level lowered to {level} to stay under --max-triangles"));
+        (level, note)
+    }
+}
+
+/// Checks a forced level of a plain mesh against the triangle budget.
+#[cfg(feature = "gpu")]
+pub fn check_plain_level(level: u32, coarse: u64, max_triangles: u64) -> Result<u32> {
+    let out = coarse << (2 * level.min(31));
+    if level > hce_geometry::decode::MAX_PATH_LEVEL || out > max_triangles {
         bail!(
-            "{}: no non-degenerate triangles to render",
-            args.file.display()
+            "--level {level} would make {out} triangles from {coarse}; the limit is \
+             {max_triangles} (raise --max-triangles or lower --level)"
         );
     }
+    Ok(level)
+}
+
+/// Previews a plain mesh as a flat object.
+#[cfg(feature = "gpu")]
+fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Result<()> {
+    use hce_runtime::gpu::{
+        render_gpu_mesh, CameraChoice, FlatKernel, Framing, GpuMesh, LodParams, RenderParams,
+    };
+
+    let (width, height) = parse_size(&args.size)?;
+    let object = plain_object(&args.file)?;
     let ctx = open_context(args.software)?;
 
-    let (lo, hi) = mesh_bounds(&object.mesh.positions).context("mesh has no finite positions")?;
+    let plain = PlainView::new(&object)?;
     let aspect = width as f32 / height as f32;
     let view = match camera {
         CameraChoice::Explicit(c) => c,
@@ -381,33 +482,16 @@ fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Resul
             "--camera scene: {} is previewed as a plain mesh, without its cameras",
             args.file.display()
         ),
-        CameraChoice::Auto | CameraChoice::SceneOrAuto => {
-            let m = &object.mesh;
-            let triangles: Vec<[[f32; 3]; 3]> = (0..m.triangle_count())
-                .map(|t| m.triangle(t).map(|v| m.position(v)))
-                .collect();
-            auto_scene_camera(&triangles, lo, hi, aspect).0
-        }
+        CameraChoice::Auto | CameraChoice::SceneOrAuto => plain.auto_camera(&object, aspect),
     };
     let f = object.triangles.len() as u64;
     let level = match args.level {
-        Some(level) => {
-            let out = f << (2 * level.min(31));
-            if level > hce_geometry::decode::MAX_PATH_LEVEL || out > args.max_triangles {
-                bail!(
-                    "--level {level} would make {out} triangles from {f}; the limit is {} \
-                     (raise --max-triangles or lower --level)",
-                    args.max_triangles
-                );
-            }
-            level
-        }
+        Some(level) => check_plain_level(level, f, args.max_triangles)?,
         None => {
-            let edge = mean_edge_length(&object.mesh.positions, &object.mesh.triangles);
-            let mut level = choose_level(lo, hi, edge, &view, height, &LodParams::default());
-            while level > 0 && f << (2 * level) > args.max_triangles {
-                level -= 1;
-                eprintln!("note: level lowered to {level} to stay under --max-triangles");
+            let (level, note) =
+                plain.level(&view, height, &LodParams::default(), f, args.max_triangles);
+            if let Some(note) = note {
+                eprintln!("note: {note}");
             }
             level
         }
@@ -432,13 +516,14 @@ fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Resul
             colours: &out.colours,
             indices: &out.indices,
             index_count: out.triangle_count * 3,
-            bounds: (lo, hi),
+            bounds: plain.bounds,
         },
         &RenderParams {
             width,
             height,
             framing: Framing::Camera(view),
             background: [0.0; 3],
+            samples: args.msaa,
         },
     )?;
     write_image(args, &image)

@@ -1,0 +1,398 @@
+//! What the viewer shows: a baked asset on a [`GpuScene`], or a plain mesh previewed flat as
+//! `hce render` previews it; the level of each object for the frame's camera, refining only the
+//! objects whose level changed, and what that cost.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use hce_format::ObjectKind;
+use hce_geometry::lighting::Reconstruction;
+use hce_runtime::asset::{Asset, AssetError};
+use hce_runtime::gpu::{
+    resolve_camera, Camera, CameraChoice, CameraSource, FlatKernel, FlatObject, FlatOutput,
+    GpuContext, GpuScene, LevelChoice, LodParams, MeshDraw, SceneOptions,
+};
+
+use crate::cmd::render::{check_plain_level, plain_object, PlainView};
+
+/// How levels are chosen each frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Levels {
+    /// `None`: from the view with `lod`.
+    pub forced: Option<u32>,
+    pub lod: LodParams,
+    /// Most fine triangles drawn, instances counted (as `hce render --max-triangles`).
+    pub max_triangles: u64,
+    /// Milliseconds of refinement per frame after which the remaining level changes wait for
+    /// the next frame (at least one object is refined per frame); 0: every change at once.
+    pub refine_budget_ms: f64,
+}
+
+/// One object as the panel and the statistics show it.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ObjectStats {
+    pub name: String,
+    pub kind: &'static str,
+    pub level: u32,
+    /// Fine triangles per instance.
+    pub triangles: u64,
+    pub instances: usize,
+    /// Wall time of its last refinement, GPU work waited for, in milliseconds.
+    pub refine_ms: f64,
+    /// GPU time of its last refinement's dispatches (timestamp queries), in milliseconds,
+    /// where the adapter has them.
+    pub refine_gpu_ms: Option<f64>,
+}
+
+/// What one frame's level update did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Refined {
+    /// Indices (into [`Content::objects`]) of the objects refined this frame.
+    pub objects: Vec<usize>,
+    /// Their refinement's wall time, GPU work waited for, in milliseconds.
+    pub ms: f64,
+    /// The GPU time of their dispatches (timestamp queries), where the adapter has them.
+    pub gpu_ms: Option<f64>,
+    /// Levels lowered for the triangle budget.
+    pub notes: Vec<String>,
+    /// Objects whose level should change but were left for a later frame (refine budget).
+    pub pending: usize,
+}
+
+enum Source {
+    Baked {
+        asset: Box<Asset>,
+        scene: Box<GpuScene>,
+    },
+    Plain(Box<Plain>),
+}
+
+/// A plain mesh with the flat kernel that previews it.
+struct Plain {
+    object: Box<hce_format::Object>,
+    view: PlainView,
+    kernel: FlatKernel,
+    uploaded: FlatObject,
+    out: Option<FlatOutput>,
+}
+
+/// A file opened in the viewer.
+pub struct Content {
+    pub path: PathBuf,
+    source: Source,
+    pub bounds: ([f32; 3], [f32; 3]),
+    pub objects: Vec<ObjectStats>,
+    pub reconstruction: Reconstruction,
+}
+
+fn kind_name(kind: Option<ObjectKind>) -> &'static str {
+    match kind {
+        Some(ObjectKind::Multiresolution) => "multiresolution",
+        Some(ObjectKind::Flat) => "flat",
+        None => "?",
+    }
+}
+
+/// A file read and checked on the CPU, before any window or adapter: a bad file is reported
+/// with its exit status even where no window could open.
+pub enum FileData {
+    Baked(Box<Asset>),
+    Plain(Box<hce_format::Object>),
+}
+
+impl FileData {
+    /// Reads `path`: a baked asset, or any other mesh previewed flat (as `hce render` does).
+    pub fn read(path: &Path) -> Result<Self> {
+        let is_obj = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+        if !is_obj {
+            match Asset::open(path) {
+                Ok(asset) => {
+                    for w in &asset.warnings {
+                        eprintln!("warning: {w}");
+                    }
+                    if asset.bounds().is_none() {
+                        bail!("{}: the asset has nothing to draw", path.display());
+                    }
+                    return Ok(Self::Baked(Box::new(asset)));
+                }
+                Err(AssetError::NotBaked { .. }) => {
+                    println!(
+                        "{}: no baked lighting; previewing the plain mesh flat",
+                        path.display()
+                    );
+                }
+                Err(e) => return Err(e.into()),
+            }
+        }
+        Ok(Self::Plain(Box::new(plain_object(path)?)))
+    }
+}
+
+impl Content {
+    /// Uploads `data`, read from `path`, with `reconstruction`.
+    pub fn upload(
+        ctx: &GpuContext,
+        path: &Path,
+        data: FileData,
+        reconstruction: Reconstruction,
+    ) -> Result<Self> {
+        match data {
+            FileData::Baked(asset) => Self::baked(ctx, path, *asset, reconstruction),
+            FileData::Plain(object) => Self::plain(ctx, path, *object, reconstruction),
+        }
+    }
+
+    fn baked(
+        ctx: &GpuContext,
+        path: &Path,
+        asset: Asset,
+        reconstruction: Reconstruction,
+    ) -> Result<Self> {
+        let bounds = asset
+            .bounds()
+            .with_context(|| format!("{}: the asset has nothing to draw", path.display()))?;
+        let scene = GpuScene::new(
+            ctx,
+            &asset,
+            &SceneOptions {
+                reconstruction,
+                ..Default::default()
+            },
+        )?;
+        let objects = (0..scene.object_count())
+            .map(|i| ObjectStats {
+                name: scene.object_name(i).unwrap_or("?").to_owned(),
+                kind: kind_name(scene.object_kind(i)),
+                level: 0,
+                triangles: 0,
+                instances: scene.instance_count(i),
+                refine_ms: 0.0,
+                refine_gpu_ms: None,
+            })
+            .collect();
+        Ok(Self {
+            path: path.to_owned(),
+            source: Source::Baked {
+                asset: Box::new(asset),
+                scene: Box::new(scene),
+            },
+            bounds: (bounds.min, bounds.max),
+            objects,
+            reconstruction,
+        })
+    }
+
+    fn plain(
+        ctx: &GpuContext,
+        path: &Path,
+        object: hce_format::Object,
+        reconstruction: Reconstruction,
+    ) -> Result<Self> {
+        let view = PlainView::new(&object)?;
+        let kernel = FlatKernel::new(ctx);
+        let uploaded = kernel.upload_with(ctx, &object, reconstruction)?;
+        let objects = vec![ObjectStats {
+            name: object.name.clone(),
+            kind: "plain mesh, previewed flat",
+            level: 0,
+            triangles: 0,
+            instances: 1,
+            refine_ms: 0.0,
+            refine_gpu_ms: None,
+        }];
+        Ok(Self {
+            path: path.to_owned(),
+            bounds: view.bounds,
+            source: Source::Plain(Box::new(Plain {
+                object: Box::new(object),
+                view,
+                kernel,
+                uploaded,
+                out: None,
+            })),
+            objects,
+            reconstruction,
+        })
+    }
+
+    /// The same file uploaded again with another reconstruction (the CPU data is kept).
+    pub fn with_reconstruction(self, ctx: &GpuContext, r: Reconstruction) -> Result<Self> {
+        let path = self.path.clone();
+        let data = match self.source {
+            Source::Baked { asset, .. } => FileData::Baked(asset),
+            Source::Plain(p) => FileData::Plain(p.object),
+        };
+        Self::upload(ctx, &path, data, r)
+    }
+
+    /// The camera `choice` gives on a view of aspect `aspect`, and where it came from.
+    pub fn start_camera(&self, choice: CameraChoice, aspect: f32) -> Result<(Camera, String)> {
+        match &self.source {
+            Source::Baked { asset, .. } => {
+                let (camera, source) = resolve_camera(asset, choice, aspect)?;
+                let text = match source {
+                    CameraSource::Scene(name) => format!("the scene's camera '{name}'"),
+                    CameraSource::Auto(p) => format!("automatic ({p:?})"),
+                    CameraSource::Explicit => "as given".to_owned(),
+                };
+                Ok((camera, text))
+            }
+            Source::Plain(p) => match choice {
+                CameraChoice::Explicit(c) => Ok((c, "as given".to_owned())),
+                CameraChoice::Scene => bail!(
+                    "--camera scene: {} is previewed as a plain mesh, without its cameras",
+                    self.path.display()
+                ),
+                CameraChoice::Auto | CameraChoice::SceneOrAuto => Ok((
+                    p.view.auto_camera(&p.object, aspect),
+                    "automatic".to_owned(),
+                )),
+            },
+        }
+    }
+
+    /// Chooses every object's level for `camera` on a viewport `viewport_height` pixels high
+    /// and refines the objects whose level changed (only those), waiting for each so that its
+    /// time is its own.
+    pub fn update(
+        &mut self,
+        ctx: &GpuContext,
+        camera: Camera,
+        viewport_height: u32,
+        levels: &Levels,
+    ) -> Result<Refined> {
+        // Levels chosen from the view also stay within the adapter's largest storage binding:
+        // a refined object's largest buffers hold 16 bytes per fine triangle (the flat kernel's
+        // face colours; indices take 12).
+        let binding = ctx.device.limits().max_storage_buffer_binding_size;
+        let levels = &Levels {
+            max_triangles: levels.max_triangles.min(binding / 16),
+            ..*levels
+        };
+        let mut refined = Refined::default();
+        // GPU timestamps where the adapter has them (reading them waits, as the frame does).
+        let measure = ctx.description.timestamps;
+        match &mut self.source {
+            Source::Baked { scene, .. } => {
+                let choice = match levels.forced {
+                    Some(l) => LevelChoice::Fixed(l),
+                    None => LevelChoice::Auto {
+                        camera,
+                        viewport_height,
+                        lod: levels.lod,
+                    },
+                };
+                let (wanted, notes) = scene.levels_within(&choice, levels.max_triangles)?;
+                refined.notes = notes;
+                // Objects not drawn yet first (all of them: there is nothing else to draw),
+                // then the largest level changes; past the frame's refine budget the rest keep
+                // their level and are drawn as they are until a later frame.
+                let mut changed: Vec<(usize, u32, Option<u32>)> = wanted
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(i, l)| l.map(|l| (i, l, scene.level(i))))
+                    .filter(|&(_, l, now)| now != Some(l))
+                    .collect();
+                changed.sort_by_key(|&(i, l, now)| {
+                    (
+                        now.is_some(),
+                        std::cmp::Reverse(now.map(|n| n.abs_diff(l))),
+                        i,
+                    )
+                });
+                refined.pending = changed.len();
+                for (i, level, now) in changed {
+                    if now.is_some()
+                        && levels.refine_budget_ms > 0.0
+                        && refined.ms >= levels.refine_budget_ms
+                    {
+                        break;
+                    }
+                    refined.pending -= 1;
+                    let t = Instant::now();
+                    let gpu = scene.refine_timed(ctx, i, level, measure)?;
+                    ctx.wait()?;
+                    let ms = t.elapsed().as_secs_f64() * 1e3;
+                    let s = &mut self.objects[i];
+                    s.level = level;
+                    s.triangles = scene.triangles_at(i, level);
+                    s.refine_ms = ms;
+                    s.refine_gpu_ms = gpu.map(|g| g * 1e3);
+                    if let Some(g) = s.refine_gpu_ms {
+                        *refined.gpu_ms.get_or_insert(0.0) += g;
+                    }
+                    refined.objects.push(i);
+                    refined.ms += ms;
+                }
+            }
+            Source::Plain(p) => {
+                let Plain {
+                    object,
+                    view,
+                    kernel,
+                    uploaded,
+                    out,
+                } = &mut **p;
+                let coarse = object.triangles.len() as u64;
+                let level = match levels.forced {
+                    Some(l) => check_plain_level(l, coarse, levels.max_triangles)?,
+                    None => {
+                        let (level, note) = view.level(
+                            &camera,
+                            viewport_height,
+                            &levels.lod,
+                            coarse,
+                            levels.max_triangles,
+                        );
+                        refined.notes.extend(note);
+                        level
+                    }
+                };
+                if out.as_ref().map(|o| o.level) != Some(level) {
+                    let t = Instant::now();
+                    let timing = kernel.refine_into(ctx, uploaded, level, out, measure)?;
+                    ctx.wait()?;
+                    let ms = t.elapsed().as_secs_f64() * 1e3;
+                    let s = &mut self.objects[0];
+                    s.level = level;
+                    s.triangles = out.as_ref().map_or(0, |o| u64::from(o.triangle_count));
+                    s.refine_ms = ms;
+                    s.refine_gpu_ms = timing.gpu_seconds.map(|g| g * 1e3);
+                    refined.gpu_ms = s.refine_gpu_ms;
+                    refined.objects.push(0);
+                    refined.ms += ms;
+                }
+            }
+        }
+        Ok(refined)
+    }
+
+    /// The draws of the current levels.
+    pub fn draws(&self) -> Vec<MeshDraw<'_>> {
+        match &self.source {
+            Source::Baked { scene, .. } => scene.draws().iter().map(MeshDraw::from).collect(),
+            Source::Plain(p) => p
+                .out
+                .iter()
+                .map(|o| MeshDraw {
+                    positions: &o.positions,
+                    colours: &o.colours,
+                    indices: &o.indices,
+                    index_count: o.triangle_count * 3,
+                    transform: glam::Mat4::IDENTITY,
+                })
+                .collect(),
+        }
+    }
+
+    /// Fine triangles drawn per frame, instances counted.
+    pub fn drawn_triangles(&self) -> u64 {
+        self.draws()
+            .iter()
+            .map(|d| u64::from(d.index_count / 3))
+            .sum()
+    }
+}
