@@ -40,6 +40,11 @@ impl From<Status> for ExitCode {
 #[error("{0}")]
 pub struct Usage(pub String);
 
+/// `e`, a bad argument found by a parser outside clap, as a [`Usage`] error.
+pub fn usage(e: anyhow::Error) -> anyhow::Error {
+    Usage(format!("{e:#}")).into()
+}
+
 /// The input was read and found unacceptable, and the problems were already printed (as by
 /// `hce validate`): exits 3.
 #[derive(Debug, thiserror::Error)]

@@ -2,7 +2,7 @@
 //! file's `hce validate` exit status and problem lines, and for valid files the refined
 //! positions and normals (bitwise) and smooth colours of the probe vertices at levels 1 to 3
 //! (through `hce subdivide --merge` to OBJ), and both reconstructions' colours through the
-//! library.
+//! library; the scene `hce subdivide` writes for baked glTF files (`NORMAL`, `COLOR_0`).
 //! Also checks that the suite is what its generator writes today.
 
 mod common;
@@ -214,6 +214,54 @@ fn probe_colours_match_both_reconstructions() {
         }
     }
     assert!(checked > 100, "{checked} probe colours");
+}
+
+/// The `scene` entries (SPEC.md F.9): what `hce subdivide FILE -l 1` writes as a scene, read
+/// back, per primitive: vertex count, `NORMAL` and `COLOR_0` (after the exposure) bitwise.
+#[test]
+fn scene_entries_match_hce_subdivide() {
+    let m = manifest();
+    let dir = tempfile::tempdir().unwrap();
+    let mut checked = 0;
+    for c in m["cases"].as_array().unwrap() {
+        let Some(scene) = c.get("scene") else {
+            continue;
+        };
+        let file = suite().join(c["file"].as_str().unwrap());
+        let out = dir.path().join(format!("scene{checked}.glb"));
+        let level = scene["level"].to_string();
+        common::hce_ok(&[
+            "subdivide",
+            file.to_str().unwrap(),
+            "-l",
+            &level,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        let (doc, buffers, _) = gltf::import_slice(std::fs::read(&out).unwrap()).unwrap();
+        for p in scene["primitives"].as_array().unwrap() {
+            let mesh = doc
+                .meshes()
+                .nth(p["mesh"].as_u64().unwrap() as usize)
+                .unwrap();
+            let prim = mesh
+                .primitives()
+                .nth(p["primitive"].as_u64().unwrap() as usize)
+                .unwrap();
+            let reader = prim.reader(|b| Some(&buffers[b.index()][..]));
+            let normals: Vec<[f32; 3]> = reader.read_normals().unwrap().collect();
+            let colours: Vec<[f32; 3]> = reader.read_colors(0).unwrap().into_rgb_f32().collect();
+            assert_eq!(normals.len() as u64, p["vertex_count"].as_u64().unwrap());
+            for probe in p["probes"].as_array().unwrap() {
+                let v = probe["vertex"].as_u64().unwrap() as usize;
+                let at = format!("{} mesh {} vertex {v}", c["file"], p["mesh"]);
+                assert_eq!(normals[v].map(f32::to_bits), bits(&probe["normal"]), "{at}");
+                assert_eq!(colours[v].map(f32::to_bits), bits(&probe["colour"]), "{at}");
+            }
+        }
+        checked += 1;
+    }
+    assert!(checked >= 2, "{checked} scene entries");
 }
 
 #[test]

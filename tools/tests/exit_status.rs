@@ -182,3 +182,13 @@ fn bake_reports_a_missing_scene_as_io_error() {
     assert!(stderr.contains("missing.obj"), "{stderr}");
     assert!(!out.exists());
 }
+
+/// Values that clap cannot check alone (sizes, output kinds) are usage errors too.
+#[test]
+fn values_parsed_after_clap_are_usage_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let (code, _, stderr) =
+        common::hce(&["demo", "--size", "huge", "-o", dir.path().to_str().unwrap()]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("huge"), "{stderr}");
+}

@@ -160,7 +160,7 @@ fn reference_explains_bad_input() {
         "{err}"
     );
     let (code, _, err) = common::hce(&["reference", s(&plain), "--level", "0", "-o", "out.jpg"]);
-    assert_ne!(code, 0);
+    assert_eq!(code, 2, "{err}");
     assert!(err.contains(".exr"), "{err}");
     // Every multisample position needs a path; the counts are those with standard positions.
     let (code, _, err) = hce(&[

@@ -124,7 +124,7 @@ fn step(started: Instant, what: impl std::fmt::Display) {
 
 pub fn run(args: DemoArgs) -> Result<()> {
     let total = Instant::now();
-    let (width, height) = parse_demo_size(&args.size)?;
+    let (width, height) = parse_demo_size(&args.size).map_err(crate::exit::usage)?;
     let scene = args.scene;
     let (dir, default_dir) = match &args.output {
         Some(d) => (d.clone(), false),

@@ -99,21 +99,21 @@ struct Placed {
 }
 
 pub fn run(args: ReferenceArgs) -> Result<()> {
-    let format = output_format(&args.output)?;
+    use crate::exit::{usage, Usage};
+    let format = output_format(&args.output).map_err(usage)?;
     if let Some(m) = &args.mask {
-        if !matches!(output_format(m)?, Format::Png) {
-            bail!("{}: the mask must be a .png", m.display());
+        if !matches!(output_format(m).map_err(usage)?, Format::Png) {
+            bail!(Usage(format!("{}: the mask must be a .png", m.display())));
         }
     }
-    let (width, height) = parse_size(&args.size)?;
+    let (width, height) = parse_size(&args.size).map_err(usage)?;
     if args.samples < args.msaa {
-        return Err(crate::exit::Usage(format!(
+        bail!(Usage(format!(
             "--samples {} must be at least --msaa {}: every sample position needs a path",
             args.samples, args.msaa
-        ))
-        .into());
+        )));
     }
-    let choice = super::render::camera_choice(args.camera.as_deref())?;
+    let choice = super::render::camera_choice(args.camera.as_deref()).map_err(usage)?;
     let asset = match Asset::open(&args.file) {
         Ok(a) => a,
         Err(e @ AssetError::NotBaked { .. }) => {
