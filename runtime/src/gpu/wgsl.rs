@@ -198,11 +198,16 @@ mod tests {
         let lp = parse("loop", &loop_source());
         let (size, members) = wgsl_struct(&lp, "Params");
         assert_eq!(size as usize, size_of::<LoopParams>());
-        // The Rust twin holds the 14 section offsets as one array, from `tri_off` on.
+        // The Rust twin holds the section offsets as one array, from `tri_off` to
+        // `slot_split_off` (the split's, SPEC.md F.5, last).
         assert_eq!(at(&members, "tri_off"), offset_of!(LoopParams, offsets));
         assert_eq!(
-            at(&members, "vertex_corners_off"),
+            at(&members, "slot_split_off"),
             offset_of!(LoopParams, offsets) + 4 * (super::super::loop_kernel::SECTIONS - 1)
+        );
+        assert_eq!(
+            at(&members, "split_copies"),
+            offset_of!(LoopParams, split_copies)
         );
         assert_eq!(at(&members, "ring_cap"), offset_of!(LoopParams, ring_cap));
         assert_eq!(at(&members, "exact"), offset_of!(LoopParams, exact));

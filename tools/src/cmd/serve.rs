@@ -71,6 +71,7 @@ const EMBEDDED: &[Embedded] = embed! {
     "/runtime/src/gpu/loop_normals.wgsl" => "runtime/src/gpu/loop_normals.wgsl",
     "/runtime/src/gpu/loop_workgroup.wgsl" => "runtime/src/gpu/loop_workgroup.wgsl",
     "/runtime/src/gpu/render.wgsl" => "runtime/src/gpu/render.wgsl",
+    "/runtime/src/gpu/render_resolve.wgsl" => "runtime/src/gpu/render_resolve.wgsl",
 };
 
 /// The longest request head read before the request is refused.
