@@ -159,10 +159,11 @@ fn screenshot_matches_hce_render() {
         assert!(out.status.success(), "{}", text(&out));
         let stdout = String::from_utf8_lossy(&out.stdout);
         assert!(stdout.contains("adapter: "), "{}", text(&out));
+        // One sample per pixel, as the window draws (hce render multisamples by default).
         let out = hce()
             .arg("render")
             .arg(file)
-            .args(["--size", &size, "--camera", CAMERA])
+            .args(["--size", &size, "--camera", CAMERA, "--msaa", "1"])
             .args(extra)
             .arg("-o")
             .arg(&still)

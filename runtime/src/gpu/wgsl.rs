@@ -199,15 +199,11 @@ mod tests {
         let (size, members) = wgsl_struct(&lp, "Params");
         assert_eq!(size as usize, size_of::<LoopParams>());
         // The Rust twin holds the section offsets as one array, from `tri_off` to
-        // `slot_split_off`.
+        // `slot_split_off` (the split's, SPEC.md F.5, last).
         assert_eq!(at(&members, "tri_off"), offset_of!(LoopParams, offsets));
         assert_eq!(
             at(&members, "slot_split_off"),
             offset_of!(LoopParams, offsets) + 4 * (super::super::loop_kernel::SECTIONS - 1)
-        );
-        assert_eq!(
-            at(&members, "split_base"),
-            offset_of!(LoopParams, split_base)
         );
         assert_eq!(
             at(&members, "split_copies"),
