@@ -348,8 +348,8 @@ fn octahedron(b: &mut Builder, c: Vec3, r: f32, n: u32) {
 /// Open: the floor's leaves next to the resting octahedron's point of contact are 6.7% off
 /// (too bright on one side, 5.7% too dark on another). A link from a larger receiver keeps one
 /// visibility fraction over all of it, and many small links that each pass the shadow rule add
-/// their errors with one sign next to a contact (BENCHMARKS.md, "Leaves against a path
-/// tracer"). Run it with `--ignored`.
+/// their errors with one sign next to a contact (BENCHMARKS.md, "Leaves of the bake"). Run
+/// it with `--ignored`.
 #[test]
 #[ignore = "open (issue 20): leaves next to a contact are 6.7% off"]
 fn objects_inside_a_closed_room() {
