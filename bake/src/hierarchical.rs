@@ -64,9 +64,15 @@ pub struct BakeParams {
     pub bf_epsilon: f32,
     /// Elements are not split below this fraction of the total scene area. Default 1e-5.
     pub min_area_fraction: f32,
-    /// Deepest element level below a coarse triangle, at most [`hce_format::MAX_TREE_DEPTH`] (the
-    /// element tree is the HCE tree). Default 4.
+    /// Deepest element level below a coarse triangle that the power-based refinement reaches,
+    /// at most [`hce_format::MAX_TREE_DEPTH`] (the element tree is the HCE tree). Default 4.
     pub max_level: u32,
+    /// Deepest level that the rules judged against a receiver's own radiance reach: where a
+    /// shadow edge crosses the receiver, or an occluder next to it shades it unevenly. At
+    /// least `max_level`, at most [`hce_format::MAX_TREE_DEPTH`]. Default 6: a shadow on the
+    /// floor of a room of two coarse triangles is resolved to a sixty-fourth of the room,
+    /// without refining the rest of the room as finely.
+    pub detail_level: u32,
     /// Jittered rays per link (and per element and light) for visibility; 0 disables
     /// occlusion. Default 8.
     pub visibility_rays: u32,
@@ -90,6 +96,7 @@ impl BakeParams {
             "bf_epsilon": self.bf_epsilon,
             "min_area_fraction": self.min_area_fraction,
             "max_level": self.max_level,
+            "detail_level": self.detail_level,
             "visibility_rays": self.visibility_rays,
             "tolerance": self.tolerance,
             "max_iterations": self.max_iterations,
@@ -106,6 +113,7 @@ impl Default for BakeParams {
             bf_epsilon: 1e-4,
             min_area_fraction: 1e-5,
             max_level: 4,
+            detail_level: 6,
             visibility_rays: 8,
             tolerance: 1e-4,
             max_iterations: 200,
@@ -274,6 +282,12 @@ impl Ctx<'_> {
         k.level < self.params.max_level.min(MAX_TREE_DEPTH) && area * 0.25 >= self.min_area
     }
 
+    /// Whether a rule judged against the receiver's own radiance may split `k`
+    /// ([`BakeParams::detail_level`]).
+    fn detail_splittable(&self, k: ElemKey, area: f32) -> bool {
+        k.level < self.params.detail_level.min(MAX_TREE_DEPTH) && area * 0.25 >= self.min_area
+    }
+
     fn reflectance(&self, k: ElemKey) -> Vec3 {
         let root = &self.roots[k.root as usize];
         let obj = &self.scene.objects[root.object];
@@ -359,7 +373,7 @@ impl Ctx<'_> {
         let mut stack = vec![(ElemKey::root(r), root_q)];
         while let Some((k, q)) = stack.pop() {
             let area = self.roots[r as usize].area / 4f32.powi(k.level as i32);
-            if self.scene.lights.is_empty() || !self.splittable(k, area) {
+            if self.scene.lights.is_empty() || !self.detail_splittable(k, area) {
                 out.push((k, q));
                 continue;
             }
@@ -373,7 +387,18 @@ impl Ctx<'_> {
                 }
             }
             let rho = lum(self.reflectance(k));
-            if var * rho * area * std::f32::consts::PI > eps_power {
+            // The power rule to `max_level`; below it, only an edge of the light across the
+            // element (a shadow's or a spot's, where a child differs from the whole by a
+            // quarter of the brightest) splits it further, down to `detail_level`.
+            let bright = kids
+                .iter()
+                .map(|(_, cq)| lum(cq[0]))
+                .fold(lum(q[0]), f32::max);
+            let power =
+                self.splittable(k, area) && var * rho * area * std::f32::consts::PI > eps_power;
+            let edge = var > DIRECT_EDGE * bright
+                && bright * rho * area * std::f32::consts::PI > 0.01 * eps_power;
+            if power || edge {
                 // Children in reverse so that they pop in order.
                 stack.extend(kids.into_iter().rev());
             } else {
@@ -505,7 +530,7 @@ impl Ctx<'_> {
         while let Some((recv, src)) = stack.pop() {
             let rt = self.elem_corners(recv);
             let r_area = root.area / 4f32.powi(recv.level as i32);
-            if self.splittable(recv, r_area)
+            if self.detail_splittable(recv, r_area)
                 && *near_shadow
                     .entry(recv)
                     .or_insert_with(|| self.near_shadow(recv))
@@ -764,7 +789,7 @@ impl Ctx<'_> {
             // gets. Judged against the light this link brings as well as the receiver's own
             // radiance, so that the first pass, before any light has arrived, resolves the
             // shadows the emitters cast.
-            if visible > 0.0 && visible < 1.0 && self.splittable(recv, r_area) {
+            if visible > 0.0 && visible < 1.0 && self.detail_splittable(recv, r_area) {
                 let gathered = lum(self.reflectance(recv))
                     * lum(self.src_radiance(trees, cl, src))
                     * (k[0] + k[nn] + k[2 * nn])
@@ -1284,6 +1309,10 @@ const NEAR_SHADOW_REACH: f32 = 10.0;
 /// what its visibility can put wrong.
 const FAINT_LINK: f32 = 0.005;
 
+/// Below `max_level`, direct light splits an element where a child's direct light differs from
+/// the element's by this fraction of the brightest of them (`Ctx::direct_tree`).
+const DIRECT_EDGE: f32 = 0.25;
+
 /// A cluster is one disc in a link's coefficient while its radius is below this fraction of
 /// its distance ([`Ctx::cluster_form_factor`]).
 const CLUSTER_DISC_OPENING: f32 = 0.2;
@@ -1412,6 +1441,12 @@ pub fn bake_with_progress(
         return Err(BakeError::InvalidParameter(format!(
             "max_level {} exceeds {MAX_TREE_DEPTH}, the deepest HCE tree a file may hold (SPEC.md B.2)",
             params.max_level
+        )));
+    }
+    if params.detail_level > MAX_TREE_DEPTH || params.detail_level < params.max_level {
+        return Err(BakeError::InvalidParameter(format!(
+            "detail_level {} must lie between max_level {} and {MAX_TREE_DEPTH}, the deepest HCE tree a file may hold (SPEC.md B.2)",
+            params.detail_level, params.max_level
         )));
     }
     if params.visibility_rays > MAX_VISIBILITY_RAYS {
