@@ -17,6 +17,7 @@ pub mod gltf;
 pub mod layout;
 pub mod model;
 pub mod read;
+pub mod rules;
 pub mod tree;
 pub mod validate;
 pub mod write;
@@ -26,5 +27,5 @@ pub use layout::{read_layout, Layout, SectionEntry, SectionType, MAJOR_VERSION, 
 pub use model::*;
 pub use read::{read, read_with, ReadOptions};
 pub use tree::{triangle_trees, BitWriter, Tree, TreeError, TreeShape, MAX_TREE_DEPTH};
-pub use validate::{validate, validate_bytes, Problem};
+pub use validate::{read_validated, validate, validate_bytes, Problem};
 pub use write::write;

@@ -56,8 +56,8 @@ use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
-use hce_format::gltf::{self as hgltf, GltfError, PrimitiveLink};
-use hce_format::{geometry_hash, Metadata, Object, ObjectKind, Problem, ReadError};
+use hce_format::gltf::{self as hgltf, GltfError, LinkFault, LinkNext, PrimitiveLink};
+use hce_format::{Metadata, Object, ObjectKind, Problem, ReadError};
 use hce_meshio::gltf_guard::{self, UriScope};
 use hce_meshio::scene_graph;
 use serde_json::Value;
@@ -570,15 +570,14 @@ impl Loader {
         }
     }
 
-    /// Reads (checksums included) and validates a container.
+    /// Reads and validates a container in one pass ([`hce_format::read_validated`]: every
+    /// checksum, the padding, every content rule and each object's geometry hash).
     fn container(&self, bytes: &[u8]) -> Result<hce_format::Container, AssetError> {
-        let container = hce_format::read(bytes).map_err(|error| AssetError::Container {
-            path: self.path.clone(),
-            error,
-        })?;
-        // From the bytes, not the model: zero padding between sections is checked too, so a
-        // flipped bit anywhere in the container is reported.
-        let problems = hce_format::validate_bytes(bytes);
+        let (container, problems) =
+            hce_format::read_validated(bytes).map_err(|error| AssetError::Container {
+                path: self.path.clone(),
+                error,
+            })?;
         if !problems.is_empty() {
             return Err(AssetError::Invalid {
                 path: self.path.clone(),
@@ -588,7 +587,8 @@ impl Loader {
         Ok(container)
     }
 
-    /// Checks the object's own geometry hash and computes what the renderer needs.
+    /// What the renderer needs of a validated object (its geometry hash was checked with the
+    /// rest of the container).
     fn finish_object(
         &self,
         index: u32,
@@ -596,17 +596,6 @@ impl Loader {
         instances: Vec<Instance>,
     ) -> Result<AssetObject, AssetError> {
         let mesh = &object.mesh;
-        let computed = geometry_hash(mesh.triangles.iter().map(|&v| mesh.position(v)));
-        if computed != object.geometry_hash {
-            return Err(AssetError::StaleGeometry {
-                path: self.path.clone(),
-                location: format!("objects[{index}].mesh"),
-                object: index,
-                name: object.name.clone(),
-                stored: object.geometry_hash,
-                computed,
-            });
-        }
         let points = mesh.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]);
         let bounds = Bounds::of_points(points).unwrap_or(Bounds {
             min: [0.0; 3],
@@ -636,17 +625,6 @@ impl Loader {
         })
     }
 
-    /// Either an error (strict) or a warning and `None` (lenient) for a bad primitive.
-    fn bad_link(&mut self, error: AssetError) -> Result<(), AssetError> {
-        if self.strict {
-            Err(error)
-        } else {
-            self.warnings
-                .push(format!("{error}; the primitive is ignored (SPEC.md 3.5)"));
-            Ok(())
-        }
-    }
-
     fn gltf(
         &mut self,
         source: &GltfSource,
@@ -660,8 +638,7 @@ impl Loader {
         let container = self.container(container_bytes)?;
         let json = &source.json;
         let links = hgltf::primitive_links(json).map_err(|e| self.gltf_err(e))?;
-        let geometries = hgltf::linked_geometries(json, &source.buffers, &links);
-        let good = self.check_links(&container, &links, geometries)?;
+        let good = self.check_links(&container, source, &links)?;
 
         // Objects of each mesh, in first-primitive order, from the links that passed.
         let mut mesh_objects: HashMap<usize, Vec<u32>> = HashMap::new();
@@ -715,89 +692,33 @@ impl Loader {
         Ok((container.metadata, objects, camera))
     }
 
-    /// SPEC.md 3.3 and 3.5 for every primitive link; returns the links that passed.
+    /// SPEC.md 3.3 and 3.5 for every primitive link ([`hgltf::check_links`], the validator's
+    /// rules), strict or lenient; returns the links that passed. An object linked from two
+    /// meshes is drawn as both link it (the validator reports it).
     fn check_links(
         &mut self,
         container: &hce_format::Container,
+        source: &GltfSource,
         links: &[PrimitiveLink],
-        geometries: Vec<Result<(u64, usize), GltfError>>,
     ) -> Result<Vec<PrimitiveLink>, AssetError> {
-        let mut good: Vec<PrimitiveLink> = Vec::new();
-        let mut ranges: Vec<(u32, u64, u64, String)> = Vec::new();
-        for (l, g) in links.iter().zip(geometries) {
-            let at = format!("meshes[{}].primitives[{}]", l.mesh, l.primitive);
-            let link_err = |message: String| AssetError::Link {
-                path: self.path.clone(),
-                location: at.clone(),
-                message,
-            };
-            let Some(object) = container.objects.get(l.object as usize) else {
-                let e = link_err(format!(
-                    "object {} is out of range; the container has {} objects",
-                    l.object,
-                    container.objects.len()
-                ));
-                self.bad_link(e)?;
-                continue;
-            };
-            let (hash, triangles) = match g {
-                Ok(g) => g,
-                Err(e) => {
-                    let e = link_err(format!("cannot read its geometry: {e}"));
-                    self.bad_link(e)?;
-                    continue;
-                }
-            };
-            let end = u64::from(l.first_triangle) + triangles as u64;
-            if end > object.triangles.len() as u64 {
-                let e = link_err(format!(
-                    "triangles {}..{end} exceed object {} '{}' with {} triangles",
-                    l.first_triangle,
-                    l.object,
-                    object.name,
-                    object.triangles.len()
-                ));
-                self.bad_link(e)?;
-                continue;
-            }
-            let whole = l.first_triangle == 0 && triangles == object.triangles.len();
-            let stored = if hash != l.geometry_hash {
-                Some(l.geometry_hash)
-            } else if whole && hash != object.geometry_hash {
-                Some(object.geometry_hash)
-            } else {
-                None
-            };
-            if let Some(stored) = stored {
-                let e = AssetError::StaleGeometry {
-                    path: self.path.clone(),
-                    location: at.clone(),
-                    object: l.object,
-                    name: object.name.clone(),
-                    stored,
-                    computed: hash,
-                };
-                self.bad_link(e)?;
-                continue;
-            }
-            ranges.push((l.object, u64::from(l.first_triangle), end, at));
-            good.push(l.clone());
+        let mut sink = LinkPolicy {
+            loader: self,
+            container,
+            error: None,
+        };
+        let good = hgltf::check_links(
+            &container.objects,
+            &source.json,
+            &source.buffers,
+            links,
+            &mut sink,
+        );
+        match (good, sink.error) {
+            (Ok(good), _) => Ok(good.into_iter().map(|i| links[i].clone()).collect()),
+            (Err(_), Some(e)) => Err(e),
+            // The policy stops only with an error; should that change, still no panic.
+            (Err(_), None) => Err(self.scene_err("meshes", "the link check stopped")),
         }
-        ranges.sort();
-        for w in ranges.windows(2) {
-            if w[0].0 == w[1].0 && w[1].1 < w[0].2 {
-                let e = AssetError::Link {
-                    path: self.path.clone(),
-                    location: w[1].3.clone(),
-                    message: format!(
-                        "its triangle range overlaps that of {} for object {} (SPEC.md 3.3)",
-                        w[0].3, w[0].0
-                    ),
-                };
-                self.bad_link(e)?;
-            }
-        }
-        Ok(good)
     }
 
     /// The camera of a node, or `None` (with a warning) for cameras that cannot be used.
@@ -850,6 +771,65 @@ impl Loader {
             fov_y_degrees: (yfov as f32).to_degrees(),
             aspect_ratio,
         }))
+    }
+}
+
+/// The loader's sink for link faults: with [`OpenOptions::strict`] the first is the error;
+/// without, each bad primitive is ignored with a warning (SPEC.md 3.5).
+struct LinkPolicy<'a> {
+    loader: &'a mut Loader,
+    container: &'a hce_format::Container,
+    error: Option<AssetError>,
+}
+
+impl hgltf::LinkSink for LinkPolicy<'_> {
+    fn fault(&mut self, link: &PrimitiveLink, at: &str, fault: LinkFault) -> LinkNext {
+        let path = self.loader.path.clone();
+        let link_err = |message: String| AssetError::Link {
+            path: path.clone(),
+            location: at.to_owned(),
+            message,
+        };
+        let error = match fault {
+            // Drawable: each mesh's nodes get an instance.
+            LinkFault::OtherMesh { .. } => return LinkNext::Continue,
+            LinkFault::ObjectOutOfRange { objects } => link_err(format!(
+                "object {} is out of range; the container has {objects} objects",
+                link.object
+            )),
+            LinkFault::Geometry(e) => link_err(format!("cannot read its geometry: {e}")),
+            LinkFault::Stale { computed, stored } | LinkFault::WholeObject { computed, stored } => {
+                AssetError::StaleGeometry {
+                    path,
+                    location: at.to_owned(),
+                    object: link.object,
+                    name: self.container.objects[link.object as usize].name.clone(),
+                    stored,
+                    computed,
+                }
+            }
+            LinkFault::Range {
+                end,
+                triangles,
+                name,
+            } => link_err(format!(
+                "triangles {}..{end} exceed object {} '{name}' with {triangles} triangles",
+                link.first_triangle, link.object
+            )),
+            LinkFault::Overlap { other } => link_err(format!(
+                "its triangle range overlaps that of {other} for object {} (SPEC.md 3.3)",
+                link.object
+            )),
+        };
+        if self.loader.strict {
+            self.error = Some(error);
+            LinkNext::Stop
+        } else {
+            self.loader
+                .warnings
+                .push(format!("{error}; the primitive is ignored (SPEC.md 3.5)"));
+            LinkNext::SkipLink
+        }
     }
 }
 
