@@ -2,7 +2,7 @@
 //! hce-format, against colours worked out by hand from their trees: the paper's nearest-normal
 //! rule and the smooth reconstruction (SPEC.md, Appendix G).
 
-use hce_format::{example, rgb9e5, tree::encode_tree, Object};
+use hce_format::{encode_tree, example, rgb9e5, Object};
 use hce_geometry::colour::{apply_baked_colours, apply_baked_colours_with, ColourError};
 use hce_geometry::lighting::{LightingTable, Reconstruction};
 use hce_geometry::subdivide::{subdivide, Refined};

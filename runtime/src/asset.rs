@@ -56,7 +56,7 @@ use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
-use hce_format::gltf::{self as hgltf, GltfError, LinkFault, LinkNext, PrimitiveLink};
+use hce_format::{GltfError, LinkFault, LinkNext, PrimitiveLink};
 use hce_format::{Metadata, Object, ObjectKind, Problem, ReadError};
 use hce_meshio::gltf_guard::{self, UriScope};
 use hce_meshio::scene_graph;
@@ -74,11 +74,11 @@ const PROBLEMS_SHOWN: usize = 5;
 pub enum AssetError {
     #[error("{path}: {error}")]
     Io { path: String, error: std::io::Error },
-    #[error("{path}: not a baked asset: expected a .glb or .gltf with {ext} or a .hce container", ext = hgltf::EXTENSION_NAME)]
+    #[error("{path}: not a baked asset: expected a .glb or .gltf with {ext} or a .hce container", ext = hce_format::EXTENSION_NAME)]
     UnknownFormat { path: String },
     #[error("{path}: {error}")]
     Gltf { path: String, error: GltfError },
-    #[error("{path}: the asset does not use {ext}; bake it with `hce bake` first", ext = hgltf::EXTENSION_NAME)]
+    #[error("{path}: the asset does not use {ext}; bake it with `hce bake` first", ext = hce_format::EXTENSION_NAME)]
     NotBaked { path: String },
     #[error("{path}: container: {error}")]
     Container { path: String, error: ReadError },
@@ -328,11 +328,11 @@ impl GltfSource {
         resolve: impl FnMut(&str) -> Result<Vec<u8>, String>,
     ) -> Result<Self, GltfError> {
         let glb = bytes.starts_with(b"glTF");
-        Self::load(hgltf::Asset::parse(bytes)?, glb, resolve)
+        Self::load(hce_format::GltfAsset::parse(bytes)?, glb, resolve)
     }
 
     fn load(
-        asset: hgltf::Asset,
+        asset: hce_format::GltfAsset,
         glb: bool,
         resolve: impl FnMut(&str) -> Result<Vec<u8>, String>,
     ) -> Result<Self, GltfError> {
@@ -356,8 +356,11 @@ impl GltfSource {
             path: shown(),
             error,
         })?;
-        let asset = hgltf::Asset::parse(&bytes).map_err(gltf_err)?;
-        if hgltf::root_link(&asset.json).map_err(gltf_err)?.is_none() {
+        let asset = hce_format::GltfAsset::parse(&bytes).map_err(gltf_err)?;
+        if hce_format::root_link(&asset.json)
+            .map_err(gltf_err)?
+            .is_none()
+        {
             return Ok(None);
         }
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
@@ -370,7 +373,7 @@ impl GltfSource {
     /// (SPEC.md 3.2), checked to lie inside its buffer; `None` when the asset does not use the
     /// extension.
     pub fn container(&self) -> Result<Option<&[u8]>, GltfError> {
-        hgltf::container_bytes(&self.json, &self.buffers)
+        hce_format::container_bytes(&self.json, &self.buffers)
     }
 }
 
@@ -637,7 +640,7 @@ impl Loader {
             })?;
         let container = self.container(container_bytes)?;
         let json = &source.json;
-        let links = hgltf::primitive_links(json).map_err(|e| self.gltf_err(e))?;
+        let links = hce_format::primitive_links(json).map_err(|e| self.gltf_err(e))?;
         let good = self.check_links(&container, source, &links)?;
 
         // Objects of each mesh, in first-primitive order, from the links that passed.
@@ -692,7 +695,7 @@ impl Loader {
         Ok((container.metadata, objects, camera))
     }
 
-    /// SPEC.md 3.3 and 3.5 for every primitive link ([`hgltf::check_links`], the validator's
+    /// SPEC.md 3.3 and 3.5 for every primitive link ([`hce_format::check_links`], the validator's
     /// rules), strict or lenient; returns the links that passed. An object linked from two
     /// meshes is drawn as both link it (the validator reports it).
     fn check_links(
@@ -706,7 +709,7 @@ impl Loader {
             container,
             error: None,
         };
-        let good = hgltf::check_links(
+        let good = hce_format::check_links(
             &container.objects,
             &source.json,
             &source.buffers,
@@ -782,7 +785,7 @@ struct LinkPolicy<'a> {
     error: Option<AssetError>,
 }
 
-impl hgltf::LinkSink for LinkPolicy<'_> {
+impl hce_format::LinkSink for LinkPolicy<'_> {
     fn fault(&mut self, link: &PrimitiveLink, at: &str, fault: LinkFault) -> LinkNext {
         let path = self.loader.path.clone();
         let link_err = |message: String| AssetError::Link {
@@ -873,10 +876,10 @@ mod tests {
 
     /// Edits the example GLB's JSON (its BIN chunk is kept).
     fn edited_glb(edit: impl FnOnce(&mut Value)) -> Vec<u8> {
-        let a = hgltf::Asset::from_glb(&example::triangle_glb()).unwrap();
+        let a = hce_format::GltfAsset::from_glb(&example::triangle_glb()).unwrap();
         let mut json = a.json;
         edit(&mut json);
-        hgltf::write_glb(&json, a.bin.as_deref().unwrap_or(&[])).unwrap()
+        hce_format::write_glb(&json, a.bin.as_deref().unwrap_or(&[])).unwrap()
     }
 
     #[test]
@@ -908,10 +911,10 @@ mod tests {
     #[test]
     fn edited_mesh_is_stale_unless_lenient() {
         // Move one vertex of the primitive: its hash no longer matches the baked one.
-        let a = hgltf::Asset::from_glb(&example::triangle_glb()).unwrap();
+        let a = hce_format::GltfAsset::from_glb(&example::triangle_glb()).unwrap();
         let mut bin = a.bin.unwrap();
         bin[12..16].copy_from_slice(&0.5f32.to_le_bytes());
-        let glb = hgltf::write_glb(&a.json, &bin).unwrap();
+        let glb = hce_format::write_glb(&a.json, &bin).unwrap();
         let e = open_glb(&glb, &OpenOptions::default()).unwrap_err();
         assert!(
             matches!(e, AssetError::StaleGeometry { object: 0, .. }),

@@ -295,7 +295,8 @@ fn gpu_flat_refinement_matches_cpu_on_real_meshes() {
     let Some(ctx) = context_or_skip("gpu_flat_refinement_matches_cpu_on_real_meshes") else {
         return;
     };
-    use hce_meshio::plain::{load_plain_mesh, to_flat_object};
+    use hce_meshio::plain::load_plain_mesh;
+    use hce_runtime::plain::to_flat_object;
     for name in ["teapot.obj", "suzanne.obj"] {
         let path = std::path::Path::new(&dir).join(name);
         let plain = load_plain_mesh(&path).unwrap();

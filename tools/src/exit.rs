@@ -40,7 +40,9 @@ impl From<Status> for ExitCode {
 #[error("{0}")]
 pub struct Usage(pub String);
 
-/// `e`, a bad argument found by a parser outside clap, as a [`Usage`] error.
+/// `e`, a bad argument found by a parser outside clap, as a [`Usage`] error. (Only the GPU
+/// commands have such arguments.)
+#[cfg_attr(not(feature = "gpu"), allow(dead_code))]
 pub fn usage(e: anyhow::Error) -> anyhow::Error {
     Usage(format!("{e:#}")).into()
 }
@@ -132,11 +134,10 @@ fn is_io(c: &(dyn std::error::Error + 'static)) -> bool {
 /// Bytes were read but are not acceptable input.
 fn is_invalid_input(c: &(dyn std::error::Error + 'static)) -> bool {
     c.is::<hce_meshio::ImportError>()
-        || c.is::<hce_bake::import::ImportError>()
         || c.is::<hce_bake::BakeError>()
         || c.is::<hce_geometry::TopologyError>()
         || c.is::<hce_format::ReadError>()
-        || c.is::<hce_format::gltf::GltfError>()
+        || c.is::<hce_format::GltfError>()
         || c.is::<hce_runtime::AssetError>()
         || c.is::<crate::cmd::compare::InvalidImage>()
 }

@@ -80,7 +80,7 @@ fn import_checked(
     let mut warnings = Vec::new();
 
     for ext in document.extensions_used() {
-        if ext == hce_format::gltf::EXTENSION_NAME {
+        if ext == hce_format::EXTENSION_NAME {
             warnings.push(format!(
                 "{ext}: the input already carries baked lighting; it is ignored and replaced"
             ));

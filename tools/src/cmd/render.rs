@@ -14,7 +14,7 @@
 //! PNG output is tone-mapped: exposure `2^--exposure`, the ACES filmic fit of Narkowicz (2016),
 //! then sRGB encoding ([`hce_runtime::gpu::tone_map_aces`]). EXR output is the linear radiance.
 
-// Without the GPU the command only explains how to get it; its helpers stay compiled and tested.
+// Without the GPU there is no `hce render`; its argument helpers stay compiled and tested.
 #![cfg_attr(not(feature = "gpu"), allow(dead_code))]
 
 use std::path::{Path, PathBuf};
@@ -208,11 +208,6 @@ pub fn write_exr(path: &Path, width: u32, height: u32, rgba: &[f32]) -> Result<(
         .with_context(|| format!("writing {}", path.display()))
 }
 
-#[cfg(not(feature = "gpu"))]
-pub fn run(_args: RenderArgs) -> Result<()> {
-    bail!("this `hce` was built without the `gpu` feature; rebuild with default features to render")
-}
-
 /// The camera `--camera` asks for.
 #[cfg(feature = "gpu")]
 pub fn camera_choice(arg: Option<&str>) -> Result<hce_runtime::gpu::CameraChoice> {
@@ -385,7 +380,7 @@ pub fn plain_object(file: &Path) -> Result<hce_format::Object> {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let (object, dropped) = plain_mesh::to_flat_object(&name, &mesh);
+    let (object, dropped) = hce_runtime::plain::to_flat_object(&name, &mesh);
     if dropped > 0 {
         eprintln!("note: {dropped} degenerate triangles dropped after welding equal positions");
     }

@@ -213,9 +213,10 @@ fn run_baked(args: &SubdivideArgs, input: Baked) -> Result<()> {
         }
         write_merged(args, &refined)?;
     } else {
+        let objects: Vec<&hce_format::Object> = asset.objects.iter().map(|o| &o.object).collect();
         write_refined_scene(
             &args.output,
-            &asset,
+            &objects,
             gltf.as_ref().map(|g| (&g.json, g.buffers.as_slice())),
             &refined,
         )
