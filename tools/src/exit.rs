@@ -110,6 +110,11 @@ fn decisive(c: &(dyn std::error::Error + 'static)) -> Option<Status> {
     if let Some(e) = c.downcast_ref::<hce_geometry::SubdivError>() {
         return Some(subdiv_status(e));
     }
+    // `hce render --level 7` on a multiresolution object: the level is the caller's argument.
+    #[cfg(feature = "gpu")]
+    if let Some(hce_runtime::gpu::GpuError::LevelTooHigh { .. }) = c.downcast_ref() {
+        return Some(Status::Usage);
+    }
     if let Some(e) = c.downcast_ref::<RefineError>() {
         return Some(match e {
             RefineError::Subdiv(s) => subdiv_status(s),
