@@ -1,7 +1,8 @@
 //! The rules of SPEC.md Appendix C on one object's tables, each written once. A rule reports
 //! what it finds to a [`Sink`] chosen by its caller:
 //!
-//! * the validator ([`crate::validate`]) collects every problem with its location and goes on;
+//! * the validator ([`crate::validate_bytes`]) collects every problem with its location and
+//!   goes on;
 //! * the guard of the code that indexes the tables (`hce_geometry::tables`) keeps the first
 //!   problem and stops ([`first_problem`]), so that a malformed table is an error and never an
 //!   out-of-bounds read.
