@@ -162,11 +162,7 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
             Some(path) => {
                 let input = hce_meshio::load_mesh(path)?;
                 let welded = hce_geometry::weld(&input.positions, 0.0);
-                let tris: Vec<[u32; 3]> = input
-                    .triangles
-                    .iter()
-                    .map(|t| t.map(|i| welded.input_to_welded[i as usize]))
-                    .collect();
+                let tris = welded.triangles(&input.triangles);
                 (welded.positions, tris, input.corner_normals)
             }
             None => {

@@ -79,11 +79,7 @@ pub fn run(mut args: SubdivideArgs) -> Result<()> {
     let input = hce_meshio::load_mesh(&args.input)?;
     let t1 = Instant::now();
     let welded = hce_geometry::weld(&input.positions, args.weld_tolerance);
-    let tris: Vec<[u32; 3]> = input
-        .triangles
-        .iter()
-        .map(|t| t.map(|i| welded.input_to_welded[i as usize]))
-        .collect();
+    let tris = welded.triangles(&input.triangles);
     let t2 = Instant::now();
     let config = TopologyConfig {
         creases: args.creases,
