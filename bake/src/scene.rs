@@ -109,22 +109,8 @@ impl SolverObject {
 /// The kind of a punctual light (KHR_lights_punctual), as the importer reads it.
 pub use hce_meshio::scene::LightKind;
 
-/// A punctual light source.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PunctualLight {
-    pub name: String,
-    pub kind: LightKind,
-    /// World-space position (ignored for directional lights).
-    pub position: [f32; 3],
-    /// World-space direction the light travels (spot axis / directional), need not be unit.
-    pub direction: [f32; 3],
-    /// Linear RGB colour multiplying `intensity`.
-    pub color: [f32; 3],
-    /// Candela (point, spot) or lux (directional).
-    pub intensity: f32,
-    /// glTF `range`: beyond it the light contributes nothing; `None` is infinite.
-    pub range: Option<f32>,
-}
+/// A punctual light source, as the importer reads it.
+pub use hce_meshio::scene::PunctualLight;
 
 /// Everything the solver needs.
 #[derive(Clone, Debug, Default)]

@@ -182,7 +182,7 @@ fn write_scene(path: &Path) {
          "extensions": {"KHR_lights_punctual": {"light": 0}}}
     ]);
     json["buffers"] = json!([{"byteLength": bin.len()}]);
-    let glb = hce_format::gltf::write_glb(&json, &bin).unwrap();
+    let glb = hce_format::write_glb(&json, &bin).unwrap();
     std::fs::write(path, glb).unwrap();
 }
 

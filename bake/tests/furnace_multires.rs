@@ -67,7 +67,7 @@ fn write_scene(path: &Path) {
             {"bufferView": 1, "componentType": 5125, "count": 36, "type": "SCALAR"}
         ]
     });
-    let glb = hce_format::gltf::write_glb(&json, &bin).unwrap();
+    let glb = hce_format::write_glb(&json, &bin).unwrap();
     std::fs::write(path, glb).unwrap();
 }
 

@@ -257,7 +257,7 @@ type Target = (&'static str, fn(&[u8]), Vec<Vec<u8>>);
 
 fn seeds() -> Vec<Target> {
     let cornell = sample("cornell-box.glb");
-    let asset = hce_format::gltf::Asset::parse(&cornell).unwrap();
+    let asset = hce_format::GltfAsset::parse(&cornell).unwrap();
     let cornell_json = serde_json::to_vec(&asset.json).unwrap();
     let cornell_bin = asset.bin.clone().unwrap();
     let obj_mtl = [OBJ.as_bytes(), &[0], MTL.as_bytes()].concat();
@@ -335,7 +335,7 @@ fn seeds_are_accepted_and_mutations_never_panic() {
             let input = if name == "import_gltf" && seed.starts_with(b"glTF") {
                 // Mutate the JSON chunk of a GLB and wrap it again, so that the damage gets
                 // past the container and into the glTF.
-                let asset = hce_format::gltf::Asset::parse(seed).unwrap();
+                let asset = hce_format::GltfAsset::parse(seed).unwrap();
                 let json = serde_json::to_vec(&asset.json).unwrap();
                 glb(
                     &mutate(&mut rng, &json),

@@ -47,7 +47,7 @@ fn mutated_samples_never_panic() {
     let glb =
         std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("../samples/cornell-box.glb"))
             .unwrap();
-    let asset = hce_format::gltf::Asset::parse(&glb).unwrap();
+    let asset = hce_format::GltfAsset::parse(&glb).unwrap();
     let bin = asset.bin.clone().unwrap();
     let mut paths = Vec::new();
     number_paths(&asset.json, &mut Vec::new(), &mut paths);
@@ -96,7 +96,7 @@ fn mutated_samples_never_panic() {
                 Value::from(new)
             };
         }
-        let bytes = hce_format::gltf::write_glb(&json, &bin).unwrap();
+        let bytes = hce_format::write_glb(&json, &bin).unwrap();
         std::fs::write(&file, &bytes).unwrap();
         match import_scene(&file, &ImportOptions::default()) {
             Ok(scene) => {

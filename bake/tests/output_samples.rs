@@ -6,8 +6,8 @@
 
 use hce_bake::import::{import_scene, ImportOptions, ImportedScene};
 use hce_bake::output::{bake_gltf, write_baked_gltf, ObjectLink, OutputError};
-use hce_format::gltf::{container_bytes, primitive_geometry, primitive_links, Asset};
 use hce_format::*;
+use hce_format::{container_bytes, primitive_geometry, primitive_links, GltfAsset as Asset};
 use std::path::{Path, PathBuf};
 
 fn sample(name: &str) -> PathBuf {
@@ -151,10 +151,7 @@ fn check_baked(
     let buffers = asset
         .buffers(|_| Err("no external buffers".into()))
         .unwrap();
-    let view = hce_format::gltf::root_link(json)
-        .unwrap()
-        .unwrap()
-        .buffer_view;
+    let view = hce_format::root_link(json).unwrap().unwrap().buffer_view;
     assert_eq!(
         json["bufferViews"][view]["byteOffset"].as_u64().unwrap() % 256,
         0

@@ -685,90 +685,218 @@ pub fn validate_asset(json: &Value, buffers: &[Vec<u8>]) -> Vec<crate::Problem> 
     let Some(container) = container else {
         return p.finish();
     };
-    let geometries = linked_geometries(json, buffers, &links);
-    let mut ranges: Vec<(u32, u64, u64, String)> = Vec::new();
-    let mut mesh_of: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
-    for (l, g) in links.iter().zip(geometries) {
-        let at = format!("meshes[{}].primitives[{}]", l.mesh, l.primitive);
-        let Some(object) = container.objects.get(l.object as usize) else {
-            p.push(
-                format!("{at}.extensions.{EXTENSION_NAME}.object"),
+    let _ = check_links(
+        &container.objects,
+        json,
+        buffers,
+        &links,
+        &mut LinkProblems(&mut p),
+    );
+    p.finish()
+}
+
+/// The validator's sink for link faults: every one, located, and on to the next check.
+struct LinkProblems<'a>(&'a mut crate::validate::Problems);
+
+impl LinkSink for LinkProblems<'_> {
+    fn fault(&mut self, link: &PrimitiveLink, at: &str, fault: LinkFault) -> LinkNext {
+        let object_at = || format!("{at}.extensions.{EXTENSION_NAME}.object");
+        let (location, message) = match fault {
+            LinkFault::ObjectOutOfRange { objects } => (
+                object_at(),
                 format!(
-                    "object {} is out of range; the container has {} objects (SPEC.md 3.5)",
-                    l.object,
-                    container.objects.len()
+                    "object {} is out of range; the container has {objects} objects (SPEC.md 3.5)",
+                    link.object
                 ),
-            );
+            ),
+            LinkFault::OtherMesh { mesh } => (
+                object_at(),
+                format!(
+                    "object {} is already linked from meshes[{mesh}]; an object may be shared by primitives of one mesh only (instance the mesh instead) (SPEC.md 3.3)",
+                    link.object
+                ),
+            ),
+            LinkFault::Geometry(e) => (at.to_owned(), e.to_string()),
+            LinkFault::Stale { computed, stored } => (
+                at.to_owned(),
+                format!(
+                    "geometry hash {computed:016x} differs from the baked {stored:016x}: the mesh was edited after baking; bake it again"
+                ),
+            ),
+            LinkFault::WholeObject { computed, stored } => (
+                at.to_owned(),
+                format!(
+                    "geometryHash {computed:016x} covers the whole of object {} but differs from its geometry_hash {stored:016x} (SPEC.md 3.3)",
+                    link.object
+                ),
+            ),
+            LinkFault::Range { end, triangles, .. } => (
+                at.to_owned(),
+                format!(
+                    "triangles {}..{end} exceed object {}'s {triangles} triangles",
+                    link.first_triangle, link.object
+                ),
+            ),
+            LinkFault::Overlap { other } => (
+                at.to_owned(),
+                format!(
+                    "triangle range overlaps that of {other} for object {} (SPEC.md 3.3)",
+                    link.object
+                ),
+            ),
+        };
+        self.0.push(location, message);
+        LinkNext::Continue
+    }
+}
+
+/// What is wrong with one primitive link (SPEC.md 3.3, 3.5), as [`check_links`] finds it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum LinkFault {
+    /// The link names no object of the container, which has `objects`.
+    ObjectOutOfRange { objects: usize },
+    /// The object is linked from primitives of another mesh, `mesh`, too.
+    OtherMesh { mesh: usize },
+    /// The primitive's triangles cannot be read.
+    Geometry(GltfError),
+    /// The primitive's triangles hash to `computed`, not to the link's `geometryHash`.
+    Stale { computed: u64, stored: u64 },
+    /// The primitive is the whole object and hashes to its `geometryHash`, but not to the
+    /// object's `geometry_hash`.
+    WholeObject { computed: u64, stored: u64 },
+    /// The primitive's triangles end at `end`, past the object's `triangles`.
+    Range {
+        end: u64,
+        triangles: usize,
+        name: String,
+    },
+    /// The primitive's triangle range overlaps that of the primitive at `other` (a location
+    /// such as `meshes[0].primitives[1]`), an earlier range of the same object.
+    Overlap { other: String },
+}
+
+impl LinkFault {
+    /// The hashes of a stale primitive: computed and stored.
+    pub fn stale_hashes(&self) -> Option<(u64, u64)> {
+        match *self {
+            LinkFault::Stale { computed, stored } | LinkFault::WholeObject { computed, stored } => {
+                Some((computed, stored))
+            }
+            _ => None,
+        }
+    }
+}
+
+/// What [`check_links`] does after a fault, as its sink decides.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LinkNext {
+    /// Go on checking this link.
+    Continue,
+    /// Leave this link out: no further check of it, and not among the links that passed.
+    SkipLink,
+    /// End the check.
+    Stop,
+}
+
+/// Where [`check_links`] reports faults: the validator collects them all, a loader rejects the
+/// asset at the first (strict) or ignores the primitive with a warning (lenient, SPEC.md 3.5).
+pub trait LinkSink {
+    /// A fault of `link`, whose location is `at` (`meshes[m].primitives[p]`).
+    fn fault(&mut self, link: &PrimitiveLink, at: &str, fault: LinkFault) -> LinkNext;
+}
+
+/// The check of every primitive link against the container's `objects`, written once (SPEC.md
+/// 3.3, 3.5): the object in range and linked from one mesh only, the primitive's triangles
+/// readable, hashing to its `geometryHash` (and to the object's hash when the primitive is the
+/// whole object), inside the object and not overlapping another primitive's range. Returns the
+/// indices into `links` of those the sink did not skip, or `Err(Stop)` when it stopped.
+pub fn check_links(
+    objects: &[crate::Object],
+    json: &Value,
+    buffers: &[Vec<u8>],
+    links: &[PrimitiveLink],
+    sink: &mut impl LinkSink,
+) -> Result<Vec<usize>, crate::rules::Stop> {
+    let geometries = linked_geometries(json, buffers, links);
+    let mut good = Vec::with_capacity(links.len());
+    // (object, first triangle, end, location, link index) of each range that was read.
+    let mut ranges: Vec<(u32, u64, u64, String, usize)> = Vec::new();
+    let mut mesh_of: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
+    'links: for (i, (l, g)) in links.iter().zip(geometries).enumerate() {
+        let at = format!("meshes[{}].primitives[{}]", l.mesh, l.primitive);
+        // Each fault: on, leave this link out, or stop.
+        macro_rules! fault {
+            ($f:expr) => {
+                match sink.fault(l, &at, $f) {
+                    LinkNext::Continue => {}
+                    LinkNext::SkipLink => continue 'links,
+                    LinkNext::Stop => return Err(crate::rules::Stop),
+                }
+            };
+        }
+        let Some(object) = objects.get(l.object as usize) else {
+            fault!(LinkFault::ObjectOutOfRange {
+                objects: objects.len()
+            });
             continue;
         };
         match mesh_of.entry(l.object) {
             std::collections::hash_map::Entry::Vacant(v) => {
                 v.insert(l.mesh);
             }
-            std::collections::hash_map::Entry::Occupied(o) if *o.get() != l.mesh => p.push(
-                format!("{at}.extensions.{EXTENSION_NAME}.object"),
-                format!(
-                    "object {} is already linked from meshes[{}]; an object may be shared by primitives of one mesh only (instance the mesh instead) (SPEC.md 3.3)",
-                    l.object,
-                    o.get()
-                ),
-            ),
+            std::collections::hash_map::Entry::Occupied(o) if *o.get() != l.mesh => {
+                fault!(LinkFault::OtherMesh { mesh: *o.get() })
+            }
             std::collections::hash_map::Entry::Occupied(_) => {}
         }
         let (hash, triangles) = match g {
             Ok(g) => g,
             Err(e) => {
-                p.push(at, e.to_string());
+                fault!(LinkFault::Geometry(e));
                 continue;
             }
         };
         if hash != l.geometry_hash {
-            p.push(
-                at.clone(),
-                format!(
-                    "geometry hash {hash:016x} differs from the baked {:016x}: the mesh was edited after baking; bake it again",
-                    l.geometry_hash
-                ),
-            );
+            fault!(LinkFault::Stale {
+                computed: hash,
+                stored: l.geometry_hash
+            });
         } else if l.first_triangle == 0
             && triangles == object.triangles.len()
             && hash != object.geometry_hash
         {
-            p.push(
-                at.clone(),
-                format!(
-                    "geometryHash {hash:016x} covers the whole of object {} but differs from its geometry_hash {:016x} (SPEC.md 3.3)",
-                    l.object, object.geometry_hash
-                ),
-            );
+            fault!(LinkFault::WholeObject {
+                computed: hash,
+                stored: object.geometry_hash
+            });
         }
         let end = u64::from(l.first_triangle) + triangles as u64;
         if end > object.triangles.len() as u64 {
-            p.push(
-                at.clone(),
-                format!(
-                    "triangles {}..{end} exceed object {}'s {} triangles",
-                    l.first_triangle,
-                    l.object,
-                    object.triangles.len()
-                ),
-            );
+            fault!(LinkFault::Range {
+                end,
+                triangles: object.triangles.len(),
+                name: object.name.clone(),
+            });
         }
-        ranges.push((l.object, u64::from(l.first_triangle), end, at));
+        ranges.push((l.object, u64::from(l.first_triangle), end, at, i));
+        good.push(i);
     }
     ranges.sort();
+    let mut skipped = vec![false; links.len()];
     for w in ranges.windows(2) {
         if w[0].0 == w[1].0 && w[1].1 < w[0].2 {
-            p.push(
-                w[1].3.clone(),
-                format!(
-                    "triangle range overlaps that of {} for object {} (SPEC.md 3.3)",
-                    w[0].3, w[0].0
-                ),
-            );
+            let fault = LinkFault::Overlap {
+                other: w[0].3.clone(),
+            };
+            match sink.fault(&links[w[1].4], &w[1].3, fault) {
+                LinkNext::Continue => {}
+                LinkNext::SkipLink => skipped[w[1].4] = true,
+                LinkNext::Stop => return Err(crate::rules::Stop),
+            }
         }
     }
-    p.finish()
+    good.retain(|&i| !skipped[i]);
+    Ok(good)
 }
 
 fn push_error(p: &mut crate::validate::Problems, e: GltfError) {

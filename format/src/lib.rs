@@ -11,20 +11,43 @@
 //! disk through `hce_meshio::write_atomic`.
 #![forbid(unsafe_code)]
 
-pub mod error;
+// The modules are private: what the crate offers is the flat list below. Two namespaces stay
+// public: `rules` (each Appendix C rule once, named after the rule, for the validator and the
+// refinement guard) and, behind feature `testing`, `example` (small valid files for tests).
+mod error;
+#[cfg(any(test, feature = "testing"))]
 pub mod example;
-pub mod gltf;
-pub mod layout;
-pub mod model;
-pub mod read;
-pub mod tree;
-pub mod validate;
-pub mod write;
+mod gltf;
+mod layout;
+mod model;
+mod read;
+pub mod rules;
+mod tree;
+mod validate;
+mod write;
 
 pub use error::{ReadError, WriteError};
-pub use layout::{read_layout, Layout, SectionEntry, SectionType, MAJOR_VERSION, MINOR_VERSION};
-pub use model::*;
-pub use read::{read, read_with, ReadOptions};
-pub use tree::{triangle_trees, BitWriter, Tree, TreeError, TreeShape, MAX_TREE_DEPTH};
-pub use validate::{validate, validate_bytes, Problem};
+pub use gltf::{
+    buffer_view_bytes, check_links, container_bytes, decode_base64, embed_container, hash_hex,
+    link_primitive, linked_geometries, primitive_geometry, primitive_links, root_link,
+    scan_primitive_links, validate_asset, write_glb, Asset as GltfAsset, GltfError, LinkFault,
+    LinkNext, LinkSink, PrimitiveLink, RootLink, EXTENSION_NAME,
+};
+pub use layout::{
+    read_layout, Header, Layout, SectionEntry, SectionType, DIRECTORY_ENTRY_LEN, FILE_LEVEL,
+    HEADER_LEN, IDENTIFIER, MAJOR_VERSION, MINOR_VERSION, OBJECT_RECORD_LEN, SECTION_ALIGNMENT,
+};
+pub use model::{
+    geometry_hash, rgb9e5, Container, ControlMesh, Metadata, Object, ObjectKind, TriangleRecord,
+    NO_NEIGHBOUR, RULE_CORNER, RULE_CREASE, RULE_SMOOTH, SPOKE_BOUNDARY, SPOKE_SHARP,
+    VERTEX_BOUNDARY, VERTEX_RULE_MASK, VERTEX_RULE_SHIFT,
+};
+pub use read::{
+    expected_length, read, read_metadata, read_object_table, read_with, ObjectRecord, ReadOptions,
+};
+pub use tree::{
+    check_flags, decode_shape, encode_tree, triangle_trees, BitWriter, NodeInfo, Tree, TreeError,
+    TreeShape, MAX_NODES, MAX_TREE_DEPTH,
+};
+pub use validate::{read_validated, validate, validate_bytes, Problem, MAX_PROBLEMS};
 pub use write::write;

@@ -5,6 +5,7 @@
 use crate::layout::*;
 use crate::model::*;
 use crate::read::{read_from_layout, ReadOptions};
+use crate::rules::{self, ring_range, Flow, Sink, Stop, Table};
 use std::fmt;
 
 /// Problems stored before the rest are only counted.
@@ -61,15 +62,32 @@ pub fn validate_bytes(bytes: &[u8]) -> Vec<Problem> {
     p.finish()
 }
 
+/// Reads and validates a container in one pass over its bytes, for a loader that needs the
+/// model and may only use a valid one: every checksum computed once, the content validated once
+/// (the geometry hashes included). `Err` when the structure cannot be read at all; otherwise the
+/// container and its problems ([`validate_bytes`]'s list, empty when the file is valid).
+pub fn read_validated(bytes: &[u8]) -> Result<(Container, Vec<Problem>), crate::ReadError> {
+    let mut p = Problems::default();
+    let container = read_checked(bytes, &mut p)?;
+    Ok((container, p.finish()))
+}
+
 /// [`validate_bytes`] into `p`; returns the container when its content could be read.
 pub(crate) fn validate_bytes_into(bytes: &[u8], p: &mut Problems) -> Option<Container> {
-    let layout = match read_layout(bytes) {
-        Ok(l) => l,
+    match read_checked(bytes, p) {
+        Ok(c) => Some(c),
         Err(e) => {
             p.push("file", e.to_string());
-            return None;
+            None
         }
-    };
+    }
+}
+
+/// The layout, checksums, padding and trailing bytes into `p`, then the content read (checksums
+/// not verified twice) and validated into `p`. `Err` when the layout or the content cannot be
+/// read.
+fn read_checked(bytes: &[u8], p: &mut Problems) -> Result<Container, crate::ReadError> {
+    let layout = read_layout(bytes)?;
     for (i, s) in layout.sections.iter().enumerate() {
         let computed = s.computed_crc32(bytes);
         if computed != s.crc32 {
@@ -84,22 +102,15 @@ pub(crate) fn validate_bytes_into(bytes: &[u8], p: &mut Problems) -> Option<Cont
     }
     check_padding(bytes, &layout, p);
     check_trailing(&layout, p);
-    match read_from_layout(
+    let c = read_from_layout(
         bytes,
         &layout,
         &ReadOptions {
             verify_checksums: false,
         },
-    ) {
-        Ok(c) => {
-            validate_into(&c, p);
-            Some(c)
-        }
-        Err(e) => {
-            p.push("file", e.to_string());
-            None
-        }
-    }
+    )?;
+    validate_into(&c, p);
+    Ok(c)
 }
 
 fn check_padding(bytes: &[u8], layout: &Layout, p: &mut Problems) {
@@ -205,333 +216,73 @@ fn validate_geometry_hash(at: &str, o: &Object, p: &mut Problems) {
     }
 }
 
-fn valence_ok(m: &ControlMesh, v: usize) -> Option<(usize, usize)> {
-    let a = *m.ring_offsets.get(v)? as usize;
-    let b = *m.ring_offsets.get(v + 1)? as usize;
-    (a <= b && b <= m.ring.len()).then_some((a, b))
+/// The validator's sink: every problem of object `at`, located, and never a stop.
+struct ObjectProblems<'a> {
+    at: &'a str,
+    p: &'a mut Problems,
+}
+
+impl Sink for ObjectProblems<'_> {
+    fn report(&mut self, location: String, message: String) -> Flow {
+        self.p.push(format!("{}.{location}", self.at), message);
+        Ok(())
+    }
+}
+
+/// Runs a rule against the validator's sink, which never stops.
+fn go<T>(r: Result<T, Stop>) -> Option<T> {
+    r.ok()
 }
 
 fn validate_mesh(at: &str, m: &ControlMesh, p: &mut Problems) {
     let nv = m.positions.len() / 3;
     let nf = m.triangles.len() / 3;
-    if m.positions.len() % 3 != 0 {
-        p.push(
-            format!("{at}.mesh.positions"),
-            format!("length {} is not a multiple of 3", m.positions.len()),
-        );
-    }
-    if m.triangles.len() % 3 != 0 {
-        p.push(
-            format!("{at}.mesh.triangles"),
-            format!("length {} is not a multiple of 3", m.triangles.len()),
-        );
-    }
+    let s = &mut ObjectProblems { at, p };
+    go(rules::triples(m, s));
     if let Some(k) = m.positions.iter().position(|x| !x.is_finite()) {
-        p.push(
-            format!("{at}.mesh.positions[{}]", k / 3),
-            "coordinate is not finite",
-        );
+        go(s.report(
+            format!("mesh.positions[{}]", k / 3),
+            "coordinate is not finite".into(),
+        ));
     }
-    for t in 0..nf {
-        let tri = m.triangle(t);
-        if let Some(&v) = tri.iter().find(|&&v| v as usize >= nv) {
-            p.push(
-                format!("{at}.mesh.triangles[{t}]"),
-                format!("vertex index {v} is out of range ({nv} vertices)"),
-            );
-        } else if tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0] {
-            p.push(
-                format!("{at}.mesh.triangles[{t}]"),
-                format!("degenerate triangle {tri:?} repeats a vertex"),
-            );
-        }
-    }
-
-    // Rings (rule 2).
-    let mut rings_ok = true;
-    let check_len = |field: &str, len: usize, want: usize, what: &str, p: &mut Problems| {
-        if len != want {
-            p.push(
-                format!("{at}.mesh.{field}"),
-                format!("length {len}, expected {want} ({what})"),
-            );
-            false
-        } else {
-            true
-        }
-    };
-    rings_ok &= check_len(
-        "ring_offsets",
-        m.ring_offsets.len(),
-        nv + 1,
-        "vertices + 1",
-        p,
-    );
-    rings_ok &= check_len(
-        "spoke_flags",
-        m.spoke_flags.len(),
-        m.ring.len(),
-        "one per ring entry",
-        p,
-    );
-    let flags_ok = check_len(
-        "vertex_flags",
-        m.vertex_flags.len(),
-        nv,
-        "one per vertex",
-        p,
-    );
-    let cs_ok = check_len(
-        "corner_spokes",
-        m.corner_spokes.len(),
-        3 * nf,
-        "three per triangle",
-        p,
-    );
-    let nb_ok = check_len(
-        "neighbours",
-        m.neighbours.len(),
-        3 * nf,
-        "three per triangle",
-        p,
-    );
-    let ed_ok = check_len("edges", m.edges.len(), 3 * nf, "three per triangle", p);
+    let tri_ok: Vec<bool> = (0..nf)
+        .map(|t| go(rules::triangle_corners(m, t, s)).unwrap_or(false))
+        .collect();
+    let mut length = |table| go(rules::table_length(m, table, s)).unwrap_or(false);
+    let mut rings_ok = length(Table::RingOffsets);
+    rings_ok &= length(Table::SpokeFlags);
+    let flags_ok = length(Table::VertexFlags);
+    let cs_ok = length(Table::CornerSpokes);
+    let nb_ok = length(Table::Neighbours);
+    let ed_ok = length(Table::Edges);
     if rings_ok {
-        if m.ring_offsets[0] != 0 {
-            p.push(
-                format!("{at}.mesh.ring_offsets[0]"),
-                format!("is {}, must be 0", m.ring_offsets[0]),
-            );
-            rings_ok = false;
-        }
-        if let Some(v) = (0..nv).find(|&v| m.ring_offsets[v] > m.ring_offsets[v + 1]) {
-            p.push(
-                format!("{at}.mesh.ring_offsets[{v}]"),
-                "ring offsets decrease",
-            );
-            rings_ok = false;
-        }
-        if m.ring_offsets[nv] as usize != m.ring.len() {
-            p.push(
-                format!("{at}.mesh.ring_offsets[{nv}]"),
-                format!(
-                    "is {}, must equal the ring length {}",
-                    m.ring_offsets[nv],
-                    m.ring.len()
-                ),
-            );
-            rings_ok = false;
-        }
+        rings_ok = go(rules::ring_offsets(m, s)).unwrap_or(false);
     }
     if rings_ok {
         for v in 0..nv {
-            let Some((a, b)) = valence_ok(m, v) else {
-                continue;
-            };
-            if b - a < 2 {
-                p.push(
-                    format!("{at}.mesh.vertices[{v}]"),
-                    format!(
-                        "valence {} < 2: the vertex is unused by any triangle or the ring is wrong",
-                        b - a
-                    ),
-                );
-            }
-            for s in a..b {
-                let w = m.ring[s];
-                if w as usize >= nv || w as usize == v {
-                    p.push(
-                        format!("{at}.mesh.ring[{s}]"),
-                        format!("spoke {w} of vertex {v} is out of range or the vertex itself"),
-                    );
-                }
-                let f = m.spoke_flags[s];
-                if f & !(SPOKE_SHARP | SPOKE_BOUNDARY) != 0 {
-                    p.push(
-                        format!("{at}.mesh.spoke_flags[{s}]"),
-                        format!("unknown bits in {f:#x}"),
-                    );
-                }
-                if f & SPOKE_BOUNDARY != 0 && f & SPOKE_SHARP == 0 {
-                    p.push(
-                        format!("{at}.mesh.spoke_flags[{s}]"),
-                        "boundary spoke is not marked sharp",
-                    );
-                }
-            }
-            if !flags_ok {
-                continue;
-            }
-            // Rule 3: boundary flag and vertex rule agree with the spokes.
-            let flags = m.vertex_flags[v];
-            let vat = || format!("{at}.mesh.vertex_flags[{v}]");
-            if flags & !(VERTEX_BOUNDARY | VERTEX_RULE_MASK) != 0 {
-                p.push(vat(), format!("unknown bits in {flags:#x}"));
-            }
-            let boundary_spokes: Vec<usize> = (a..b)
-                .filter(|&s| m.spoke_flags[s] & SPOKE_BOUNDARY != 0)
-                .collect();
-            let is_boundary = flags & VERTEX_BOUNDARY != 0;
-            if is_boundary {
-                if b - a < 2 || boundary_spokes != [a, b - 1] {
-                    p.push(vat(), "boundary vertex whose first and last spokes are not exactly its boundary spokes");
-                }
-            } else if !boundary_spokes.is_empty() {
-                p.push(vat(), "interior vertex with a boundary spoke");
-            }
-            let sharp = (a..b)
-                .filter(|&s| m.spoke_flags[s] & SPOKE_SHARP != 0)
-                .count();
-            let expected = if (is_boundary && b - a == 2) || sharp >= 3 {
-                RULE_CORNER
-            } else if sharp == 2 {
-                RULE_CREASE
-            } else {
-                RULE_SMOOTH
-            };
-            let rule = (flags & VERTEX_RULE_MASK) >> VERTEX_RULE_SHIFT;
-            if rule != expected {
-                p.push(vat(), format!("rule {rule} but {sharp} sharp spokes (valence {}) make it {expected} (SPEC.md C.3)", b - a));
+            go(rules::vertex_ring(m, v, s));
+            if flags_ok {
+                go(rules::vertex_rule(m, v, s));
             }
         }
+        check_spoke_pairs(at, m, s.p);
     }
-
-    if rings_ok {
-        check_spoke_pairs(at, m, p);
-    }
-
-    let tri_ok = |t: usize| m.triangle(t).iter().all(|&v| (v as usize) < nv);
-    // Rule 4: corner spokes.
     if cs_ok && rings_ok && flags_ok {
-        for t in (0..nf).filter(|&t| tri_ok(t)) {
-            let tri = m.triangle(t);
+        for t in (0..nf).filter(|&t| tri_ok[t]) {
             for c in 0..3 {
-                let v = tri[c] as usize;
-                let Some((a, b)) = valence_ok(m, v) else {
-                    continue;
-                };
-                let val = b - a;
-                let k = m.corner_spokes[3 * t + c] as usize;
-                let cat = || format!("{at}.mesh.corner_spokes[{}]", 3 * t + c);
-                if k >= val {
-                    p.push(
-                        cat(),
-                        format!("spoke {k} is out of vertex {v}'s ring of {val}"),
-                    );
-                    continue;
-                }
-                let next = if k + 1 < val {
-                    Some(k + 1)
-                } else if m.vertex_flags[v] & VERTEX_BOUNDARY == 0 {
-                    Some(0)
-                } else {
-                    None
-                };
-                let (v1, v2) = (tri[(c + 1) % 3], tri[(c + 2) % 3]);
-                if m.ring[a + k] != v1 {
-                    p.push(
-                        cat(),
-                        format!(
-                            "ring of vertex {v} has {} at position {k}, triangle {t} needs {v1}",
-                            m.ring[a + k]
-                        ),
-                    );
-                } else if next.map(|n| m.ring[a + n]) != Some(v2) {
-                    p.push(cat(), format!("the spoke after position {k} in vertex {v}'s ring is not {v2}: the ring is not counter-clockwise or misses triangle {t}"));
-                }
+                go(rules::corner_spoke(m, t, c, s));
             }
         }
     }
-
-    // Rule 5: neighbours.
     if nb_ok {
-        for t in (0..nf).filter(|&t| tri_ok(t)) {
-            let tri = m.triangle(t);
+        for t in (0..nf).filter(|&t| tri_ok[t]) {
             for e in 0..3 {
-                let n = m.neighbours[3 * t + e];
-                let nat = || format!("{at}.mesh.neighbours[{}]", 3 * t + e);
-                let (va, vb) = (tri[e], tri[(e + 1) % 3]);
-                if n == NO_NEIGHBOUR {
-                    if cs_ok && rings_ok {
-                        if let Some((a, b)) = valence_ok(m, va as usize) {
-                            let k = m.corner_spokes[3 * t + e] as usize;
-                            if a + k < b && m.spoke_flags[a + k] & SPOKE_BOUNDARY == 0 {
-                                p.push(nat(), format!("edge ({va}, {vb}) has no neighbour but its spoke is not marked boundary"));
-                            }
-                        }
-                    }
-                    continue;
-                }
-                if n as usize >= nf {
-                    p.push(
-                        nat(),
-                        format!("neighbour {n} is out of range ({nf} triangles)"),
-                    );
-                    continue;
-                }
-                let u = n as usize;
-                let ut = m.triangle(u);
-                match (0..3).find(|&f| ut[f] == vb && ut[(f + 1) % 3] == va) {
-                    None => p.push(
-                        nat(),
-                        format!("triangle {u} does not have edge ({vb}, {va})"),
-                    ),
-                    Some(f) => {
-                        if m.neighbours[3 * u + f] != t as u32 {
-                            p.push(nat(), format!("triangle {u} does not name {t} as its neighbour across the shared edge"));
-                        }
-                        if ed_ok && m.edges[3 * u + f] != m.edges[3 * t + e] {
-                            p.push(
-                                format!("{at}.mesh.edges[{}]", 3 * t + e),
-                                format!(
-                                    "id {} differs from id {} of the same edge in triangle {u}",
-                                    m.edges[3 * t + e],
-                                    m.edges[3 * u + f]
-                                ),
-                            );
-                        }
-                    }
-                }
+                go(rules::neighbour(m, t, e, cs_ok && rings_ok, ed_ok, s));
             }
         }
     }
-
-    // Rule 6: edge ids dense in first-appearance order, interior twice, boundary once.
     if ed_ok {
-        let mut next: u32 = 0;
-        let mut seen = vec![0u8; 0];
-        for (i, &id) in m.edges.iter().enumerate() {
-            if id == next {
-                next += 1;
-                seen.push(1);
-            } else if id > next {
-                p.push(format!("{at}.mesh.edges[{i}]"), format!("id {id} skips ahead of {next}: ids must be numbered in order of first appearance"));
-            } else {
-                let s = &mut seen[id as usize];
-                *s = s.saturating_add(1);
-            }
-        }
-        if nb_ok {
-            for (i, &id) in m.edges.iter().enumerate() {
-                let Some(&count) = seen.get(id as usize) else {
-                    continue;
-                };
-                let want = if m.neighbours[i] == NO_NEIGHBOUR {
-                    1
-                } else {
-                    2
-                };
-                if count != want {
-                    p.push(
-                        format!("{at}.mesh.edges[{i}]"),
-                        format!(
-                            "id {id} appears {count} times, a {} edge's id appears {want}",
-                            if want == 1 { "boundary" } else { "interior" }
-                        ),
-                    );
-                }
-            }
-        }
+        go(rules::edge_ids(m, nb_ok, s));
     }
 }
 
@@ -542,7 +293,7 @@ fn check_spoke_pairs(at: &str, m: &ControlMesh, p: &mut Problems) {
     let mut spoke_of: std::collections::HashMap<(u32, u32), usize> =
         std::collections::HashMap::with_capacity(m.ring.len());
     for v in 0..nv {
-        let Some((a, b)) = valence_ok(m, v) else {
+        let Some((a, b)) = ring_range(m, v) else {
             continue;
         };
         for s in a..b {
@@ -550,7 +301,7 @@ fn check_spoke_pairs(at: &str, m: &ControlMesh, p: &mut Problems) {
         }
     }
     for v in 0..nv {
-        let Some((a, b)) = valence_ok(m, v) else {
+        let Some((a, b)) = ring_range(m, v) else {
             continue;
         };
         for s in a..b {
@@ -594,88 +345,24 @@ fn check_spoke_pairs(at: &str, m: &ControlMesh, p: &mut Problems) {
 }
 
 fn validate_shading(at: &str, o: &Object, p: &mut Problems) {
-    let nf = o.mesh.triangles.len() / 3;
-    if o.triangles.len() != nf {
-        p.push(
-            format!("{at}.triangles"),
-            format!("{} records for {nf} mesh triangles", o.triangles.len()),
-        );
-    }
+    let s = &mut ObjectProblems { at, p };
+    go(rules::record_count(o, s));
     // Rule 8: normals.
     for (k, n) in o.normals.iter().enumerate() {
         let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
         if !len.is_finite() || (len - 1.0).abs() > 1e-3 {
-            p.push(
-                format!("{at}.normals[{k}]"),
+            go(s.report(
+                format!("normals[{k}]"),
                 format!("{n:?} has length {len}, not 1"),
-            );
+            ));
         }
     }
-    // Rule 9: bitstream words.
-    let words = o.bit_len.div_ceil(32);
-    if words != o.bits.len() as u64 {
-        p.push(
-            format!("{at}.bits"),
-            format!(
-                "{} words, but bit_len {} needs {words}",
-                o.bits.len(),
-                o.bit_len
-            ),
-        );
-    } else if o.bit_len % 32 != 0 {
-        if let Some(&last) = o.bits.last() {
-            if last >> (o.bit_len % 32) != 0 {
-                p.push(format!("{at}.bits"), "bits past bit_len are not zero");
-            }
-        }
-    }
+    go(rules::bitstream_words(o, s));
     // Rule 7: triangle records; trees decoded in linear time (see `triangle_trees`).
     let shapes = crate::tree::triangle_trees(o);
-    for (t, r) in o.triangles.iter().enumerate() {
-        let tat = || format!("{at}.triangles[{t}]");
-        if r.normal_count == 0 {
-            p.push(
-                tat(),
-                "normal_count is 0; every triangle has at least its geometric normal",
-            );
-        }
-        if o.kind == ObjectKind::Flat && r.normal_count > 1 {
-            p.push(
-                tat(),
-                format!(
-                    "flat objects have one normal per triangle, found {}",
-                    r.normal_count
-                ),
-            );
-        }
-        let n = u64::from(r.normal_count);
-        if u64::from(r.normal_start) + n > o.normals.len() as u64 {
-            p.push(
-                tat(),
-                format!(
-                    "normals {}..{} run past the {} normals",
-                    r.normal_start,
-                    u64::from(r.normal_start) + n,
-                    o.normals.len()
-                ),
-            );
-        }
-        match &shapes[t] {
-            Ok(shape) => {
-                let end = u64::from(r.colour_start) + u64::from(shape.node_count) * n;
-                if end > o.colours.len() as u64 {
-                    p.push(
-                        tat(),
-                        format!(
-                            "colours {}..{end} for {} nodes x {n} normals run past the {} colours",
-                            r.colour_start,
-                            shape.node_count,
-                            o.colours.len()
-                        ),
-                    );
-                }
-            }
-            Err(e) => p.push(tat(), e.to_string()),
-        }
+    for (t, shape) in shapes.iter().enumerate() {
+        go(rules::record_normal_count(o, t, s));
+        go(rules::flat_record(o, t, s));
+        go(rules::record_ranges(o, t, shape, s));
     }
 }

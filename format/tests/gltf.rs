@@ -1,7 +1,8 @@
 //! The glTF extension helpers: embed a container into a GLB, read it back, recompute hashes.
 
-use hce_format::gltf::*;
-use hce_format::{example, read};
+use hce_format::GltfAsset as Asset;
+use hce_format::*;
+
 use serde_json::json;
 
 fn triangle_glb() -> Vec<u8> {

@@ -4,8 +4,8 @@
 
 mod common;
 
-use hce_format::gltf::{validate_asset, Asset, EXTENSION_NAME};
 use hce_format::{example, validate_bytes, write, Container, Problem, SPOKE_SHARP};
+use hce_format::{validate_asset, GltfAsset as Asset, EXTENSION_NAME};
 use serde_json::{json, Value};
 
 fn problems_of(c: &Container) -> Vec<Problem> {

@@ -3,7 +3,7 @@
 //! or allocate beyond what the input justifies.
 #![no_main]
 
-use hce_format::gltf::{self, Asset};
+use hce_format::{container_bytes, linked_geometries, primitive_links, GltfAsset as Asset};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
@@ -13,10 +13,10 @@ fuzz_target!(|data: &[u8]| {
     let Ok(buffers) = asset.buffers(|_| Err("external files are not followed".into())) else {
         return;
     };
-    if let Ok(Some(bytes)) = gltf::container_bytes(&asset.json, &buffers) {
+    if let Ok(Some(bytes)) = container_bytes(&asset.json, &buffers) {
         let _ = hce_format::validate_bytes(bytes);
     }
-    if let Ok(links) = gltf::primitive_links(&asset.json) {
-        let _ = gltf::linked_geometries(&asset.json, &buffers, &links);
+    if let Ok(links) = primitive_links(&asset.json) {
+        let _ = linked_geometries(&asset.json, &buffers, &links);
     }
 });

@@ -38,11 +38,7 @@ fn bench(c: &mut Criterion) {
     let path = Path::new(&dir).join("stanford-bunny.obj");
     let input = hce_meshio::load_mesh(&path).unwrap();
     let w = hce_geometry::weld(&input.positions, 0.0);
-    let tris: Vec<[u32; 3]> = input
-        .triangles
-        .iter()
-        .map(|t| t.map(|i| w.input_to_welded[i as usize]))
-        .collect();
+    let tris = w.triangles(&input.triangles);
     let build = || {
         hce_geometry::topology::build_control_mesh(&w.positions, &tris, None, &Default::default())
             .unwrap()

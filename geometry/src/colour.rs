@@ -28,7 +28,7 @@
 //!   over a table of each leaf's colour for its triangle's geometric normal, without slopes:
 //!   classic radiosity shading of one colour per element (Cohen & Wallace 1993, section 9.2).
 
-use hce_format::{rgb9e5, Object, TreeError};
+use hce_format::{rgb9e5, Object};
 
 use crate::lattice::subtriangle_cells;
 pub use crate::lighting::Reconstruction;
@@ -58,46 +58,11 @@ pub enum ColourError {
         refined: u32,
         level: u32,
     },
-    #[error("object '{object}', triangle {triangle}: {what}; re-bake the file")]
-    Record {
-        object: String,
-        triangle: usize,
-        what: String,
-    },
-    #[error("object '{object}', triangle {triangle}: bad HCE tree: {source}")]
-    Tree {
-        object: String,
-        triangle: usize,
-        #[source]
-        source: TreeError,
-    },
+    /// The object's records, trees or colours are inconsistent ([`LightingError`]).
+    #[error(transparent)]
+    Lighting(#[from] LightingError),
     #[error("object '{object}': subtriangle {face} has a vertex index out of range")]
     Index { object: String, face: usize },
-}
-
-impl From<LightingError> for ColourError {
-    fn from(e: LightingError) -> Self {
-        match e {
-            LightingError::Record {
-                object,
-                triangle,
-                what,
-            } => ColourError::Record {
-                object,
-                triangle,
-                what,
-            },
-            LightingError::Tree {
-                object,
-                triangle,
-                source,
-            } => ColourError::Tree {
-                object,
-                triangle,
-                source,
-            },
-        }
-    }
 }
 
 /// Per refined vertex linear RGB colour of `object` drawn at `level` from `refined`, which must be

@@ -13,6 +13,16 @@ pub struct Weld {
     pub input_to_welded: Vec<u32>,
 }
 
+impl Weld {
+    /// `triangles` (indices of input vertices, each in range) on the welded vertices.
+    pub fn triangles(&self, triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
+        triangles
+            .iter()
+            .map(|t| t.map(|i| self.input_to_welded[i as usize]))
+            .collect()
+    }
+}
+
 /// Welds input vertices whose positions are equal (`tolerance == 0`: bitwise equal, with `-0.0`
 /// taken as `0.0`), or within `tolerance` (Euclidean) of the first vertex of a cluster. Each
 /// input vertex joins the earliest welded vertex within reach, so the result depends only on the

@@ -2,8 +2,9 @@
 //! hce-format, against colours worked out by hand from their trees: the paper's nearest-normal
 //! rule and the smooth reconstruction (SPEC.md, Appendix G).
 
-use hce_format::{example, rgb9e5, tree::encode_tree, Object};
+use hce_format::{encode_tree, example, rgb9e5, Object};
 use hce_geometry::colour::{apply_baked_colours, apply_baked_colours_with, ColourError};
+use hce_geometry::lighting::LightingError;
 use hce_geometry::lighting::{LightingTable, Reconstruction};
 use hce_geometry::subdivide::{subdivide, Refined};
 
@@ -188,13 +189,19 @@ fn mismatched_or_damaged_input_is_an_error() {
     o.colours.truncate(4);
     assert!(matches!(
         apply_baked_colours(&o, &r, 1),
-        Err(ColourError::Record { triangle: 0, .. })
+        Err(ColourError::Lighting(LightingError::Record {
+            triangle: 0,
+            ..
+        }))
     ));
     let mut o = c.objects[0].clone();
     o.triangles[0].normal_start = 5;
     assert!(matches!(
         apply_baked_colours(&o, &r, 1),
-        Err(ColourError::Record { triangle: 0, .. })
+        Err(ColourError::Lighting(LightingError::Record {
+            triangle: 0,
+            ..
+        }))
     ));
 }
 

@@ -265,7 +265,7 @@ fn bad_levels_and_broken_tables_are_errors() {
     assert_eq!(
         subdivide(&m, 1),
         Err(SubdivError::Tables(
-            "vertex 0: ring_offsets run past the ring array".into()
+            "mesh.ring_offsets[1]: ring offsets decrease".into()
         ))
     );
 }

@@ -95,11 +95,7 @@ fn compute(dir: &Path, out: &mut BTreeMap<String, String>) {
         let name = path.file_stem().unwrap().to_string_lossy().into_owned();
         let input = hce_meshio::load_mesh(&path).unwrap();
         let w = hce_geometry::weld(&input.positions, 0.0);
-        let tris: Vec<[u32; 3]> = input
-            .triangles
-            .iter()
-            .map(|t| t.map(|i| w.input_to_welded[i as usize]))
-            .collect();
+        let tris = w.triangles(&input.triangles);
         for &(creases, non_manifold) in MODES {
             let config = TopologyConfig {
                 creases,

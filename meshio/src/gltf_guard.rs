@@ -128,7 +128,7 @@ pub fn read_uri(base: &Path, uri: &str) -> Result<Vec<u8>, String> {
         let (_, payload) = rest
             .split_once(";base64,")
             .ok_or("the data URI is not base64")?;
-        return hce_format::gltf::decode_base64(payload).ok_or_else(|| "invalid base64".into());
+        return hce_format::decode_base64(payload).ok_or_else(|| "invalid base64".into());
     }
     read_regular_file(&uri_path(base, uri, UriScope::Relative)?)
 }

@@ -19,7 +19,8 @@ pub struct InputMesh {
     pub corner_normals: Option<Vec<[f32; 3]>>,
 }
 
-/// Errors of mesh import.
+/// Why a mesh ([`load_mesh`], [`crate::plain::load_plain_mesh`]) or a scene
+/// ([`crate::scene::import_scene`]) cannot be imported: the one error of meshio's readers.
 #[derive(Debug, thiserror::Error)]
 pub enum ImportError {
     #[error("{path}: cannot read the file: {source}")]
@@ -28,24 +29,38 @@ pub enum ImportError {
         #[source]
         source: std::io::Error,
     },
-    #[error("{path}: not a readable OBJ file: {source}")]
-    Obj {
-        path: PathBuf,
-        #[source]
-        source: tobj::LoadError,
-    },
+    #[error("{path}: not a readable OBJ file: {message}")]
+    Obj { path: PathBuf, message: String },
     #[error("{path}: not a readable glTF 2.0 file: {source}")]
     Gltf {
         path: PathBuf,
         #[source]
         source: gltf::Error,
     },
-    #[error("{path}: {what}")]
-    Invalid { path: PathBuf, what: String },
-    #[error("{path}: unknown mesh extension; use .obj, .gltf or .glb")]
+    #[error("{path}: {message}")]
+    Invalid { path: PathBuf, message: String },
+    #[error("{path}: unknown format; use .gltf, .glb or .obj")]
     UnknownFormat { path: PathBuf },
-    #[error("{path}: the file holds no triangles")]
-    Empty { path: PathBuf },
+    #[error("{path}: the file holds no triangles{}", warnings_suffix(.warnings))]
+    NoTriangles {
+        path: PathBuf,
+        /// What the import skipped on the way (a scene's warnings), if anything.
+        warnings: Vec<String>,
+    },
+    #[error(
+        "{path}: the scene has no light source: no KHR_lights_punctual light and no material \
+         with a non-zero emission; add a light, or an emissive material (emissiveFactor, \
+         or Ke in MTL) on some geometry"
+    )]
+    NoLightSource { path: PathBuf },
+}
+
+fn warnings_suffix(w: &[String]) -> String {
+    if w.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", w.join("; "))
+    }
 }
 
 /// Reads `.obj`, `.gltf` or `.glb`, chosen by extension, with corner normals where the file
@@ -107,8 +122,9 @@ pub(crate) fn read_triangles(path: &Path, wanted: Wanted) -> Result<Triangles, I
         }
     };
     if read.triangles.is_empty() {
-        return Err(ImportError::Empty {
+        return Err(ImportError::NoTriangles {
             path: path.to_owned(),
+            warnings: Vec::new(),
         });
     }
     Ok(read)
@@ -130,7 +146,7 @@ fn read_obj(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
     })
     .map_err(|source| ImportError::Obj {
         path: path.to_owned(),
-        source,
+        message: source.to_string(),
     })?;
     let mut out = Triangles::default();
     let mut normals = Vec::new();
@@ -159,7 +175,7 @@ fn read_obj(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
             if tri.iter().any(|&i| i as usize >= nv) {
                 return Err(ImportError::Invalid {
                     path: path.to_owned(),
-                    what: format!(
+                    message: format!(
                         "object '{}' face {k} references a missing vertex",
                         model.name
                     ),
@@ -175,7 +191,7 @@ fn read_obj(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
                             .get(3 * n..3 * n + 3)
                             .ok_or_else(|| ImportError::Invalid {
                                 path: path.to_owned(),
-                                what: format!(
+                                message: format!(
                                     "object '{}' face {k} references missing normal {}",
                                     model.name,
                                     n + 1
@@ -196,7 +212,7 @@ fn read_obj(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
 fn too_many(path: &Path) -> ImportError {
     ImportError::Invalid {
         path: path.to_owned(),
-        what: "more than 2^32 vertices in all mesh instances; split the scene".into(),
+        message: "more than 2^32 vertices in all mesh instances; split the scene".into(),
     }
 }
 
@@ -219,10 +235,10 @@ fn too_many(path: &Path) -> ImportError {
 fn read_gltf(path: &Path, bytes: &[u8], wanted: Wanted) -> Result<Triangles, ImportError> {
     let base = path.parent().unwrap_or_else(|| Path::new("."));
     crate::gltf_guard::panic_free(|| read_gltf_checked(path, base, bytes, wanted)).unwrap_or_else(
-        |what| {
+        |message| {
             Err(ImportError::Invalid {
                 path: path.to_owned(),
-                what,
+                message,
             })
         },
     )
@@ -236,9 +252,9 @@ fn read_gltf_checked(
 ) -> Result<Triangles, ImportError> {
     use crate::gltf_guard::{check_accessor, AccessorUse, OpenError};
     use crate::scene_graph::SceneWalk;
-    let invalid = |what: String| ImportError::Invalid {
+    let invalid = |message: String| ImportError::Invalid {
         path: path.to_owned(),
-        what,
+        message,
     };
     let gltf = crate::gltf_guard::open(bytes, Some(base)).map_err(|e| match e {
         OpenError::Invalid(what) => invalid(what),

@@ -13,7 +13,8 @@
 //! * `scene`: the baker's scene importer (objects per node instance and primitive,
 //!   materials and textures, lights, camera);
 //! * `import`: `load_mesh`, one triangle mesh in world space from OBJ/glTF (`hce subdivide`);
-//! * `plain`: `hce render`'s preview of a plain mesh, by the same reader as `load_mesh`.
+//! * `plain`: `load_plain_mesh`, `hce render`'s preview of a plain mesh, by the same reader as
+//!   `load_mesh` (the `PlainMesh` type is there without features).
 //!
 //! Feature `export` (default): `export`, OBJ/glTF/GLB writers of refined meshes.
 //!
@@ -28,7 +29,6 @@ pub mod scene_graph;
 pub mod export;
 #[cfg(feature = "import")]
 pub mod import;
-#[cfg(feature = "import")]
 pub mod plain;
 #[cfg(feature = "import")]
 pub mod scene;

@@ -1,16 +1,14 @@
 //! A minimal loader for plain (not yet baked) meshes, so `hce render` can preview any OBJ or
 //! glTF: positions, triangle indices and `COLOR_0` when present, read by the same reader as
 //! [`crate::load_mesh`] (the guards of [`crate::gltf_guard`], meshes placed by their nodes'
-//! world transforms through [`crate::scene_graph`]), then welded on exactly equal positions and
-//! turned into a flat object whose single-node trees carry one colour per triangle, which the
-//! runtime's flat kernel draws.
+//! world transforms through [`crate::scene_graph`]). `hce_runtime::plain::to_flat_object` turns
+//! it into the flat object the runtime's flat kernel draws. [`PlainMesh`] is plain data, there
+//! without features; [`load_plain_mesh`] comes with feature `import`.
 
+#[cfg(feature = "import")]
 use std::path::Path;
 
-use hce_format::{rgb9e5, ControlMesh, Object, ObjectKind, TriangleRecord};
-
-use hce_geometry::flat::{edge_ids, normal_and_area};
-
+#[cfg(feature = "import")]
 use crate::import::{read_triangles, ImportError, Wanted};
 
 /// Triangles with optional linear per-vertex colours.
@@ -23,10 +21,12 @@ pub struct PlainMesh {
 }
 
 /// Grey for the vertices without colours of a partly coloured file.
+#[cfg(feature = "import")]
 const NO_COLOUR: [f32; 3] = [0.5; 3];
 
 /// Loads every triangle primitive of every mesh instance of an OBJ, glTF or GLB file into one
 /// mesh, in world space.
+#[cfg(feature = "import")]
 pub fn load_plain_mesh(path: &Path) -> Result<PlainMesh, ImportError> {
     let read = read_triangles(
         path,
@@ -44,99 +44,7 @@ pub fn load_plain_mesh(path: &Path) -> Result<PlainMesh, ImportError> {
     })
 }
 
-/// Direction of the preview light used for meshes without colours.
-const PREVIEW_LIGHT: [f32; 3] = [0.408_248_3, 0.816_496_6, 0.408_248_3];
-
-/// A flat object for the flat-refinement kernel: vertices welded on exactly equal positions,
-/// degenerate triangles dropped, one single-node tree and one colour per triangle: the mean of
-/// its corners' `COLOR_0`, or (no colours) a neutral grey `0.6 × (0.2 + 0.8 max(0, n·l))` lit by
-/// a fixed preview light, clearly not baked lighting. Returns the object and the number of
-/// triangles dropped.
-pub fn to_flat_object(name: &str, mesh: &PlainMesh) -> (Object, usize) {
-    let mut map = std::collections::HashMap::new();
-    let mut positions = Vec::new();
-    let mut remap = Vec::with_capacity(mesh.positions.len() / 3);
-    for p in mesh.positions.chunks_exact(3) {
-        let key = [p[0].to_bits(), p[1].to_bits(), p[2].to_bits()];
-        let next = (positions.len() / 3) as u32;
-        let id = *map.entry(key).or_insert_with(|| {
-            positions.extend_from_slice(p);
-            next
-        });
-        remap.push(id);
-    }
-    let mut triangles = Vec::new();
-    let mut tri_colours = Vec::new();
-    let mut dropped = 0;
-    for tri in mesh.indices.chunks_exact(3) {
-        let w = [tri[0], tri[1], tri[2]].map(|i| remap[i as usize]);
-        if w[0] == w[1] || w[1] == w[2] || w[0] == w[2] {
-            dropped += 1;
-            continue;
-        }
-        let colour = match &mesh.colours {
-            Some(c) => {
-                let mut s = [0f32; 3];
-                for &i in tri {
-                    for k in 0..3 {
-                        s[k] += c[3 * i as usize + k] / 3.0;
-                    }
-                }
-                s
-            }
-            None => {
-                let p = w.map(|v| {
-                    let v = v as usize * 3;
-                    [positions[v], positions[v + 1], positions[v + 2]]
-                });
-                let (n, _) = normal_and_area(p);
-                let d =
-                    (n[0] * PREVIEW_LIGHT[0] + n[1] * PREVIEW_LIGHT[1] + n[2] * PREVIEW_LIGHT[2])
-                        .max(0.0);
-                [0.6 * (0.2 + 0.8 * d); 3]
-            }
-        };
-        triangles.extend(w);
-        tri_colours.push(rgb9e5::encode(colour));
-    }
-    let f = tri_colours.len();
-    let mut normals = Vec::with_capacity(f);
-    for tri in triangles.chunks_exact(3) {
-        let p = [tri[0], tri[1], tri[2]].map(|v| {
-            let v = v as usize * 3;
-            [positions[v], positions[v + 1], positions[v + 2]]
-        });
-        normals.push(normal_and_area(p).0);
-    }
-    let edges = edge_ids(&triangles);
-    let object = Object {
-        name: name.to_string(),
-        kind: ObjectKind::Flat,
-        geometry_hash: 0,
-        mesh: ControlMesh {
-            positions,
-            triangles,
-            edges,
-            ..Default::default()
-        },
-        triangles: (0..f as u32)
-            .map(|t| TriangleRecord {
-                bits_start: t,
-                colour_start: t,
-                normal_start: t,
-                normal_count: 1,
-            })
-            .collect(),
-        normals,
-        // Every tree is a single leaf: all start bits zero.
-        bits: vec![0; f.div_ceil(32)],
-        bit_len: f as u64,
-        colours: tri_colours,
-    };
-    (object, dropped)
-}
-
-#[cfg(test)]
+#[cfg(all(test, feature = "import"))]
 mod tests {
     use super::*;
 
@@ -174,14 +82,10 @@ mod tests {
         );
         // The mirror reverses the winding, so the triangle still faces +z.
         assert_eq!(mesh.indices, vec![0, 2, 1]);
-        let (object, dropped) = to_flat_object("t", &mesh);
-        assert_eq!(dropped, 0);
-        assert_eq!(object.normals, vec![[0.0, 0.0, 1.0]]);
-        // The triangle's colour is the mean of its corners' COLOR_0.
-        let c = rgb9e5::decode(object.colours[0]);
-        for k in 0..3 {
-            assert!((c[k] - 1.0 / 3.0).abs() < 0.01, "{c:?}");
-        }
+        assert_eq!(
+            mesh.colours,
+            Some(vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0])
+        );
     }
 
     #[test]

@@ -56,8 +56,8 @@ use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
-use hce_format::gltf::{self as hgltf, GltfError, PrimitiveLink};
-use hce_format::{geometry_hash, Metadata, Object, ObjectKind, Problem, ReadError};
+use hce_format::{GltfError, LinkFault, LinkNext, PrimitiveLink};
+use hce_format::{Metadata, Object, ObjectKind, Problem, ReadError};
 use hce_meshio::gltf_guard::{self, UriScope};
 use hce_meshio::scene_graph;
 use serde_json::Value;
@@ -74,11 +74,11 @@ const PROBLEMS_SHOWN: usize = 5;
 pub enum AssetError {
     #[error("{path}: {error}")]
     Io { path: String, error: std::io::Error },
-    #[error("{path}: not a baked asset: expected a .glb or .gltf with {ext} or a .hce container", ext = hgltf::EXTENSION_NAME)]
+    #[error("{path}: not a baked asset: expected a .glb or .gltf with {ext} or a .hce container", ext = hce_format::EXTENSION_NAME)]
     UnknownFormat { path: String },
     #[error("{path}: {error}")]
     Gltf { path: String, error: GltfError },
-    #[error("{path}: the asset does not use {ext}; bake it with `hce bake` first", ext = hgltf::EXTENSION_NAME)]
+    #[error("{path}: the asset does not use {ext}; bake it with `hce bake` first", ext = hce_format::EXTENSION_NAME)]
     NotBaked { path: String },
     #[error("{path}: container: {error}")]
     Container { path: String, error: ReadError },
@@ -328,11 +328,11 @@ impl GltfSource {
         resolve: impl FnMut(&str) -> Result<Vec<u8>, String>,
     ) -> Result<Self, GltfError> {
         let glb = bytes.starts_with(b"glTF");
-        Self::load(hgltf::Asset::parse(bytes)?, glb, resolve)
+        Self::load(hce_format::GltfAsset::parse(bytes)?, glb, resolve)
     }
 
     fn load(
-        asset: hgltf::Asset,
+        asset: hce_format::GltfAsset,
         glb: bool,
         resolve: impl FnMut(&str) -> Result<Vec<u8>, String>,
     ) -> Result<Self, GltfError> {
@@ -356,8 +356,11 @@ impl GltfSource {
             path: shown(),
             error,
         })?;
-        let asset = hgltf::Asset::parse(&bytes).map_err(gltf_err)?;
-        if hgltf::root_link(&asset.json).map_err(gltf_err)?.is_none() {
+        let asset = hce_format::GltfAsset::parse(&bytes).map_err(gltf_err)?;
+        if hce_format::root_link(&asset.json)
+            .map_err(gltf_err)?
+            .is_none()
+        {
             return Ok(None);
         }
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
@@ -370,7 +373,7 @@ impl GltfSource {
     /// (SPEC.md 3.2), checked to lie inside its buffer; `None` when the asset does not use the
     /// extension.
     pub fn container(&self) -> Result<Option<&[u8]>, GltfError> {
-        hgltf::container_bytes(&self.json, &self.buffers)
+        hce_format::container_bytes(&self.json, &self.buffers)
     }
 }
 
@@ -570,15 +573,14 @@ impl Loader {
         }
     }
 
-    /// Reads (checksums included) and validates a container.
+    /// Reads and validates a container in one pass ([`hce_format::read_validated`]: every
+    /// checksum, the padding, every content rule and each object's geometry hash).
     fn container(&self, bytes: &[u8]) -> Result<hce_format::Container, AssetError> {
-        let container = hce_format::read(bytes).map_err(|error| AssetError::Container {
-            path: self.path.clone(),
-            error,
-        })?;
-        // From the bytes, not the model: zero padding between sections is checked too, so a
-        // flipped bit anywhere in the container is reported.
-        let problems = hce_format::validate_bytes(bytes);
+        let (container, problems) =
+            hce_format::read_validated(bytes).map_err(|error| AssetError::Container {
+                path: self.path.clone(),
+                error,
+            })?;
         if !problems.is_empty() {
             return Err(AssetError::Invalid {
                 path: self.path.clone(),
@@ -588,7 +590,8 @@ impl Loader {
         Ok(container)
     }
 
-    /// Checks the object's own geometry hash and computes what the renderer needs.
+    /// What the renderer needs of a validated object (its geometry hash was checked with the
+    /// rest of the container).
     fn finish_object(
         &self,
         index: u32,
@@ -596,17 +599,6 @@ impl Loader {
         instances: Vec<Instance>,
     ) -> Result<AssetObject, AssetError> {
         let mesh = &object.mesh;
-        let computed = geometry_hash(mesh.triangles.iter().map(|&v| mesh.position(v)));
-        if computed != object.geometry_hash {
-            return Err(AssetError::StaleGeometry {
-                path: self.path.clone(),
-                location: format!("objects[{index}].mesh"),
-                object: index,
-                name: object.name.clone(),
-                stored: object.geometry_hash,
-                computed,
-            });
-        }
         let points = mesh.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]);
         let bounds = Bounds::of_points(points).unwrap_or(Bounds {
             min: [0.0; 3],
@@ -636,17 +628,6 @@ impl Loader {
         })
     }
 
-    /// Either an error (strict) or a warning and `None` (lenient) for a bad primitive.
-    fn bad_link(&mut self, error: AssetError) -> Result<(), AssetError> {
-        if self.strict {
-            Err(error)
-        } else {
-            self.warnings
-                .push(format!("{error}; the primitive is ignored (SPEC.md 3.5)"));
-            Ok(())
-        }
-    }
-
     fn gltf(
         &mut self,
         source: &GltfSource,
@@ -659,9 +640,8 @@ impl Loader {
             })?;
         let container = self.container(container_bytes)?;
         let json = &source.json;
-        let links = hgltf::primitive_links(json).map_err(|e| self.gltf_err(e))?;
-        let geometries = hgltf::linked_geometries(json, &source.buffers, &links);
-        let good = self.check_links(&container, &links, geometries)?;
+        let links = hce_format::primitive_links(json).map_err(|e| self.gltf_err(e))?;
+        let good = self.check_links(&container, source, &links)?;
 
         // Objects of each mesh, in first-primitive order, from the links that passed.
         let mut mesh_objects: HashMap<usize, Vec<u32>> = HashMap::new();
@@ -715,89 +695,33 @@ impl Loader {
         Ok((container.metadata, objects, camera))
     }
 
-    /// SPEC.md 3.3 and 3.5 for every primitive link; returns the links that passed.
+    /// SPEC.md 3.3 and 3.5 for every primitive link ([`hce_format::check_links`], the validator's
+    /// rules), strict or lenient; returns the links that passed. An object linked from two
+    /// meshes is drawn as both link it (the validator reports it).
     fn check_links(
         &mut self,
         container: &hce_format::Container,
+        source: &GltfSource,
         links: &[PrimitiveLink],
-        geometries: Vec<Result<(u64, usize), GltfError>>,
     ) -> Result<Vec<PrimitiveLink>, AssetError> {
-        let mut good: Vec<PrimitiveLink> = Vec::new();
-        let mut ranges: Vec<(u32, u64, u64, String)> = Vec::new();
-        for (l, g) in links.iter().zip(geometries) {
-            let at = format!("meshes[{}].primitives[{}]", l.mesh, l.primitive);
-            let link_err = |message: String| AssetError::Link {
-                path: self.path.clone(),
-                location: at.clone(),
-                message,
-            };
-            let Some(object) = container.objects.get(l.object as usize) else {
-                let e = link_err(format!(
-                    "object {} is out of range; the container has {} objects",
-                    l.object,
-                    container.objects.len()
-                ));
-                self.bad_link(e)?;
-                continue;
-            };
-            let (hash, triangles) = match g {
-                Ok(g) => g,
-                Err(e) => {
-                    let e = link_err(format!("cannot read its geometry: {e}"));
-                    self.bad_link(e)?;
-                    continue;
-                }
-            };
-            let end = u64::from(l.first_triangle) + triangles as u64;
-            if end > object.triangles.len() as u64 {
-                let e = link_err(format!(
-                    "triangles {}..{end} exceed object {} '{}' with {} triangles",
-                    l.first_triangle,
-                    l.object,
-                    object.name,
-                    object.triangles.len()
-                ));
-                self.bad_link(e)?;
-                continue;
-            }
-            let whole = l.first_triangle == 0 && triangles == object.triangles.len();
-            let stored = if hash != l.geometry_hash {
-                Some(l.geometry_hash)
-            } else if whole && hash != object.geometry_hash {
-                Some(object.geometry_hash)
-            } else {
-                None
-            };
-            if let Some(stored) = stored {
-                let e = AssetError::StaleGeometry {
-                    path: self.path.clone(),
-                    location: at.clone(),
-                    object: l.object,
-                    name: object.name.clone(),
-                    stored,
-                    computed: hash,
-                };
-                self.bad_link(e)?;
-                continue;
-            }
-            ranges.push((l.object, u64::from(l.first_triangle), end, at));
-            good.push(l.clone());
+        let mut sink = LinkPolicy {
+            loader: self,
+            container,
+            error: None,
+        };
+        let good = hce_format::check_links(
+            &container.objects,
+            &source.json,
+            &source.buffers,
+            links,
+            &mut sink,
+        );
+        match (good, sink.error) {
+            (Ok(good), _) => Ok(good.into_iter().map(|i| links[i].clone()).collect()),
+            (Err(_), Some(e)) => Err(e),
+            // The policy stops only with an error; should that change, still no panic.
+            (Err(_), None) => Err(self.scene_err("meshes", "the link check stopped")),
         }
-        ranges.sort();
-        for w in ranges.windows(2) {
-            if w[0].0 == w[1].0 && w[1].1 < w[0].2 {
-                let e = AssetError::Link {
-                    path: self.path.clone(),
-                    location: w[1].3.clone(),
-                    message: format!(
-                        "its triangle range overlaps that of {} for object {} (SPEC.md 3.3)",
-                        w[0].3, w[0].0
-                    ),
-                };
-                self.bad_link(e)?;
-            }
-        }
-        Ok(good)
     }
 
     /// The camera of a node, or `None` (with a warning) for cameras that cannot be used.
@@ -853,6 +777,65 @@ impl Loader {
     }
 }
 
+/// The loader's sink for link faults: with [`OpenOptions::strict`] the first is the error;
+/// without, each bad primitive is ignored with a warning (SPEC.md 3.5).
+struct LinkPolicy<'a> {
+    loader: &'a mut Loader,
+    container: &'a hce_format::Container,
+    error: Option<AssetError>,
+}
+
+impl hce_format::LinkSink for LinkPolicy<'_> {
+    fn fault(&mut self, link: &PrimitiveLink, at: &str, fault: LinkFault) -> LinkNext {
+        let path = self.loader.path.clone();
+        let link_err = |message: String| AssetError::Link {
+            path: path.clone(),
+            location: at.to_owned(),
+            message,
+        };
+        let error = match fault {
+            // Drawable: each mesh's nodes get an instance.
+            LinkFault::OtherMesh { .. } => return LinkNext::Continue,
+            LinkFault::ObjectOutOfRange { objects } => link_err(format!(
+                "object {} is out of range; the container has {objects} objects",
+                link.object
+            )),
+            LinkFault::Geometry(e) => link_err(format!("cannot read its geometry: {e}")),
+            LinkFault::Stale { computed, stored } | LinkFault::WholeObject { computed, stored } => {
+                AssetError::StaleGeometry {
+                    path,
+                    location: at.to_owned(),
+                    object: link.object,
+                    name: self.container.objects[link.object as usize].name.clone(),
+                    stored,
+                    computed,
+                }
+            }
+            LinkFault::Range {
+                end,
+                triangles,
+                name,
+            } => link_err(format!(
+                "triangles {}..{end} exceed object {} '{name}' with {triangles} triangles",
+                link.first_triangle, link.object
+            )),
+            LinkFault::Overlap { other } => link_err(format!(
+                "its triangle range overlaps that of {other} for object {} (SPEC.md 3.3)",
+                link.object
+            )),
+        };
+        if self.loader.strict {
+            self.error = Some(error);
+            LinkNext::Stop
+        } else {
+            self.loader
+                .warnings
+                .push(format!("{error}; the primitive is ignored (SPEC.md 3.5)"));
+            LinkNext::SkipLink
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -893,10 +876,10 @@ mod tests {
 
     /// Edits the example GLB's JSON (its BIN chunk is kept).
     fn edited_glb(edit: impl FnOnce(&mut Value)) -> Vec<u8> {
-        let a = hgltf::Asset::from_glb(&example::triangle_glb()).unwrap();
+        let a = hce_format::GltfAsset::from_glb(&example::triangle_glb()).unwrap();
         let mut json = a.json;
         edit(&mut json);
-        hgltf::write_glb(&json, a.bin.as_deref().unwrap_or(&[])).unwrap()
+        hce_format::write_glb(&json, a.bin.as_deref().unwrap_or(&[])).unwrap()
     }
 
     #[test]
@@ -928,10 +911,10 @@ mod tests {
     #[test]
     fn edited_mesh_is_stale_unless_lenient() {
         // Move one vertex of the primitive: its hash no longer matches the baked one.
-        let a = hgltf::Asset::from_glb(&example::triangle_glb()).unwrap();
+        let a = hce_format::GltfAsset::from_glb(&example::triangle_glb()).unwrap();
         let mut bin = a.bin.unwrap();
         bin[12..16].copy_from_slice(&0.5f32.to_le_bytes());
-        let glb = hgltf::write_glb(&a.json, &bin).unwrap();
+        let glb = hce_format::write_glb(&a.json, &bin).unwrap();
         let e = open_glb(&glb, &OpenOptions::default()).unwrap_err();
         assert!(
             matches!(e, AssetError::StaleGeometry { object: 0, .. }),

@@ -18,5 +18,7 @@ pub mod asset;
 #[forbid(unsafe_code)]
 pub mod gpu;
 mod mmap;
+#[forbid(unsafe_code)]
+pub mod plain;
 
 pub use asset::{Asset, AssetError, OpenOptions};

@@ -59,11 +59,7 @@ fn flat_shaded_cube() -> Topology {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../geometry/tests/data/cube_creased.obj");
     let input = hce_meshio::load_mesh(&path).unwrap();
     let w = hce_geometry::weld(&input.positions, 0.0);
-    let tris: Vec<[u32; 3]> = input
-        .triangles
-        .iter()
-        .map(|t| t.map(|i| w.input_to_welded[i as usize]))
-        .collect();
+    let tris = w.triangles(&input.triangles);
     let normals: Vec<[f32; 3]> = tris
         .iter()
         .flat_map(|t| {

@@ -9,11 +9,11 @@
 
 use std::path::Path;
 
-use hce_format::gltf::{validate_asset, Asset, EXTENSION_NAME};
 use hce_format::{
     example, validate_bytes, write, Container, Problem, RULE_CORNER, RULE_CREASE, RULE_SMOOTH,
     SPOKE_SHARP, VERTEX_BOUNDARY, VERTEX_RULE_SHIFT,
 };
+use hce_format::{validate_asset, GltfAsset as Asset, EXTENSION_NAME};
 use hce_geometry::colour::{apply_baked_colours_with, Reconstruction};
 use hce_geometry::refine::{refine_object, RefinedObject};
 use serde_json::{json, Value};
@@ -199,7 +199,7 @@ pub fn cases(cornell_baked: Vec<u8>) -> Vec<Case> {
         let mut j = a.json;
         edit(&mut j);
         let bytes =
-            hce_format::gltf::write_glb(&j, a.bin.as_deref().unwrap_or(&[])).expect("a small GLB");
+            hce_format::write_glb(&j, a.bin.as_deref().unwrap_or(&[])).expect("a small GLB");
         case(file, bytes, description)
     };
     let view = |j: &Value| {
@@ -298,7 +298,7 @@ pub fn objects(file: &str, bytes: &[u8]) -> Vec<hce_format::Object> {
     } else {
         let a = Asset::parse(bytes).expect("suite GLBs parse");
         let buffers = a.buffers(|_| Err("none".into())).expect("GLB buffers");
-        hce_format::gltf::container_bytes(&a.json, &buffers)
+        hce_format::container_bytes(&a.json, &buffers)
             .ok()
             .flatten()
             .expect("a container")
@@ -372,9 +372,10 @@ pub fn scene(file: &str, bytes: &[u8]) -> Value {
         .map(|o| refine_object(&o.object, SCENE_LEVEL).expect("valid objects refine"))
         .collect();
     let output = scratch.path().join("scene.glb");
+    let objects: Vec<&hce_format::Object> = asset.objects.iter().map(|o| &o.object).collect();
     hce_bake::output::refined_scene::write_refined_scene(
         &output,
-        &asset,
+        &objects,
         Some((&source.json, source.buffers.as_slice())),
         &refined,
     )

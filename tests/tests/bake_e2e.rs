@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 use hce_bake::import::ImportOptions;
 use hce_bake::pipeline::{bake_file, BakeOutcome, PipelineOptions};
 use hce_bake::BakeParams;
-use hce_format::gltf::{container_bytes, linked_geometries, primitive_links, Asset};
 use hce_format::ObjectKind;
+use hce_format::{container_bytes, linked_geometries, primitive_links, GltfAsset as Asset};
 use hce_geometry::Creases;
 
 fn sample(name: &str) -> PathBuf {

@@ -31,15 +31,19 @@ const RULES: &[(&str, &[&str], &[&str])] = &[
     ),
     (
         "hce-meshio",
-        &["wgpu", "hce-bake", "obvhs"],
-        &["wgpu", "the solver"],
+        &["wgpu", "hce-bake", "obvhs", "hce-geometry", "hce-runtime"],
+        &["wgpu", "the solver", "hce-geometry"],
     ),
     (
         "hce-runtime",
         &["hce-bake", "hce-tools"],
         &["hce-bake", "hce-tools", "readers and writers"],
     ),
-    ("hce-bake", &["hce-tools"], &["hce-tools"]),
+    (
+        "hce-bake",
+        &["hce-tools", "hce-runtime"],
+        &["hce-tools", "hce-runtime"],
+    ),
     (
         "hce-samples",
         &[
@@ -82,12 +86,58 @@ fn metadata() -> Value {
 /// Per workspace package name, the names of every package it depends on through normal
 /// (non-dev, non-build) dependencies, transitively.
 fn normal_closure(m: &Value) -> BTreeMap<String, BTreeSet<String>> {
-    let name_of: BTreeMap<&str, &str> = m["packages"]
+    closure(m, |kind| kind.is_null())
+}
+
+/// Per workspace package name, the workspace packages it names as dev-dependencies (directly).
+fn dev_dependencies(m: &Value) -> BTreeMap<String, BTreeSet<String>> {
+    let members: BTreeSet<&str> = m["workspace_members"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|id| id.as_str().unwrap())
+        .collect();
+    let name_of = names(m);
+    let mut out = BTreeMap::new();
+    for node in m["resolve"]["nodes"].as_array().unwrap() {
+        let id = node["id"].as_str().unwrap();
+        if !members.contains(id) {
+            continue;
+        }
+        let dev: BTreeSet<String> = node["deps"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|d| {
+                let pkg = d["pkg"].as_str().unwrap();
+                pkg != id
+                    && members.contains(pkg)
+                    && d["dep_kinds"]
+                        .as_array()
+                        .unwrap()
+                        .iter()
+                        .any(|k| k["kind"] == "dev")
+            })
+            .map(|d| name_of[d["pkg"].as_str().unwrap()].to_string())
+            .collect();
+        out.insert(name_of[id].to_string(), dev);
+    }
+    out
+}
+
+fn names(m: &Value) -> BTreeMap<&str, &str> {
+    m["packages"]
         .as_array()
         .unwrap()
         .iter()
         .map(|p| (p["id"].as_str().unwrap(), p["name"].as_str().unwrap()))
-        .collect();
+        .collect()
+}
+
+/// Per workspace package name, every package it reaches through dependencies whose kind
+/// `follow` accepts, transitively.
+fn closure(m: &Value, follow: impl Fn(&Value) -> bool) -> BTreeMap<String, BTreeSet<String>> {
+    let name_of = names(m);
     let mut edges: BTreeMap<&str, Vec<&str>> = BTreeMap::new();
     for node in m["resolve"]["nodes"].as_array().unwrap() {
         let id = node["id"].as_str().unwrap();
@@ -96,7 +146,7 @@ fn normal_closure(m: &Value) -> BTreeMap<String, BTreeSet<String>> {
                 .as_array()
                 .unwrap()
                 .iter()
-                .any(|k| k["kind"].is_null())
+                .any(|k| follow(&k["kind"]))
         });
         edges.insert(id, normal.map(|d| d["pkg"].as_str().unwrap()).collect());
     }
@@ -139,6 +189,58 @@ fn no_crate_depends_on_what_architecture_md_forbids() {
         }
     }
     assert!(broken.is_empty(), "{broken:#?}");
+}
+
+/// The crates' order (ARCHITECTURE.md: "Dependencies point one way"): no crate depends, even
+/// transitively, on one later in this list.
+const ORDER: &[&str] = &[
+    "hce-format",
+    "hce-geometry",
+    "hce-meshio",
+    "hce-runtime",
+    "hce-bake",
+    "hce-tools",
+];
+
+#[test]
+fn dependencies_point_one_way() {
+    let closure = normal_closure(&metadata());
+    let mut broken = Vec::new();
+    for (i, krate) in ORDER.iter().enumerate() {
+        for later in &ORDER[i + 1..] {
+            if closure[*krate].contains(*later) {
+                broken.push(format!("{krate} depends on {later}"));
+            }
+        }
+    }
+    assert!(broken.is_empty(), "{broken:#?}");
+    // The order is a real one: each crate after the format reaches the format.
+    for krate in &ORDER[1..] {
+        assert!(closure[*krate].contains("hce-format"), "{krate}");
+    }
+}
+
+/// A crate's tests may use a crate above it (geometry's read meshes through meshio), but never one
+/// that depends on the crate under test: that would be a cycle, the crate built twice, and
+/// a forbidden edge hidden in a test.
+#[test]
+fn no_dev_dependency_closes_a_cycle() {
+    let m = metadata();
+    let closure = normal_closure(&m);
+    let dev = dev_dependencies(&m);
+    // The graph is read: geometry's tests take meshio.
+    assert!(dev["hce-geometry"].contains("hce-meshio"), "{dev:?}");
+    let mut cycles = Vec::new();
+    for (krate, devs) in &dev {
+        for d in devs {
+            if closure[d].contains(krate) {
+                cycles.push(format!(
+                    "{krate} dev-depends on {d}, which depends on {krate}"
+                ));
+            }
+        }
+    }
+    assert!(cycles.is_empty(), "{cycles:#?}");
 }
 
 /// hce-runtime takes hce-meshio without its features (no readers, no writers), so that a viewer

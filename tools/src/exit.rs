@@ -40,7 +40,9 @@ impl From<Status> for ExitCode {
 #[error("{0}")]
 pub struct Usage(pub String);
 
-/// `e`, a bad argument found by a parser outside clap, as a [`Usage`] error.
+/// `e`, a bad argument found by a parser outside clap, as a [`Usage`] error. (Only the GPU
+/// commands have such arguments.)
+#[cfg_attr(not(feature = "gpu"), allow(dead_code))]
 pub fn usage(e: anyhow::Error) -> anyhow::Error {
     Usage(format!("{e:#}")).into()
 }
@@ -108,6 +110,11 @@ fn decisive(c: &(dyn std::error::Error + 'static)) -> Option<Status> {
     if let Some(e) = c.downcast_ref::<hce_geometry::SubdivError>() {
         return Some(subdiv_status(e));
     }
+    // `hce render --level 7` on a multiresolution object: the level is the caller's argument.
+    #[cfg(feature = "gpu")]
+    if let Some(hce_runtime::gpu::GpuError::LevelTooHigh { .. }) = c.downcast_ref() {
+        return Some(Status::Usage);
+    }
     if let Some(e) = c.downcast_ref::<RefineError>() {
         return Some(match e {
             RefineError::Subdiv(s) => subdiv_status(s),
@@ -132,11 +139,10 @@ fn is_io(c: &(dyn std::error::Error + 'static)) -> bool {
 /// Bytes were read but are not acceptable input.
 fn is_invalid_input(c: &(dyn std::error::Error + 'static)) -> bool {
     c.is::<hce_meshio::ImportError>()
-        || c.is::<hce_bake::import::ImportError>()
         || c.is::<hce_bake::BakeError>()
         || c.is::<hce_geometry::TopologyError>()
         || c.is::<hce_format::ReadError>()
-        || c.is::<hce_format::gltf::GltfError>()
+        || c.is::<hce_format::GltfError>()
         || c.is::<hce_runtime::AssetError>()
         || c.is::<crate::cmd::compare::InvalidImage>()
 }

@@ -25,6 +25,7 @@ enum Command {
     Bake(cmd::bake::BakeArgs),
     /// Render a baked asset (its HCE colours, refined on the GPU) or preview a mesh, headless,
     /// to PNG or EXR.
+    #[cfg(feature = "gpu")]
     #[command(after_help = EXIT_CODES)]
     Render(cmd::render::RenderArgs),
     /// Path-trace what `hce render --level L` draws (same geometry, camera and units), as ground
@@ -36,9 +37,11 @@ enum Command {
     #[command(after_help = EXIT_CODES)]
     Compare(cmd::compare::CompareArgs),
     /// Bake a bundled sample and render it at levels 0 to 3 side by side: a first look at hce.
+    #[cfg(feature = "gpu")]
     #[command(after_help = EXIT_CODES)]
     Demo(cmd::demo::DemoArgs),
     /// Measure the GPU kernels' throughput per level.
+    #[cfg(feature = "gpu")]
     BenchGpu(cmd::bench_gpu::BenchGpuArgs),
     /// Loop-subdivide a mesh on the CPU (OBJ, glTF or GLB in and out).
     Subdivide(cmd::subdivide::SubdivideArgs),
@@ -50,6 +53,7 @@ enum Command {
     Validate(cmd::validate::ValidateArgs),
     /// Open a baked asset in a window (or preview a mesh) and move around it, with each
     /// object's level chosen live from the view; `--frames N` for scripted runs.
+    #[cfg(feature = "gpu")]
     #[command(after_help = EXIT_CODES)]
     View(cmd::view::ViewArgs),
     /// Serve the browser viewer (WebGPU) for a baked file on 127.0.0.1 and print its URL.
@@ -88,15 +92,19 @@ fn main() -> std::process::ExitCode {
     };
     let result = match cli.command {
         Command::Bake(args) => cmd::bake::run(args),
+        #[cfg(feature = "gpu")]
         Command::Render(args) => cmd::render::run(args),
         #[cfg(feature = "gpu")]
         Command::Reference(args) => cmd::reference::run(args),
         Command::Compare(args) => cmd::compare::run(args),
+        #[cfg(feature = "gpu")]
         Command::Demo(args) => cmd::demo::run(args),
+        #[cfg(feature = "gpu")]
         Command::BenchGpu(args) => cmd::bench_gpu::run(args),
         Command::Subdivide(args) => cmd::subdivide::run(args),
         Command::Inspect(args) => cmd::inspect::run(args),
         Command::Validate(args) => cmd::validate::run(args),
+        #[cfg(feature = "gpu")]
         Command::View(args) => cmd::view::run(args),
         Command::Serve(args) => cmd::serve::run(args),
     };

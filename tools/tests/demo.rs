@@ -63,11 +63,11 @@ fn luma_stats(rgba: &[u8]) -> (f64, f64) {
 /// multiresolution object of the sample.
 fn check_baked(path: &Path) {
     let bytes = std::fs::read(path).unwrap();
-    let asset = hce_format::gltf::Asset::from_glb(&bytes).unwrap();
+    let asset = hce_format::GltfAsset::from_glb(&bytes).unwrap();
     let buffers = asset
         .buffers(|uri| Err(format!("unexpected external buffer {uri}")))
         .unwrap();
-    let container = hce_format::gltf::container_bytes(&asset.json, &buffers)
+    let container = hce_format::container_bytes(&asset.json, &buffers)
         .unwrap()
         .expect("the baked file has no EXT_hce_baked_lighting container");
     let problems = hce_format::validate_bytes(container);

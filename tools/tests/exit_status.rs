@@ -192,3 +192,60 @@ fn values_parsed_after_clap_are_usage_errors() {
     assert_eq!(code, 2, "{stderr}");
     assert!(stderr.contains("huge"), "{stderr}");
 }
+
+/// `hce render`'s own arguments: a bad `--size`, `--level` or `--camera` is a usage error (2),
+/// found before any file is read or GPU opened, whatever the input.
+#[test]
+fn render_argument_errors_are_usage_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("tri.hce");
+    std::fs::write(&input, write(&example::single_triangle()).unwrap()).unwrap();
+    let out = dir.path().join("out.png");
+    let (input, out) = (input.to_str().unwrap(), out.to_str().unwrap());
+    for bad in [
+        &["--size", "0x600"][..],
+        &["--size", "wide"],
+        &["--level", "16"],
+        &["--camera", "1,2:3"],
+        &["--camera", "0,0,1:0,0,1"],
+    ] {
+        let mut args = vec!["render", input, "-o", out];
+        args.extend_from_slice(bad);
+        let (code, _, stderr) = common::hce(&args);
+        assert_eq!(code, 2, "{bad:?}: {stderr}");
+        assert!(
+            stderr.contains(bad[0]) || stderr.contains("camera"),
+            "{bad:?}: {stderr}"
+        );
+    }
+}
+
+/// A level the flat kernel takes but Loop subdivision does not (7 to 15) is a usage error on an
+/// asset with a multiresolution object, found when the object is refined.
+#[test]
+fn render_level_past_loop_subdivision_is_a_usage_error() {
+    use hce_runtime::gpu::testing::{try_context, Unavailable};
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("tri.hce");
+    std::fs::write(&input, write(&example::single_triangle()).unwrap()).unwrap();
+    let out = dir.path().join("out.png");
+    let (code, _, stderr) = common::hce(&[
+        "render",
+        input.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--size",
+        "16x16",
+        "--level",
+        "7",
+        "--software",
+    ]);
+    match try_context("render_level_past_loop_subdivision_is_a_usage_error") {
+        Ok(_) => {}
+        Err(Unavailable::Skip(_)) => return,
+        Err(Unavailable::Fail(m)) => panic!("{m}"),
+    }
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains('7'), "{stderr}");
+    assert!(!std::path::Path::new(&out).exists());
+}

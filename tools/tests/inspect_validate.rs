@@ -88,7 +88,7 @@ fn damaged_files_get_distinct_exit_statuses() {
 
 #[test]
 fn glb_links_are_checked_against_the_mesh() {
-    use hce_format::gltf::{write_glb, Asset};
+    use hce_format::{write_glb, GltfAsset as Asset};
     let dir = tempfile::tempdir().unwrap();
     let glb = example::triangle_glb();
     let ok = dir.path().join("ok.glb");

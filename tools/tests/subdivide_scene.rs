@@ -4,7 +4,7 @@
 
 mod common;
 
-use hce_format::gltf::{Asset, EXTENSION_NAME};
+use hce_format::{GltfAsset as Asset, EXTENSION_NAME};
 use serde_json::{json, Value};
 use std::path::Path;
 
@@ -103,7 +103,7 @@ fn nodes_sharing_a_mesh_still_share_the_refined_mesh() {
     let input = dir.path().join("two.glb");
     std::fs::write(
         &input,
-        hce_format::gltf::write_glb(&json, a.bin.as_deref().unwrap()).unwrap(),
+        hce_format::write_glb(&json, a.bin.as_deref().unwrap()).unwrap(),
     )
     .unwrap();
     let out = dir.path().join("two-l1.gltf");

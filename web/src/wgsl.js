@@ -5,6 +5,7 @@
 
 /** The files the kernels are assembled from, all in runtime/src/gpu/. */
 export const WGSL_FILES = /** @type {const} */ ([
+  'hce_constants.wgsl',
   'hce_tree.wgsl',
   'hce_light.wgsl',
   'hce_lattice.wgsl',
@@ -66,7 +67,7 @@ export class KernelSources {
    */
   refinement(kernel) {
     const f = this.files;
-    return `${f['hce_tree.wgsl']}\n${f['hce_light.wgsl']}\n${f['hce_lattice.wgsl']}\n${f['hce_gather.wgsl']}\n${kernel}`;
+    return `${f['hce_constants.wgsl']}\n${f['hce_tree.wgsl']}\n${f['hce_light.wgsl']}\n${f['hce_lattice.wgsl']}\n${f['hce_gather.wgsl']}\n${kernel}`;
   }
 
   /**
@@ -98,7 +99,7 @@ export class KernelSources {
 
   /** The colour-decoding kernel of the tests (`decode.rs`). */
   decode() {
-    return `${this.files['hce_tree.wgsl']}\n${this.files['decode.wgsl']}`;
+    return `${this.files['hce_constants.wgsl']}\n${this.files['hce_tree.wgsl']}\n${this.files['decode.wgsl']}`;
   }
 
   /** The headless renderer's module (`render.rs`). */

@@ -90,20 +90,7 @@ impl ToSolver for ImportedScene {
             objects: (0..self.objects.len())
                 .map(|i| self.solver_object(i))
                 .collect(),
-            lights: self
-                .lights
-                .iter()
-                .enumerate()
-                .map(|(i, l)| scene::PunctualLight {
-                    name: l.name.clone().unwrap_or_else(|| format!("light {i}")),
-                    kind: l.kind,
-                    position: l.position,
-                    direction: l.direction,
-                    color: l.color,
-                    intensity: l.intensity,
-                    range: l.range,
-                })
-                .collect(),
+            lights: self.lights.clone(),
         }
     }
 }

@@ -16,7 +16,7 @@ pub mod refined_scene;
 pub use from_obj::obj_to_gltf;
 
 use crate::import::{ImportedScene, SourceFormat};
-use hce_format::gltf::{embed_container, link_primitive, write_glb, Asset, PrimitiveLink};
+use hce_format::{embed_container, link_primitive, write_glb, GltfAsset as Asset, PrimitiveLink};
 use hce_meshio::gltf_guard::read_uri;
 use hce_meshio::write_atomic;
 use serde_json::{json, Value};
@@ -31,7 +31,7 @@ pub enum OutputError {
     #[error("{path}: cannot re-read the source scene: {message}")]
     Source { path: PathBuf, message: String },
     #[error("{0}")]
-    Gltf(#[from] hce_format::gltf::GltfError),
+    Gltf(#[from] hce_format::GltfError),
     #[error("object {index} {name:?}: {message}")]
     Object {
         index: usize,
@@ -95,7 +95,7 @@ impl BakedAsset {
                 }
                 write_atomic(&bin_path, &self.bin)?;
                 let text = serde_json::to_vec_pretty(&json)
-                    .map_err(|e| hce_format::gltf::GltfError::Json(e.to_string()))?;
+                    .map_err(|e| hce_format::GltfError::Json(e.to_string()))?;
                 Ok(write_atomic(path, &text)?)
             }
             _ => Err(OutputError::OutputExtension {
@@ -418,7 +418,7 @@ fn embed_images(
 
 /// Removes a previous bake's extension objects (its container view is left unused).
 fn strip_extension(json: &mut Value) {
-    let name = hce_format::gltf::EXTENSION_NAME;
+    let name = hce_format::EXTENSION_NAME;
     remove_from_extensions(json, name);
     for key in ["extensionsUsed", "extensionsRequired"] {
         if let Some(list) = json.get_mut(key).and_then(Value::as_array_mut) {
@@ -525,7 +525,7 @@ fn push(json: &mut Value, key: &str, item: Value) -> Result<usize, OutputError> 
     let list = json
         .as_object_mut()
         .and_then(|r| r.entry(key).or_insert_with(|| json!([])).as_array_mut())
-        .ok_or_else(|| hce_format::gltf::GltfError::Json(format!("\"{key}\" is not an array")))?;
+        .ok_or_else(|| hce_format::GltfError::Json(format!("\"{key}\" is not an array")))?;
     list.push(item);
     Ok(list.len() - 1)
 }

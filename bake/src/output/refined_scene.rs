@@ -24,14 +24,13 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use hce_format::gltf::{hash_hex, write_glb, PrimitiveLink};
+use hce_format::{hash_hex, write_glb, PrimitiveLink};
 use hce_format::{Object, ObjectKind};
 use serde_json::{json, Map, Value};
 
 use hce_geometry::refine::{face_normal, unit_or_up, RefinedObject};
 use hce_meshio::export::base64;
 use hce_meshio::{write_atomic, FileWriteError};
-use hce_runtime::asset::{Asset, AssetFormat};
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -161,7 +160,7 @@ impl Writer<'_> {
 
     /// Copies a buffer view of the input (its bytes, stride and target) into the output.
     fn copy_view(&mut self, index: usize) -> Result<usize, SceneExportError> {
-        let bytes = hce_format::gltf::buffer_view_bytes(self.input, self.buffers, index)
+        let bytes = hce_format::buffer_view_bytes(self.input, self.buffers, index)
             .map_err(|e| SceneExportError::Gltf {
                 location: format!("bufferViews[{index}]"),
                 message: e.to_string(),
@@ -273,46 +272,48 @@ fn material_response(input: &Value, material: Option<u64>) -> ([f32; 3], bool) {
     (base, emissive)
 }
 
-/// Writes `asset` with every object refined (`refined[k]` for object `k`) as a `.glb` or
-/// `.gltf` (buffer embedded as a data URI). `input` is the glTF JSON and `buffers` its loaded
-/// buffers, `None` for a `.hce` file (then each object becomes one node and mesh of its name).
+/// Writes a baked asset's `objects` (its container's, in order) with every object refined
+/// (`refined[k]` for object `k`) as a `.glb` or `.gltf` (buffer embedded as a data URI). `input`
+/// is the glTF JSON and `buffers` its loaded buffers, `None` for a `.hce` file (then each object
+/// becomes one node and mesh of its name).
 pub fn write_refined_scene(
     path: &Path,
-    asset: &Asset,
+    objects: &[&Object],
     input: Option<(&Value, &[Vec<u8>])>,
     refined: &[RefinedObject],
 ) -> Result<(), SceneExportError> {
+    // A bare container: one synthetic node and mesh per object, linked whole.
+    let bare = input.is_none();
     let synthetic;
     let (input, buffers) = match input {
         Some(i) => i,
         None => {
-            synthetic = hce_scene_json(asset);
+            synthetic = hce_scene_json(objects);
             (&synthetic, &[][..])
         }
     };
-    let links: Vec<PrimitiveLink> = if asset.format == AssetFormat::Hce {
-        (0..asset.objects.len())
+    let links: Vec<PrimitiveLink> = if bare {
+        (0..objects.len())
             .map(|k| PrimitiveLink {
                 mesh: k,
                 primitive: 0,
                 object: k as u32,
-                geometry_hash: asset.objects[k].object.geometry_hash,
+                geometry_hash: objects[k].geometry_hash,
                 first_triangle: 0,
             })
             .collect()
     } else {
-        hce_format::gltf::primitive_links(input).map_err(|e| SceneExportError::Gltf {
+        hce_format::primitive_links(input).map_err(|e| SceneExportError::Gltf {
             location: "meshes".into(),
             message: e.to_string(),
         })?
     };
     let link_of: HashMap<(usize, usize), &PrimitiveLink> =
         links.iter().map(|l| ((l.mesh, l.primitive), l)).collect();
-    let geometry: Vec<ObjectGeometry> = asset
-        .objects
+    let geometry: Vec<ObjectGeometry> = objects
         .iter()
         .zip(refined)
-        .map(|(o, r)| ObjectGeometry::new(&o.object, r))
+        .map(|(o, r)| ObjectGeometry::new(o, r))
         .collect();
 
     // COLOR_0 per linked primitive, before the exposure: radiosity over base colour.
@@ -342,7 +343,7 @@ pub fn write_refined_scene(
             let k = l.object as usize;
             let Some(g) = geometry.get(k) else { continue };
             let level = refined[k].mesh.level;
-            let coarse = hce_format::gltf::primitive_geometry(input, buffers, m, p)
+            let coarse = hce_format::primitive_geometry(input, buffers, m, p)
                 .map(|(_, t)| t)
                 .unwrap_or(refined[k].mesh.coarse_triangles);
             let first = (l.first_triangle as usize) << (2 * level);
@@ -531,7 +532,7 @@ pub fn write_refined_scene(
         root.insert("images".into(), json!(images));
     }
     // Root extensions (KHR_lights_punctual, ...) without ours: the output carries no container.
-    let ours = hce_format::gltf::EXTENSION_NAME;
+    let ours = hce_format::EXTENSION_NAME;
     if let Some(ext) = input.get("extensions").and_then(Value::as_object) {
         let ext: Map<String, Value> = ext
             .iter()
@@ -584,25 +585,24 @@ pub fn write_refined_scene(
 
 /// The scene of a bare container: one node and one mesh per object, named after it, in its own
 /// object space (a container has no scene graph).
-fn hce_scene_json(asset: &Asset) -> Value {
-    let nodes: Vec<Value> = asset
-        .objects
+fn hce_scene_json(objects: &[&Object]) -> Value {
+    let nodes: Vec<Value> = objects
         .iter()
         .enumerate()
-        .map(|(k, o)| json!({ "name": o.name(), "mesh": k }))
+        .map(|(k, o)| json!({ "name": o.name, "mesh": k }))
         .collect();
-    let meshes: Vec<Value> = asset
-        .objects
+    let meshes: Vec<Value> = objects
         .iter()
-        .map(|o| {
-            json!({ "name": o.name(), "primitives": [{ "attributes": {}, "extensions": {
-                hce_format::gltf::EXTENSION_NAME: { "object": o.index,
-                    "geometryHash": hash_hex(o.object.geometry_hash) } } }] })
+        .enumerate()
+        .map(|(k, o)| {
+            json!({ "name": o.name, "primitives": [{ "attributes": {}, "extensions": {
+                hce_format::EXTENSION_NAME: { "object": k,
+                    "geometryHash": hash_hex(o.geometry_hash) } } }] })
         })
         .collect();
     json!({
         "scene": 0,
-        "scenes": [{ "nodes": (0..asset.objects.len()).collect::<Vec<_>>() }],
+        "scenes": [{ "nodes": (0..objects.len()).collect::<Vec<_>>() }],
         "nodes": nodes,
         "meshes": meshes,
     })

@@ -13,11 +13,7 @@ use hce_geometry::topology::{Topology, TopologyConfig};
 pub fn control_mesh(path: &Path, config: &TopologyConfig) -> Topology {
     let input = hce_meshio::load_mesh(path).unwrap();
     let w = hce_geometry::weld(&input.positions, 0.0);
-    let tris: Vec<[u32; 3]> = input
-        .triangles
-        .iter()
-        .map(|t| t.map(|i| w.input_to_welded[i as usize]))
-        .collect();
+    let tris = w.triangles(&input.triangles);
     hce_geometry::topology::build_control_mesh(
         &w.positions,
         &tris,

@@ -48,7 +48,7 @@ pub(super) fn import_bytes(
     panic_free(|| import_checked(path, base, bytes, options)).unwrap_or_else(|message| {
         Err(ImportError::Invalid {
             path: path.to_path_buf(),
-            message,
+            message: format!("invalid glTF: {message}"),
         })
     })
 }
@@ -66,7 +66,7 @@ fn import_checked(
     };
     let invalid = |message: String| ImportError::Invalid {
         path: path.to_path_buf(),
-        message,
+        message: format!("invalid glTF: {message}"),
     };
     let gltf = crate::gltf_guard::open(bytes, base).map_err(|e| match e {
         OpenError::Invalid(message) => invalid(message),
@@ -80,7 +80,7 @@ fn import_checked(
     let mut warnings = Vec::new();
 
     for ext in document.extensions_used() {
-        if ext == hce_format::gltf::EXTENSION_NAME {
+        if ext == hce_format::EXTENSION_NAME {
             warnings.push(format!(
                 "{ext}: the input already carries baked lighting; it is ignored and replaced"
             ));
@@ -120,7 +120,8 @@ fn import_checked(
             );
         }
         if let Some(light) = node.light() {
-            scene.lights.push(light_of(node, &light, world));
+            let index = scene.lights.len();
+            scene.lights.push(light_of(index, node, &light, world));
         }
         if let (Some(cam), None) = (node.camera(), &scene.camera) {
             scene.camera = Some(SceneCamera {
@@ -306,6 +307,7 @@ fn read_mesh_instance(
 }
 
 fn light_of(
+    index: usize,
     node: &::gltf::Node,
     light: &::gltf::khr_lights_punctual::Light,
     world: Mat4,
@@ -322,8 +324,10 @@ fn light_of(
         },
     };
     PunctualLight {
-        name: light.name().or(node.name()).map(str::to_owned),
-        node: node.index(),
+        name: light
+            .name()
+            .or(node.name())
+            .map_or_else(|| format!("light {index}"), str::to_owned),
         kind,
         position: world.transform_point3(Vec3::ZERO).to_array(),
         direction: world

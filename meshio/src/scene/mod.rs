@@ -70,45 +70,8 @@ pub fn glob_match(pattern: &[u8], name: &[u8]) -> bool {
     pattern[p.min(pattern.len())..].iter().all(|&c| c == b'*')
 }
 
-/// Why a scene cannot be imported.
-#[derive(Debug, thiserror::Error)]
-pub enum ImportError {
-    #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
-    #[error("{path}: not a readable glTF 2.0 file: {source}")]
-    Gltf {
-        path: PathBuf,
-        source: ::gltf::Error,
-    },
-    #[error("{path}: invalid glTF: {message}")]
-    Invalid { path: PathBuf, message: String },
-    #[error("{path}: not a readable OBJ file: {message}")]
-    Obj { path: PathBuf, message: String },
-    #[error("{path}: unknown scene format; use .gltf, .glb or .obj")]
-    UnknownFormat { path: PathBuf },
-    #[error("{path}: the scene has no triangles to bake{}", warnings_suffix(.warnings))]
-    NoTriangles {
-        path: PathBuf,
-        warnings: Vec<String>,
-    },
-    #[error(
-        "{path}: the scene has no light source: no KHR_lights_punctual light and no material \
-         with a non-zero emission; add a light, or an emissive material (emissiveFactor, \
-         or Ke in MTL) on some geometry"
-    )]
-    NoLightSource { path: PathBuf },
-}
-
-fn warnings_suffix(w: &[String]) -> String {
-    if w.is_empty() {
-        String::new()
-    } else {
-        format!(" ({})", w.join("; "))
-    }
-}
+/// Why a scene cannot be imported: meshio's one reader error.
+pub use crate::import::ImportError;
 
 /// The file format a scene was read from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -250,21 +213,24 @@ pub enum LightKind {
     Directional,
 }
 
-/// A punctual light placed in world space. Units are those of KHR_lights_punctual: candela for
-/// point and spot lights, lux for directional lights.
-#[derive(Clone, Debug)]
+/// A punctual light placed in world space: the one light type of the importer and the solver
+/// (`hce_bake::PunctualLight` is this type). Units are those of KHR_lights_punctual: candela
+/// for point and spot lights, lux for directional lights.
+#[derive(Clone, Debug, PartialEq)]
 pub struct PunctualLight {
-    pub name: Option<String>,
-    pub node: usize,
+    /// The light's name, else its node's, else `light {i}` (its index in the scene's lights).
+    pub name: String,
     pub kind: LightKind,
-    /// World position (meaningless for directional lights).
+    /// World position (ignored for directional lights).
     pub position: [f32; 3],
-    /// Unit world direction the light shines towards (the node's -Z); unused for point lights.
+    /// World direction the light travels (the node's -Z; spot axis / directional), need not be
+    /// unit; unused for point lights.
     pub direction: [f32; 3],
-    /// Linear RGB colour.
+    /// Linear RGB colour multiplying `intensity`.
     pub color: [f32; 3],
+    /// Candela (point, spot) or lux (directional).
     pub intensity: f32,
-    /// Distance cut-off; `None` is infinite.
+    /// glTF `range`: beyond it the light contributes nothing; `None` is infinite.
     pub range: Option<f32>,
 }
 

@@ -14,6 +14,8 @@ use super::util::{
 use super::{GpuContext, GpuError};
 use hce_geometry::lighting::Reconstruction;
 
+pub use super::inputs::{grid, octahedron, random_object, RandomTrees, SplitMix};
+
 /// Where a time came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Timer {

@@ -8,10 +8,8 @@
 //                           patterns) per point: c (RGB), then the red, green, blue gradients.
 // The Rust side builds the table from the validated object, so every index stays in bounds.
 
-// Bits of the lattice in which points are evaluated (lighting.rs EVAL_LATTICE_BITS).
-const HCE_EVAL_BITS: u32 = 16u;
-// A leaf's node word (lighting.rs LEAF).
-const HCE_LEAF: u32 = 0x80000000u;
+// HCE_EVAL_BITS (the bits of the lattice in which points are evaluated) and HCE_LEAF (a leaf's
+// node word) come from hce_constants.wgsl, generated from lighting.rs's constants.
 
 // Step 1: `c + G n` of one point's model, per channel, in the order of lighting.rs
 // `eval_model`: c + ((g.x n.x + g.y n.y) + g.z n.z).

@@ -75,16 +75,9 @@ struct Params {
 
 const NO_COPY: u32 = 0xffffffffu;
 
-// Bits of the per-triangle flags word the Rust side derives from the tables.
-const OWNS_EDGE: u32 = 1u;       // << e: the triangle owns edge e (writes its points)
-const OWNS_VERTEX: u32 = 8u;     // << c: the triangle's corner c writes coarse vertex v_c
-const INTERIOR: u32 = 64u;       // << e: edge e has a neighbour (a band)
-const SHARP: u32 = 512u;         // << e: edge e is infinitely sharp
-
-const RULE_CREASE: u32 = 1u;
-const RULE_CORNER: u32 = 2u;
-const SPOKE_SHARP: u32 = 1u;
-const VERTEX_BOUNDARY: u32 = 1u;
+// The bits of the per-triangle flags word (OWNS_EDGE, OWNS_VERTEX, INTERIOR, SHARP) and of the
+// file's flags (RULE_CREASE, RULE_CORNER, SPOKE_SHARP, VERTEX_BOUNDARY) come from
+// hce_constants.wgsl, generated from the Rust constants and prepended first.
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> coarse_positions: array<f32>;

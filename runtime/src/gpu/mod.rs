@@ -32,6 +32,8 @@ mod context;
 mod decode;
 mod flat;
 mod framing;
+#[cfg(any(feature = "testing", feature = "bench"))]
+mod inputs;
 mod lod;
 mod loop_kernel;
 mod render;

@@ -1,6 +1,6 @@
 //! Test support (feature `testing`): a GPU context or a visible skip, synthetic objects with
-//! random HCE trees (also the inputs of `hce bench-gpu`), and the colour-decoding kernel on its
-//! own ([`decode_colours`]), checked against its CPU twin by `tests/gpu_kernels.rs`.
+//! random HCE trees (`inputs`, shared with `bench`: the inputs of `hce bench-gpu`), and the
+//! colour-decoding kernel on its own ([`decode_colours`]), checked against its CPU twin by `tests/gpu_kernels.rs`.
 //!
 //! GPU tests must run in CI (Mesa lavapipe is enough) and must not silently pass when the
 //! runner lost its driver, so `HCE_REQUIRE_GPU=1` turns "no adapter" into a failure. Without it
@@ -9,6 +9,7 @@
 use super::{ContextOptions, GpuContext, GpuError};
 
 pub use super::decode::{decode_colours, ColourQuery, DecodedColour};
+pub use super::inputs::{grid, octahedron, random_object, RandomTrees, SplitMix};
 
 /// The environment variable that makes a missing adapter a test failure.
 const REQUIRE_GPU_ENV: &str = "HCE_REQUIRE_GPU";
@@ -79,171 +80,4 @@ mod tests {
             matches!(classify("t", &e, false), Unavailable::Skip(m) if m.starts_with("SKIPPED t"))
         );
     }
-}
-
-/// A small deterministic generator (SplitMix64) for test and benchmark inputs, so the crate
-/// needs no random-number dependency and every run sees the same data.
-#[derive(Clone, Debug)]
-pub struct SplitMix(pub u64);
-
-impl SplitMix {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[0, 1)`.
-    pub fn unit(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-    }
-
-    pub fn below(&mut self, n: u32) -> u32 {
-        (self.next_u64() % u64::from(n.max(1))) as u32
-    }
-
-    pub fn unit_vector(&mut self) -> [f32; 3] {
-        loop {
-            let v = [
-                2.0 * self.unit() - 1.0,
-                2.0 * self.unit() - 1.0,
-                2.0 * self.unit() - 1.0,
-            ];
-            let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-            if l > 0.1 && l <= 1.0 {
-                return v.map(|x| x / l);
-            }
-        }
-    }
-}
-
-/// Shape of the random HCE data [`random_object`] attaches to a mesh.
-#[derive(Clone, Copy, Debug)]
-pub struct RandomTrees {
-    /// Deepest tree level. Default 4.
-    pub max_depth: u32,
-    /// Probability that a node above `max_depth` is subdivided. Default 0.6.
-    pub split_probability: f32,
-    /// Extra representative normals per triangle: `0 ..= max_extra_normals`. Default 4.
-    pub max_extra_normals: u32,
-}
-
-impl Default for RandomTrees {
-    fn default() -> Self {
-        Self {
-            max_depth: 4,
-            split_probability: 0.6,
-            max_extra_normals: 4,
-        }
-    }
-}
-
-/// An object over `positions`/`triangles` (edge ids filled in, other adjacency tables left
-/// empty) with random breadth-first trees, normal sets and colours: valid input for the
-/// decoding and flat kernels, built entirely in code.
-pub fn random_object(
-    name: &str,
-    positions: Vec<f32>,
-    triangles: Vec<u32>,
-    shape: RandomTrees,
-    seed: u64,
-) -> hce_format::Object {
-    use hce_format::{rgb9e5, ControlMesh, Object, ObjectKind, TriangleRecord};
-    let mut rng = SplitMix(seed);
-    let edges = hce_geometry::flat::edge_ids(&triangles);
-    let mesh = ControlMesh {
-        positions,
-        triangles,
-        edges,
-        ..Default::default()
-    };
-    let mut records = Vec::new();
-    let mut normals = Vec::new();
-    let mut bit_list: Vec<bool> = Vec::new();
-    let mut colours = Vec::new();
-    for t in 0..mesh.triangle_count() {
-        let p = mesh.triangle(t).map(|v| mesh.position(v));
-        let (geometric, _) = hce_geometry::flat::normal_and_area(p);
-        let normal_count = 1 + rng.below(shape.max_extra_normals + 1);
-        let record = TriangleRecord {
-            bits_start: bit_list.len() as u32,
-            colour_start: colours.len() as u32,
-            normal_start: normals.len() as u32,
-            normal_count,
-        };
-        normals.push(geometric);
-        for _ in 1..normal_count {
-            normals.push(rng.unit_vector());
-        }
-        // Breadth-first: a node's bit, then its children queued behind the current level.
-        let mut queue = std::collections::VecDeque::from([0u32]);
-        let mut nodes = 0u32;
-        while let Some(depth) = queue.pop_front() {
-            nodes += 1;
-            let split = depth < shape.max_depth && rng.unit() < shape.split_probability;
-            bit_list.push(split);
-            if split {
-                queue.extend([depth + 1; 4]);
-            }
-        }
-        for _ in 0..nodes * normal_count {
-            let scale = 4.0 * rng.unit();
-            colours.push(rgb9e5::encode([
-                scale * rng.unit(),
-                scale * rng.unit(),
-                scale * rng.unit(),
-            ]));
-        }
-        records.push(record);
-    }
-    let mut bits = vec![0u32; bit_list.len().div_ceil(32)];
-    for (i, &b) in bit_list.iter().enumerate() {
-        if b {
-            bits[i / 32] |= 1 << (i % 32);
-        }
-    }
-    Object {
-        name: name.to_string(),
-        kind: ObjectKind::Flat,
-        geometry_hash: 0,
-        mesh,
-        triangles: records,
-        normals,
-        bits,
-        bit_len: bit_list.len() as u64,
-        colours,
-    }
-}
-
-/// Test meshes: a closed octahedron and an open 3×2 grid (boundary edges and corners).
-pub fn octahedron() -> (Vec<f32>, Vec<u32>) {
-    let positions = vec![
-        1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0,
-    ];
-    let triangles = vec![
-        0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5,
-    ];
-    (positions, triangles)
-}
-
-pub fn grid(nx: u32, ny: u32) -> (Vec<f32>, Vec<u32>) {
-    let mut positions = Vec::new();
-    for y in 0..=ny {
-        for x in 0..=nx {
-            // A gentle bump so fine normals differ from triangle to triangle.
-            let z = 0.3 * ((x as f32) * 0.9).sin() * ((y as f32) * 1.3).cos();
-            positions.extend([x as f32, y as f32, z]);
-        }
-    }
-    let mut triangles = Vec::new();
-    let id = |x: u32, y: u32| y * (nx + 1) + x;
-    for y in 0..ny {
-        for x in 0..nx {
-            triangles.extend([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
-            triangles.extend([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
-        }
-    }
-    (positions, triangles)
 }

@@ -2,6 +2,9 @@
 //! written once: shared modules prepended to the kernels that use them, in dependency order,
 //! and one template instantiated per memory.
 //!
+//! * `hce_constants.wgsl`: the constants the kernels share with the Rust side, generated from
+//!   the Rust constants (the list `CONSTANTS`; a test fails while the checked-in file differs, and
+//!   `HCE_WRITE_WGSL=1` rewrites it), prepended first to every kernel, here and in the browser;
 //! * `hce_tree.wgsl`: the walk of a breadth-first HCE tree and the paper's face colour;
 //! * `hce_light.wgsl`: the smooth reconstruction of baked lighting (SPEC.md Appendix G);
 //! * `hce_lattice.wgsl`: the 1-to-4 lattice of a refined triangle and its vertex numbering;
@@ -10,6 +13,8 @@
 //!   (WGSL has no pointer that reaches both storage and workgroup memory), instantiated for the
 //!   scratch kernel of `loop.wgsl` and for the workgroup kernel of `loop_workgroup.wgsl`.
 
+/// The generated constants, prepended first (see `CONSTANTS`).
+const CONSTANTS_WGSL: &str = include_str!("hce_constants.wgsl");
 /// The shared tree-walking functions, prepended to every kernel that colours subtriangles.
 const TREE_WGSL: &str = include_str!("hce_tree.wgsl");
 const LIGHT_WGSL: &str = include_str!("hce_light.wgsl");
@@ -25,10 +30,83 @@ const DECODE_WGSL: &str = include_str!("decode.wgsl");
 /// The placeholder of `loop_normals.wgsl`: the prefix of a patch memory's accessors.
 const PATCH: &str = "{patch}";
 
+/// The one list of the constants the WGSL shares with the Rust side: WGSL name, value (the Rust
+/// constant itself) and what it is. `hce_constants.wgsl` is generated from it
+/// ([`constants_wgsl`]) and checked in, so that the browser, which fetches the same files,
+/// gets it too.
+#[cfg(test)]
+const CONSTANTS: &[(&str, u32, &str)] = &[
+    (
+        "OWNS_EDGE",
+        super::loop_kernel::OWNS_EDGE,
+        "<< e: the triangle owns edge e (writes its points); loop_kernel.rs",
+    ),
+    (
+        "OWNS_VERTEX",
+        super::loop_kernel::OWNS_VERTEX,
+        "<< c: the triangle's corner c writes coarse vertex v_c; loop_kernel.rs",
+    ),
+    (
+        "INTERIOR",
+        super::loop_kernel::INTERIOR,
+        "<< e: edge e has a neighbour (a band); loop_kernel.rs",
+    ),
+    (
+        "SHARP",
+        super::loop_kernel::SHARP,
+        "<< e: edge e is infinitely sharp; loop_kernel.rs",
+    ),
+    (
+        "RULE_CREASE",
+        hce_format::RULE_CREASE,
+        "the crease vertex rule (SPEC.md A.7); hce_format",
+    ),
+    (
+        "RULE_CORNER",
+        hce_format::RULE_CORNER,
+        "the corner vertex rule (SPEC.md A.7); hce_format",
+    ),
+    (
+        "SPOKE_SHARP",
+        hce_format::SPOKE_SHARP,
+        "a spoke's sharp bit (SPEC.md A.7); hce_format",
+    ),
+    (
+        "VERTEX_BOUNDARY",
+        hce_format::VERTEX_BOUNDARY,
+        "a vertex's boundary bit (SPEC.md A.7); hce_format",
+    ),
+    (
+        "HCE_EVAL_BITS",
+        hce_geometry::lighting::EVAL_LATTICE_BITS,
+        "bits of the lattice in which points are evaluated; lighting.rs EVAL_LATTICE_BITS",
+    ),
+    (
+        "HCE_LEAF",
+        hce_geometry::lighting::LEAF,
+        "a leaf's node word; lighting.rs LEAF",
+    ),
+];
+
+/// The text of `hce_constants.wgsl`, generated from [`CONSTANTS`].
+#[cfg(test)]
+fn constants_wgsl() -> String {
+    let mut out = String::from(
+        "// GENERATED from the Rust constants by runtime/src/gpu/wgsl.rs (`CONSTANTS`); do not edit.\n\
+         // Change the Rust constant, then `HCE_WRITE_WGSL=1 cargo test -p hce-runtime --lib\n\
+         // constants` rewrites this file. Prepended first to every kernel, by wgsl.rs and by\n\
+         // web/src/wgsl.js alike.\n\n",
+    );
+    for (name, value, what) in CONSTANTS {
+        out.push_str(&format!("// {what}\nconst {name}: u32 = {value:#x}u;\n"));
+    }
+    out
+}
+
 /// The shared modules of a refinement kernel (flat and Loop), in dependency order, followed by
 /// `kernel`.
 pub(crate) fn refinement_source(kernel: &str) -> String {
-    format!("{TREE_WGSL}\n{LIGHT_WGSL}\n{LATTICE_WGSL}\n{GATHER_WGSL}\n{kernel}")
+    format!("{CONSTANTS_WGSL}\n{TREE_WGSL}\n{LIGHT_WGSL}\n{LATTICE_WGSL}\n{GATHER_WGSL}\n{kernel}")
 }
 
 /// The flat (linear 1-to-4) refinement kernel.
@@ -36,10 +114,11 @@ pub(crate) fn flat_source() -> String {
     refinement_source(FLAT_WGSL)
 }
 
-/// The colour-decoding kernel (`gpu::testing`): the tree walk, then `decode.wgsl`.
+/// The colour-decoding kernel (`gpu::testing`): the constants, the tree walk, then
+/// `decode.wgsl`.
 #[cfg(any(test, feature = "testing"))]
 pub(crate) fn decode_source() -> String {
-    format!("{TREE_WGSL}\n{DECODE_WGSL}")
+    format!("{CONSTANTS_WGSL}\n{TREE_WGSL}\n{DECODE_WGSL}")
 }
 
 /// `loop_normals.wgsl` for the patch memory whose accessors start with `prefix` (`sq_at`,
@@ -87,6 +166,23 @@ mod tests {
         modules
     }
 
+    /// Every `.wgsl` file of this folder, by name, with its text.
+    fn every_file() -> Vec<(String, String)> {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/gpu");
+        let mut files: Vec<(String, String)> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|x| x == "wgsl"))
+            .map(|p| {
+                let name = p.file_name().unwrap().to_string_lossy().into_owned();
+                (name, std::fs::read_to_string(&p).unwrap())
+            })
+            .collect();
+        files.sort();
+        assert!(files.len() >= 10, "{files:?}");
+        files
+    }
+
     /// `source` parsed and validated by naga (the WGSL front end wgpu compiles with).
     fn parse(name: &str, source: &str) -> naga::Module {
         let module = naga::front::wgsl::parse_str(source)
@@ -125,24 +221,34 @@ mod tests {
         }
     }
 
-    /// The constants the WGSL restates are the Rust ones they mirror.
+    /// `hce_constants.wgsl` is what [`constants_wgsl`] generates from the Rust constants
+    /// (`HCE_WRITE_WGSL=1` rewrites it), and the assembled kernels see those values.
     #[test]
-    fn wgsl_constants_equal_their_rust_twins() {
-        use super::super::loop_kernel::{INTERIOR, OWNS_EDGE, OWNS_VERTEX, SHARP};
+    fn constants_prelude_is_generated_from_the_rust_constants() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/gpu/hce_constants.wgsl");
+        let generated = constants_wgsl();
+        if std::env::var_os("HCE_WRITE_WGSL").is_some() {
+            std::fs::write(&path, &generated).unwrap();
+        }
+        assert_eq!(
+            std::fs::read_to_string(&path).unwrap(),
+            generated,
+            "{} is stale: run HCE_WRITE_WGSL=1 cargo test -p hce-runtime --lib constants",
+            path.display()
+        );
         let module = parse("loop", &loop_source());
-        for (name, rust) in [
-            ("OWNS_EDGE", OWNS_EDGE),
-            ("OWNS_VERTEX", OWNS_VERTEX),
-            ("INTERIOR", INTERIOR),
-            ("SHARP", SHARP),
-            ("RULE_CREASE", hce_format::RULE_CREASE),
-            ("RULE_CORNER", hce_format::RULE_CORNER),
-            ("SPOKE_SHARP", hce_format::SPOKE_SHARP),
-            ("VERTEX_BOUNDARY", hce_format::VERTEX_BOUNDARY),
-            ("HCE_EVAL_BITS", hce_geometry::lighting::EVAL_LATTICE_BITS),
-            ("HCE_LEAF", hce_geometry::lighting::LEAF),
-        ] {
-            assert_eq!(u32_constant(&module, name), rust, "{name}");
+        for (name, rust, _) in CONSTANTS {
+            assert_eq!(u32_constant(&module, name), *rust, "{name}");
+        }
+        // Each is declared in the prelude alone.
+        for (file, text) in every_file() {
+            for (name, _, _) in CONSTANTS {
+                assert!(
+                    file == "hce_constants.wgsl" || !text.contains(&format!("const {name}:")),
+                    "{file} declares {name}"
+                );
+            }
         }
     }
 

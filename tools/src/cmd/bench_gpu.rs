@@ -38,18 +38,14 @@ pub struct BenchGpuArgs {
     pub reconstruction: String,
 }
 
-#[cfg(not(feature = "gpu"))]
-pub fn run(_args: BenchGpuArgs) -> Result<()> {
-    anyhow::bail!("this `hce` was built without the `gpu` feature")
-}
-
 #[cfg(feature = "gpu")]
 pub fn run(args: BenchGpuArgs) -> Result<()> {
     use anyhow::Context;
     use hce_geometry::lighting::Reconstruction;
     use hce_meshio::plain as plain_mesh;
-    use hce_runtime::gpu::bench::{bench_flat, bench_loop, write_bandwidth, BenchRow, Timer};
-    use hce_runtime::gpu::testing::{grid, random_object, RandomTrees};
+    use hce_runtime::gpu::bench::{
+        bench_flat, bench_loop, grid, random_object, write_bandwidth, BenchRow, RandomTrees, Timer,
+    };
     use hce_runtime::gpu::PatchScheme;
     use hce_runtime::gpu::{ContextOptions, GpuContext};
 
@@ -140,7 +136,7 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
         let object = match &args.mesh {
             Some(path) => {
                 let mesh = plain_mesh::load_plain_mesh(path)?;
-                plain_mesh::to_flat_object("mesh", &mesh).0
+                hce_runtime::plain::to_flat_object("mesh", &mesh).0
             }
             None => {
                 let (p, t) = grid(32, 32);
@@ -166,11 +162,7 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
             Some(path) => {
                 let input = hce_meshio::load_mesh(path)?;
                 let welded = hce_geometry::weld(&input.positions, 0.0);
-                let tris: Vec<[u32; 3]> = input
-                    .triangles
-                    .iter()
-                    .map(|t| t.map(|i| welded.input_to_welded[i as usize]))
-                    .collect();
+                let tris = welded.triangles(&input.triangles);
                 (welded.positions, tris, input.corner_normals)
             }
             None => {

@@ -10,9 +10,6 @@
 //! exits with a non-zero status, so that a script never mistakes a half-finished demo for a
 //! finished one.
 
-// Without the GPU the command bakes and explains how to get it; the image helpers stay tested.
-#![cfg_attr(not(feature = "gpu"), allow(dead_code))]
-
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -221,21 +218,6 @@ pub fn run(args: DemoArgs) -> Result<()> {
         baked.display()
     );
     Ok(())
-}
-
-#[cfg(not(feature = "gpu"))]
-fn render_levels(
-    _args: &DemoArgs,
-    _dir: &Path,
-    _stem: &str,
-    baked: &Path,
-    _size: (u32, u32),
-) -> Result<()> {
-    bail!(
-        "the baked scene is in {}, but this `hce` was built without the `gpu` feature and \
-         cannot render it; rebuild with default features",
-        baked.display()
-    )
 }
 
 #[cfg(feature = "gpu")]

@@ -4,7 +4,7 @@
 //! SPEC.md Appendix E.
 
 use clap::Args;
-use hce_format::gltf;
+
 use hce_format::{
     read_layout, read_with, rgb9e5, triangle_trees, Container, ObjectKind, ReadOptions,
 };
@@ -42,7 +42,7 @@ impl LoadError {
 
 /// A primitive linked to a container object, with the hash recomputed from its geometry.
 pub struct LinkedPrimitive {
-    pub link: gltf::PrimitiveLink,
+    pub link: hce_format::PrimitiveLink,
     /// `Ok((hash, triangle count))` or why the geometry could not be read.
     pub computed: Result<(u64, usize), String>,
 }
@@ -69,7 +69,7 @@ pub fn load(path: &Path) -> Result<Loaded, LoadError> {
             primitives: Vec::new(),
         });
     }
-    let invalid = |e: gltf::GltfError| LoadError::Invalid(format!("{}: {e}", path.display()));
+    let invalid = |e: hce_format::GltfError| LoadError::Invalid(format!("{}: {e}", path.display()));
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let source = GltfSource::parse(&bytes, buffer_files(&dir)).map_err(invalid)?;
     let format = if source.glb { "glb" } else { "gltf" };
@@ -80,13 +80,13 @@ pub fn load(path: &Path) -> Result<Loaded, LoadError> {
             LoadError::Invalid(format!(
                 "{}: the asset does not use {} (no root extension object); bake it with `hce bake`",
                 path.display(),
-                gltf::EXTENSION_NAME
+                hce_format::EXTENSION_NAME
             ))
         })?
         .to_vec();
     // Malformed links are left out here; `hce validate` reports each of them.
-    let (links, _) = gltf::scan_primitive_links(&source.json);
-    let geometries = gltf::linked_geometries(&source.json, &source.buffers, &links);
+    let (links, _) = hce_format::scan_primitive_links(&source.json);
+    let geometries = hce_format::linked_geometries(&source.json, &source.buffers, &links);
     let primitives = links
         .into_iter()
         .zip(geometries)
@@ -140,7 +140,7 @@ fn object_json(index: usize, o: &hce_format::Object) -> Value {
         "index": index,
         "name": o.name,
         "kind": match o.kind { ObjectKind::Multiresolution => "multiresolution", ObjectKind::Flat => "flat" },
-        "geometry_hash": gltf::hash_hex(o.geometry_hash),
+        "geometry_hash": hce_format::hash_hex(o.geometry_hash),
         "control_points": o.mesh.positions.len() / 3,
         "triangles": o.triangles.len(),
         "ring_length": o.mesh.ring.len(),
@@ -171,7 +171,7 @@ pub fn inspect_json(path: &Path) -> Result<Value, LoadError> {
             json!({
                 "index": i,
                 "type": s.kind.to_string(),
-                "object": (s.object != hce_format::layout::FILE_LEVEL).then_some(s.object),
+                "object": (s.object != hce_format::FILE_LEVEL).then_some(s.object),
                 "offset": s.offset,
                 "length": s.length,
                 "crc32": format!("{:08x}", s.crc32),
@@ -203,7 +203,7 @@ pub fn inspect_json(path: &Path) -> Result<Value, LoadError> {
         .iter()
         .map(|p| {
             let (computed, triangles, error) = match &p.computed {
-                Ok((h, t)) => (json!(gltf::hash_hex(*h)), json!(t), Value::Null),
+                Ok((h, t)) => (json!(hce_format::hash_hex(*h)), json!(t), Value::Null),
                 Err(e) => (Value::Null, Value::Null, json!(e)),
             };
             json!({
@@ -211,7 +211,7 @@ pub fn inspect_json(path: &Path) -> Result<Value, LoadError> {
                 "primitive": p.link.primitive,
                 "object": p.link.object,
                 "first_triangle": p.link.first_triangle,
-                "geometry_hash": gltf::hash_hex(p.link.geometry_hash),
+                "geometry_hash": hce_format::hash_hex(p.link.geometry_hash),
                 "computed_hash": computed,
                 "hash_ok": p.computed.as_ref().ok().map(|(h, _)| *h == p.link.geometry_hash),
                 "triangles": triangles,
@@ -237,7 +237,7 @@ fn metadata_json(c: &Container) -> Value {
     json!({
         "generator": c.metadata.generator,
         "bake_parameters": c.metadata.bake_parameters,
-        "source_hash": gltf::hash_hex(c.metadata.source_hash),
+        "source_hash": hce_format::hash_hex(c.metadata.source_hash),
     })
 }
 

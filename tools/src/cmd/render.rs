@@ -14,7 +14,7 @@
 //! PNG output is tone-mapped: exposure `2^--exposure`, the ACES filmic fit of Narkowicz (2016),
 //! then sRGB encoding ([`hce_runtime::gpu::tone_map_aces`]). EXR output is the linear radiance.
 
-// Without the GPU the command only explains how to get it; its helpers stay compiled and tested.
+// Without the GPU there is no `hce render`; its argument helpers stay compiled and tested.
 #![cfg_attr(not(feature = "gpu"), allow(dead_code))]
 
 use std::path::{Path, PathBuf};
@@ -31,16 +31,17 @@ pub struct RenderArgs {
     /// 32-bit float).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Refine every multiresolution object to this level (0 = coarse mesh); flat objects of a
-    /// baked asset are always refined to their tree depth.
-    #[arg(long, conflicts_with = "auto")]
+    /// Refine every multiresolution object to this level (0 = coarse mesh; at most 6 for
+    /// multiresolution objects, 15 for a plain mesh's preview); flat objects of a baked asset
+    /// are always refined to their tree depth.
+    #[arg(long, conflicts_with = "auto", value_parser = level_parser())]
     pub level: Option<u32>,
     /// Choose the level from the view (the default): edges of about 8 pixels.
     #[arg(long)]
     pub auto: bool,
     /// Image size, WIDTHxHEIGHT.
-    #[arg(long, default_value = "800x600")]
-    pub size: String,
+    #[arg(long, default_value = "800x600", value_parser = parse_size)]
+    pub size: (u32, u32),
     /// `scene` (the file's camera), `auto` (inside a closed room, in front of an open box, or
     /// outside an object), or EYE:TARGET[:FOV] with EYE and TARGET as x,y,z and FOV the
     /// vertical field of view in degrees (default 40), e.g. `3,2,5:0,0,0:35`. Default: the
@@ -84,6 +85,13 @@ pub fn parse_msaa(s: &str) -> Result<u32, String> {
             "'{s}': expected 1, 2, 4, 8 or 16 samples per pixel"
         )),
     }
+}
+
+/// `--level`: 0 to the deepest level a subtriangle path can name (`MAX_PATH_LEVEL`, the flat
+/// kernel's); Loop subdivision's own bound (6) is checked where a multiresolution object is
+/// refined, as a usage error too.
+fn level_parser() -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(0..=i64::from(hce_geometry::decode::MAX_PATH_LEVEL))
 }
 
 pub fn parse_reconstruction(s: &str) -> Result<hce_geometry::lighting::Reconstruction, String> {
@@ -208,11 +216,6 @@ pub fn write_exr(path: &Path, width: u32, height: u32, rgba: &[f32]) -> Result<(
         .with_context(|| format!("writing {}", path.display()))
 }
 
-#[cfg(not(feature = "gpu"))]
-pub fn run(_args: RenderArgs) -> Result<()> {
-    bail!("this `hce` was built without the `gpu` feature; rebuild with default features to render")
-}
-
 /// The camera `--camera` asks for.
 #[cfg(feature = "gpu")]
 pub fn camera_choice(arg: Option<&str>) -> Result<hce_runtime::gpu::CameraChoice> {
@@ -285,8 +288,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
     use hce_runtime::asset::{Asset, AssetError};
 
     output_format(&args.output)?;
-    parse_size(&args.size)?;
-    let choice = camera_choice(args.camera.as_deref())?;
+    // A bad --camera is a usage error (exit 2), as clap's own are.
+    let choice = camera_choice(args.camera.as_deref()).map_err(crate::exit::usage)?;
     let is_obj = args
         .file
         .extension()
@@ -316,13 +319,9 @@ fn run_baked(
 ) -> Result<()> {
     use hce_runtime::gpu::{render_asset, AssetRenderOptions, CameraSource};
 
-    let (width, height) = parse_size(&args.size)?;
+    let (width, height) = args.size;
     for w in &asset.warnings {
         eprintln!("warning: {w}");
-    }
-    let max = hce_geometry::decode::MAX_PATH_LEVEL;
-    if args.level.is_some_and(|l| l > max) {
-        bail!("--level must be 0 to {max}");
     }
     let ctx = open_context(args.software)?;
     let result = render_asset(
@@ -385,7 +384,7 @@ pub fn plain_object(file: &Path) -> Result<hce_format::Object> {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let (object, dropped) = plain_mesh::to_flat_object(&name, &mesh);
+    let (object, dropped) = hce_runtime::plain::to_flat_object(&name, &mesh);
     if dropped > 0 {
         eprintln!("note: {dropped} degenerate triangles dropped after welding equal positions");
     }
@@ -470,7 +469,7 @@ fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Resul
         render_gpu_mesh, CameraChoice, FlatKernel, Framing, GpuMesh, LodParams, RenderParams,
     };
 
-    let (width, height) = parse_size(&args.size)?;
+    let (width, height) = args.size;
     let object = plain_object(&args.file)?;
     let ctx = open_context(args.software)?;
 
@@ -486,7 +485,9 @@ fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Resul
     };
     let f = object.triangles.len() as u64;
     let level = match args.level {
-        Some(level) => check_plain_level(level, f, args.max_triangles)?,
+        Some(level) => {
+            check_plain_level(level, f, args.max_triangles).map_err(crate::exit::usage)?
+        }
         None => {
             let (level, note) =
                 plain.level(&view, height, &LodParams::default(), f, args.max_triangles);

@@ -79,11 +79,7 @@ pub fn run(mut args: SubdivideArgs) -> Result<()> {
     let input = hce_meshio::load_mesh(&args.input)?;
     let t1 = Instant::now();
     let welded = hce_geometry::weld(&input.positions, args.weld_tolerance);
-    let tris: Vec<[u32; 3]> = input
-        .triangles
-        .iter()
-        .map(|t| t.map(|i| welded.input_to_welded[i as usize]))
-        .collect();
+    let tris = welded.triangles(&input.triangles);
     let t2 = Instant::now();
     let config = TopologyConfig {
         creases: args.creases,
@@ -213,9 +209,10 @@ fn run_baked(args: &SubdivideArgs, input: Baked) -> Result<()> {
         }
         write_merged(args, &refined)?;
     } else {
+        let objects: Vec<&hce_format::Object> = asset.objects.iter().map(|o| &o.object).collect();
         write_refined_scene(
             &args.output,
-            &asset,
+            &objects,
             gltf.as_ref().map(|g| (&g.json, g.buffers.as_slice())),
             &refined,
         )

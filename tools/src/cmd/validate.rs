@@ -5,7 +5,7 @@
 
 use super::inspect::LoadError;
 use clap::Args;
-use hce_format::{gltf, validate_bytes};
+use hce_format::{validate_asset, validate_bytes, GltfError};
 use hce_runtime::asset::{buffer_files, GltfSource};
 use std::path::{Path, PathBuf};
 
@@ -17,7 +17,7 @@ pub struct ValidateArgs {
 
 /// Every problem of the file, as `location: message` lines: the container's (SPEC.md
 /// Appendix C) and, for glTF assets, the extension's and every primitive link's
-/// ([`hce_format::gltf::validate_asset`]). `Err` only when the file cannot be read or parsed
+/// ([`hce_format::validate_asset`]). `Err` only when the file cannot be read or parsed
 /// at all.
 pub fn problems(args: &ValidateArgs) -> Result<Vec<String>, LoadError> {
     let path = &args.file;
@@ -28,10 +28,10 @@ pub fn problems(args: &ValidateArgs) -> Result<Vec<String>, LoadError> {
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"));
     let problems = if is_gltf {
-        let invalid = |e: gltf::GltfError| LoadError::Invalid(format!("{}: {e}", path.display()));
+        let invalid = |e: GltfError| LoadError::Invalid(format!("{}: {e}", path.display()));
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let source = GltfSource::parse(&bytes, buffer_files(&dir)).map_err(invalid)?;
-        gltf::validate_asset(&source.json, &source.buffers)
+        validate_asset(&source.json, &source.buffers)
     } else {
         validate_bytes(&bytes)
     };

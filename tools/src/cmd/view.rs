@@ -70,13 +70,6 @@ pub struct ViewArgs {
     pub stats: Option<PathBuf>,
 }
 
-#[cfg(not(feature = "gpu"))]
-pub fn run(_args: ViewArgs) -> Result<()> {
-    anyhow::bail!(
-        "this `hce` was built without the `gpu` feature; rebuild with default features to view"
-    )
-}
-
 #[cfg(feature = "gpu")]
 pub fn run(args: ViewArgs) -> Result<()> {
     use crate::view::{camera::CameraPath, content::Levels, Options, Settings};

@@ -1,6 +1,6 @@
 //! Imports the three committed sample scenes and checks what was read against their README.
 
-use hce_bake::import::{import_scene, ImportError, ImportOptions, LightKind, SourceFormat};
+use hce_meshio::scene::{import_scene, ImportError, ImportOptions, LightKind, SourceFormat};
 use std::path::PathBuf;
 
 fn sample(name: &str) -> PathBuf {
@@ -44,12 +44,11 @@ fn hashes_match_the_format_crate_recomputation() {
     let s = import_scene(&path, &ImportOptions::default()).unwrap();
     assert_eq!(s.triangle_count(), 2214);
     let bytes = std::fs::read(&path).unwrap();
-    let asset = hce_format::gltf::Asset::parse(&bytes).unwrap();
+    let asset = hce_format::GltfAsset::parse(&bytes).unwrap();
     let buffers = asset.buffers(|_| Err("no external".into())).unwrap();
     for o in &s.objects {
         let (hash, tris) =
-            hce_format::gltf::primitive_geometry(&asset.json, &buffers, o.mesh, o.primitive)
-                .unwrap();
+            hce_format::primitive_geometry(&asset.json, &buffers, o.mesh, o.primitive).unwrap();
         assert_eq!(hash, o.geometry_hash(), "{}", o.name);
         assert_eq!(tris, o.triangle_count());
         assert_eq!(o.world_positions.len(), o.positions.len());

@@ -1,0 +1,3 @@
+//! Support shared by meshio's integration tests.
+
+pub mod quad;

@@ -1,0 +1,25 @@
+// GENERATED from the Rust constants by runtime/src/gpu/wgsl.rs (`CONSTANTS`); do not edit.
+// Change the Rust constant, then `HCE_WRITE_WGSL=1 cargo test -p hce-runtime --lib
+// constants` rewrites this file. Prepended first to every kernel, by wgsl.rs and by
+// web/src/wgsl.js alike.
+
+// << e: the triangle owns edge e (writes its points); loop_kernel.rs
+const OWNS_EDGE: u32 = 0x1u;
+// << c: the triangle's corner c writes coarse vertex v_c; loop_kernel.rs
+const OWNS_VERTEX: u32 = 0x8u;
+// << e: edge e has a neighbour (a band); loop_kernel.rs
+const INTERIOR: u32 = 0x40u;
+// << e: edge e is infinitely sharp; loop_kernel.rs
+const SHARP: u32 = 0x200u;
+// the crease vertex rule (SPEC.md A.7); hce_format
+const RULE_CREASE: u32 = 0x1u;
+// the corner vertex rule (SPEC.md A.7); hce_format
+const RULE_CORNER: u32 = 0x2u;
+// a spoke's sharp bit (SPEC.md A.7); hce_format
+const SPOKE_SHARP: u32 = 0x1u;
+// a vertex's boundary bit (SPEC.md A.7); hce_format
+const VERTEX_BOUNDARY: u32 = 0x1u;
+// bits of the lattice in which points are evaluated; lighting.rs EVAL_LATTICE_BITS
+const HCE_EVAL_BITS: u32 = 0x10u;
+// a leaf's node word; lighting.rs LEAF
+const HCE_LEAF: u32 = 0x80000000u;
