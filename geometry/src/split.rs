@@ -165,7 +165,7 @@ pub struct SplitTables {
     pub edge_copy: Vec<u32>,
     /// `X`: corner copies.
     pub copies: u32,
-    /// `S`: edges that are sharp and have triangles on both sides.
+    /// `S`: split edges, the edges with a neighbour that are not joined (SPEC.md G.2).
     pub split_edges: u32,
     /// CSR over corner slots (`V + X`: control point `v`'s owner region, then the copies):
     /// the region's corners `3t + c`, increasing.
@@ -300,7 +300,7 @@ impl SplitTables {
         }
     }
 
-    /// Whether nothing splits (no sharp edge has triangles on both sides).
+    /// Whether nothing splits (every edge with a neighbour is joined).
     pub fn is_empty(&self) -> bool {
         self.copies == 0 && self.split_edges == 0
     }
