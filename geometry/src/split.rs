@@ -260,8 +260,8 @@ impl SplitTables {
         for id in 0..ne {
             let sides = &topo.edge_sides
                 [topo.edge_side_offsets[id] as usize..topo.edge_side_offsets[id + 1] as usize];
-            let neighboured = sides.len() == 2
-                && mesh.neighbours.get(sides[0] as usize) == Some(&(sides[1] / 3));
+            let neighboured =
+                sides.len() == 2 && mesh.neighbours.get(sides[0] as usize) == Some(&(sides[1] / 3));
             if neighboured && !joined[sides[0] as usize] {
                 edge_copy[id] = copy_sides.len() as u32;
                 edge_split[id] = true;

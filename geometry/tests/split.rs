@@ -222,9 +222,14 @@ fn folded_pair(degrees: f64) -> Object {
     let mesh = hce_format::example::control_mesh(positions, triangles);
     let mut object = coloured_cube(mesh);
     object.kind = ObjectKind::Flat;
-    object.colours = [[0.9f32, 0.8, 0.7], [0.9, 0.8, 0.7], [0.1, 0.05, 0.02], [0.1, 0.05, 0.02]]
-        .map(rgb9e5::encode)
-        .to_vec();
+    object.colours = [
+        [0.9f32, 0.8, 0.7],
+        [0.9, 0.8, 0.7],
+        [0.1, 0.05, 0.02],
+        [0.1, 0.05, 0.02],
+    ]
+    .map(rgb9e5::encode)
+    .to_vec();
     object
 }
 
@@ -249,12 +254,19 @@ fn a_flat_fold_splits_above_ten_degrees_only() {
         let fold_vertices: Vec<usize> = (0..r.mesh.positions.len())
             .filter(|&i| on_fold(r.mesh.positions[i]))
             .collect();
-        assert_eq!(fold_vertices.len(), if splits { 10 } else { 5 }, "{degrees}");
+        assert_eq!(
+            fold_vertices.len(),
+            if splits { 10 } else { 5 },
+            "{degrees}"
+        );
         let bright = rgb9e5::decode(object.colours[0]);
         let dark = rgb9e5::decode(object.colours[2]);
         for (f, tri) in r.mesh.indices.iter().enumerate() {
             let side = if f / per < 2 { bright } else { dark };
-            for &i in tri.iter().filter(|&&i| on_fold(r.mesh.positions[i as usize])) {
+            for &i in tri
+                .iter()
+                .filter(|&&i| on_fold(r.mesh.positions[i as usize]))
+            {
                 let got = r.colours[i as usize];
                 if splits {
                     assert!(

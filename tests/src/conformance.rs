@@ -11,8 +11,8 @@ use std::path::Path;
 
 use hce_format::gltf::{validate_asset, Asset, EXTENSION_NAME};
 use hce_format::{
-    example, rgb9e5, validate_bytes, write, Container, Problem, RULE_CORNER, RULE_CREASE, RULE_SMOOTH,
-    SPOKE_SHARP, VERTEX_BOUNDARY, VERTEX_RULE_SHIFT,
+    example, rgb9e5, validate_bytes, write, Container, Problem, RULE_CORNER, RULE_CREASE,
+    RULE_SMOOTH, SPOKE_SHARP, VERTEX_BOUNDARY, VERTEX_RULE_SHIFT,
 };
 use hce_geometry::colour::{apply_baked_colours_with, Reconstruction};
 use hce_geometry::refine::{refine_object, RefinedObject};
@@ -100,7 +100,12 @@ fn flat_fold() -> Container {
     use hce_format::{geometry_hash, BitWriter, Metadata, Object, ObjectKind, TriangleRecord};
     let (s5, c5) = 5f64.to_radians().sin_cos();
     // Where the strip is at x = 0, 1, 2, 3 (in the xz plane).
-    let xz = [[0.0, 0.0], [1.0, 0.0], [1.0 + c5, s5], [1.0 + c5 - s5, s5 + c5]];
+    let xz = [
+        [0.0, 0.0],
+        [1.0, 0.0],
+        [1.0 + c5, s5],
+        [1.0 + c5 - s5, s5 + c5],
+    ];
     let mut positions = Vec::new();
     for y in 0..2 {
         for p in xz {
