@@ -87,7 +87,7 @@ pub fn joined_sides(mesh: &ControlMesh, kind: ObjectKind) -> Vec<bool> {
 
 /// The unit geometric normal of coarse triangle `t` in `f64` from its `POSN` corners (SPEC.md
 /// G.2), the zero vector for a degenerate triangle (which then joins nothing).
-pub fn coarse_normal(mesh: &ControlMesh, t: usize) -> [f64; 3] {
+fn coarse_normal(mesh: &ControlMesh, t: usize) -> [f64; 3] {
     let p = |c: usize| {
         let v = mesh.triangles[3 * t + c] as usize;
         [0, 1, 2].map(|k| f64::from(mesh.positions.get(3 * v + k).copied().unwrap_or(0.0)))
