@@ -75,6 +75,19 @@ impl Occluders {
     /// there. A fixed gap at each end let a closed 30-degree wedge lose 4% of its light at the
     /// leaves along its edge (issue 20).
     pub fn segment_clear_between(&self, a: Vec3, na: Vec3, b: Vec3, nb: Vec3) -> bool {
+        self.segment_clear_between_but(a, na, b, nb, |_| false)
+    }
+
+    /// [`Occluders::segment_clear_between`], the triangles (by index) for which `ignore` is
+    /// true left out.
+    pub fn segment_clear_between_but(
+        &self,
+        a: Vec3,
+        na: Vec3,
+        b: Vec3,
+        nb: Vec3,
+        ignore: impl Fn(usize) -> bool,
+    ) -> bool {
         let d = b - a;
         let len = d.length();
         if len <= 2.0 * self.eps {
@@ -84,7 +97,11 @@ impl Occluders {
         // The distance along the segment over which it rises `eps` above each end's plane,
         // never more than a quarter of the segment (a grazing ray carries almost no light:
         // the form factor weighs it by the cosine).
-        let gap = |n: Vec3| (self.eps / n.dot(dir).abs().max(1e-6)).clamp(self.eps, 0.25 * len);
+        let gap = |n: Vec3| {
+            (self.eps / n.dot(dir).abs().max(1e-6))
+                .max(self.eps)
+                .min(0.25 * len)
+        };
         let (t0, t1) = (gap(na), len - gap(nb));
         let Some(bvh) = &self.bvh else { return true };
         if t0 >= t1 {
@@ -92,8 +109,44 @@ impl Occluders {
         }
         let ray = Ray::new(a.into(), dir.into(), t0, t1);
         bvh.ray_traverse_miss(ray, |r, id| {
-            self.tris[bvh.primitive_indices[id] as usize].intersect(r)
+            let t = bvh.primitive_indices[id] as usize;
+            if ignore(t) {
+                f32::INFINITY
+            } else {
+                self.tris[t].intersect(r)
+            }
         })
+    }
+
+    /// Distance to the first triangle met by the ray that leaves `a`, on a surface of unit
+    /// normal `na`, along unit `dir`, within `max_t`; the start is kept clear of `a`'s own
+    /// surface as in [`Occluders::segment_clear_between`].
+    pub fn first_hit_from(
+        &self,
+        a: Vec3,
+        na: Vec3,
+        dir: Vec3,
+        max_t: f32,
+        ignore: impl Fn(usize) -> bool,
+    ) -> Option<f32> {
+        let bvh = self.bvh.as_ref()?;
+        let t0 = (self.eps / na.dot(dir).abs().max(1e-6))
+            .max(self.eps)
+            .min(0.25 * max_t);
+        if t0 >= max_t {
+            return None;
+        }
+        let ray = Ray::new(a.into(), dir.into(), t0, max_t);
+        let mut hit = RayHit::none();
+        bvh.ray_traverse(ray, &mut hit, |r, id| {
+            let t = bvh.primitive_indices[id] as usize;
+            if ignore(t) {
+                f32::INFINITY
+            } else {
+                self.tris[t].intersect(r)
+            }
+        })
+        .then_some(hit.t)
     }
 
     /// Whether the ray from `origin` along unit `dir` first meets the back of a triangle (the

@@ -499,6 +499,21 @@ fn bad_parameters_are_errors() {
         ),
         (
             BakeParams {
+                max_level: 4,
+                detail_level: 3,
+                ..Default::default()
+            },
+            "detail_level",
+        ),
+        (
+            BakeParams {
+                detail_level: hce_format::MAX_TREE_DEPTH + 1,
+                ..Default::default()
+            },
+            "detail_level",
+        ),
+        (
+            BakeParams {
                 bf_epsilon: f32::NAN,
                 ..Default::default()
             },
