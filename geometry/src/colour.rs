@@ -17,7 +17,8 @@
 //!   normal, read from the subtriangle's own coarse triangle; each vertex averages those values
 //!   over its incident subtriangles weighted by their areas. Inside one smooth region all
 //!   incident subtriangles give the same value; across a sharp edge or a fold of a flat object
-//!   the vertex, shared by both sides, blends them.
+//!   the refinement has one vertex per side ([`crate::split`], SPEC.md F.5), so each side keeps
+//!   its own.
 //! * [`Reconstruction::NearestNormal`], the paper's rule (Concheiro et al., "Synthesis of
 //!   multiresolution scenes with global illumination on a GPU", GRAPP 2012, section 4): each
 //!   level-`L` subtriangle follows its path down its coarse triangle's HCE tree, stopping at a

@@ -1,8 +1,11 @@
 //! Flat refinement on the CPU: the linear 1-to-4 split of every coarse triangle to a level, one
 //! colour per fine triangle from its HCE tree node (the paper's nearest-normal rule), and
-//! area-weighted vertex colours shared across coarse edges. This is how flat objects are drawn
-//! (SPEC.md A.7, Appendix F), and the step-for-step twin of the GPU flat kernel (`flat.wgsl`),
-//! which tests compare with value by value. Vertices are numbered as in [`crate::lattice`].
+//! area-weighted vertex colours shared across the coarse edges that join their triangles. The
+//! vertices are split where the surface folds (SPEC.md F.5, F.7, [`crate::split`]): across an
+//! edge that does not join (sharp, or a fold of more than 10 degrees), each side has its own
+//! vertices and colours. This is how flat objects are drawn (SPEC.md A.7, Appendix F), and the
+//! step-for-step twin of the GPU flat kernel (`flat.wgsl`), which tests compare with value by
+//! value. Vertices are numbered as in [`crate::lattice`], then the split's copies.
 //!
 //! Based on: Concheiro et al. Synthesis of multiresolution scenes with global illumination on a
 //! GPU. GRAPP 2012, section 4 (colour by tree node and nearest representative normal, averaged
@@ -15,6 +18,7 @@ use crate::lattice::{
     corner_point, edge_point, fine_corners, incident_paths, interior_coords, interior_index, site,
     Numbering, RefinedPoint, Site,
 };
+use crate::split::SplitTables;
 use crate::tables::{check_triangles, InvalidObject, TriangleEdges};
 
 /// The refined-mesh connectivity a flat refinement needs beyond the control mesh: edge end
@@ -186,20 +190,33 @@ fn lattice_position(p: [[f32; 3]; 3], n: i32, b: i32, c: i32) -> [f32; 3] {
     std::array::from_fn(|i| (p[0][i] * wa + p[1][i] * wb + p[2][i] * wc) * inv)
 }
 
-/// The CPU reference of the GPU flat kernel (`hce_runtime::gpu::refine_flat`): linear 1-to-4 split of every coarse
-/// triangle to `level`, one colour per fine triangle from its tree node (normal chosen by the
-/// fine triangle's normal), vertex colours as area-weighted means over every incident fine
-/// triangle, across coarse edges and vertices. `object` must have passed
-/// [`validate_tables`](crate::tables::validate_tables).
+/// The CPU reference of the GPU flat kernel (`hce_runtime::gpu::refine_flat`): linear 1-to-4
+/// split of every coarse triangle to `level`, the vertices split where the surface folds
+/// (SPEC.md F.5), one colour per fine triangle from its tree node (normal chosen by the fine
+/// triangle's normal), vertex colours as area-weighted means over the incident fine triangles
+/// of the vertex's region, across the coarse edges and vertices that join. `object` must have
+/// passed [`validate_tables`](crate::tables::validate_tables).
 pub fn refine_flat_cpu(object: &Object, topo: &FlatTopology, level: u32) -> RefinedMesh {
+    let split = SplitTables::from_topology(&object.mesh, topo, object.kind);
+    refine_flat_split(object, topo, &split, level)
+}
+
+/// [`refine_flat_cpu`] with the split already built.
+pub fn refine_flat_split(
+    object: &Object,
+    topo: &FlatTopology,
+    split: &SplitTables,
+    level: u32,
+) -> RefinedMesh {
     let mesh = &object.mesh;
     let n = 1i32 << level;
     let numbering = topo.numbering(level);
-    let nv = numbering.vertex_count() as usize;
+    let base = numbering.vertex_count() as usize;
+    let nv = base + split.appended(level) as usize;
     let f = topo.triangle_count as usize;
     let per = 1usize << (2 * level);
 
-    // Step 1: vertex positions, one writer per vertex.
+    // Step 1: vertex positions, one writer per vertex; a copy repeats its original's bits.
     let mut positions = vec![0f32; 3 * nv];
     let v = topo.vertex_count as usize;
     positions[..3 * v].copy_from_slice(&mesh.positions[..3 * v]);
@@ -221,6 +238,10 @@ pub fn refine_flat_cpu(object: &Object, topo: &FlatTopology, level: u32) -> Refi
             positions[3 * i..3 * i + 3].copy_from_slice(&p);
         }
     }
+    for (j, src) in split.copy_sources(mesh, level).into_iter().enumerate() {
+        let (i, src) = (base + j, src as usize);
+        positions.copy_within(3 * src..3 * src + 3, 3 * i);
+    }
 
     // Step 2: fine triangles: indices, area, decoded colour.
     let mut indices = vec![0u32; 3 * f * per];
@@ -232,7 +253,9 @@ pub fn refine_flat_cpu(object: &Object, topo: &FlatTopology, level: u32) -> Refi
             let g = t * per + path as usize;
             let corners = fine_corners(level, path);
             let idx = corners.map(|[b, c]| vertex_index(topo, mesh, level, t as u32, b, c));
-            indices[3 * g..3 * g + 3].copy_from_slice(&idx);
+            let tv = mesh.triangle(t);
+            indices[3 * g..3 * g + 3]
+                .copy_from_slice(&idx.map(|i| split.split_index(level, base, t, tv, i)));
             let p = idx.map(|i| {
                 let i = i as usize * 3;
                 [positions[i], positions[i + 1], positions[i + 2]]
@@ -253,30 +276,41 @@ pub fn refine_flat_cpu(object: &Object, topo: &FlatTopology, level: u32) -> Refi
                 acc.add(&face_colours[4 * g..4 * g + 4]);
             }
         };
-        match numbering.point(i as u64) {
-            RefinedPoint::Coarse(v) => {
-                let (s, e) = (
-                    topo.vertex_corner_offsets[v as usize] as usize,
-                    topo.vertex_corner_offsets[v as usize + 1] as usize,
-                );
-                for &corner in &topo.vertex_corners[s..e] {
-                    add(corner / 3, corner_point(n, corner % 3));
+        // The slot the vertex gathers from (SPEC.md F.5): a control point's or an edge's
+        // region (the F.5 vertices, then the copies), or an interior point's triangle.
+        let x = split.copies as usize;
+        let pe = (n - 1) as usize;
+        let (corner_slot, edge_slot) = if i >= base {
+            let j = i - base;
+            if j < x {
+                (Some(topo.vertex_count as usize + j), None)
+            } else {
+                let s = (j - x) / pe;
+                (None, Some((topo.edge_count as usize + s, (j - x) % pe + 1)))
+            }
+        } else {
+            match numbering.point(i as u64) {
+                RefinedPoint::Coarse(v) => (Some(v as usize), None),
+                RefinedPoint::Edge { id, k } => (None, Some((id as usize, k as usize))),
+                RefinedPoint::Interior { t, local } => {
+                    add(t, interior_coords(n, local as u32).into());
+                    (None, None)
                 }
             }
-            RefinedPoint::Edge { id, k: kk } => {
-                let id = id as usize;
-                let (s, e) = (
-                    topo.edge_side_offsets[id] as usize,
-                    topo.edge_side_offsets[id + 1] as usize,
-                );
-                for &side in &topo.edge_sides[s..e] {
-                    let (t, ed) = (side / 3, side % 3);
-                    let forward = mesh.triangles[side as usize] == topo.edge_verts[2 * id];
-                    let k = if forward { kk as i32 } else { n - kk as i32 };
-                    add(t, edge_point(n, ed, k));
-                }
+        };
+        if let Some(slot) = corner_slot {
+            for &corner in split.corner_slot(slot) {
+                add(corner / 3, corner_point(n, corner % 3));
             }
-            RefinedPoint::Interior { t, local } => add(t, interior_coords(n, local as u32).into()),
+        }
+        if let Some((slot, kk)) = edge_slot {
+            for &side in split.edge_slot(slot) {
+                let (t, ed) = (side / 3, side % 3);
+                let id = mesh.edges[side as usize] as usize;
+                let forward = mesh.triangles[side as usize] == topo.edge_verts[2 * id];
+                let k = if forward { kk as i32 } else { n - kk as i32 };
+                add(t, edge_point(n, ed, k));
+            }
         }
         out.copy_from_slice(&acc.mean());
     }

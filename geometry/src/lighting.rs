@@ -40,9 +40,10 @@
 
 use std::collections::HashMap;
 
-use hce_format::{rgb9e5, Object, ObjectKind, Tree, TreeError, NO_NEIGHBOUR, SPOKE_SHARP};
+use hce_format::{rgb9e5, Object, ObjectKind, Tree, TreeError};
 
 use crate::lattice::{site, LatticeTriangle, Site};
+use crate::split::{corner_groups, joined_sides};
 
 /// Denominator of the lattice in which leaf corners are identified: the finest split a tree can
 /// have (`hce_format::MAX_TREE_DEPTH` = 12).
@@ -55,10 +56,6 @@ pub const EVAL_LATTICE_BITS: u32 = 16;
 
 /// Ridge weight of the normal fit, relative to the samples' total weight (SPEC.md G.3).
 pub const RIDGE: f64 = 1e-4;
-
-/// Flat objects join neighbouring coarse triangles whose normals differ by less than this many
-/// degrees (SPEC.md G.3); between steeper ones (the corner of a room) values do not mix.
-pub const FLAT_JOIN_DEGREES: f64 = 10.0;
 
 /// Floats per model: `c` (RGB), then `G` row by row (the red, green and blue gradients).
 pub const MODEL_FLOATS: usize = 12;
@@ -205,29 +202,6 @@ enum PointKey {
     Face { triangle: u32, x: u32, y: u32 },
 }
 
-/// Union-find over triangle corners.
-struct Groups(Vec<u32>);
-
-impl Groups {
-    fn find(&mut self, mut a: u32) -> u32 {
-        while self.0[a as usize] != a {
-            let up = self.0[self.0[a as usize] as usize];
-            self.0[a as usize] = up;
-            a = up;
-        }
-        a
-    }
-    fn union(&mut self, a: u32, b: u32) {
-        let (ra, rb) = (self.find(a), self.find(b));
-        // The smaller root wins, so the result does not depend on the order of the unions.
-        if ra < rb {
-            self.0[rb as usize] = ra;
-        } else if rb < ra {
-            self.0[ra as usize] = rb;
-        }
-    }
-}
-
 /// The coarse-mesh facts the point identities need.
 struct Surface<'a> {
     object: &'a Object,
@@ -239,49 +213,8 @@ struct Surface<'a> {
 
 impl<'a> Surface<'a> {
     fn new(object: &'a Object) -> Self {
-        let m = &object.mesh;
-        let f = m.triangles.len() / 3;
-        let normals: Vec<[f64; 3]> = (0..f).map(|t| coarse_normal(object, t)).collect();
-        let cos_join = FLAT_JOIN_DEGREES.to_radians().cos();
-        let mut joined = vec![false; 3 * f];
-        for t in 0..f {
-            for e in 0..3 {
-                let u = m.neighbours.get(3 * t + e).copied().unwrap_or(NO_NEIGHBOUR);
-                if u == NO_NEIGHBOUR || u as usize >= f {
-                    continue;
-                }
-                let v = m.triangles[3 * t + e] as usize;
-                let spoke = m
-                    .ring_offsets
-                    .get(v)
-                    .zip(m.corner_spokes.get(3 * t + e))
-                    .and_then(|(&o, &k)| m.spoke_flags.get((o + k) as usize))
-                    .copied()
-                    .unwrap_or(SPOKE_SHARP);
-                let smooth = spoke & SPOKE_SHARP == 0;
-                joined[3 * t + e] = smooth
-                    && match object.kind {
-                        ObjectKind::Multiresolution => true,
-                        ObjectKind::Flat => dot(normals[t], normals[u as usize]) >= cos_join,
-                    };
-            }
-        }
-        let mut groups = Groups((0..3 * f as u32).collect());
-        for t in 0..f {
-            for e in 0..3 {
-                if !joined[3 * t + e] {
-                    continue;
-                }
-                let u = m.neighbours[3 * t + e] as usize;
-                let (a, b) = (m.triangles[3 * t + e], m.triangles[3 * t + (e + 1) % 3]);
-                for (c, v) in [(e, a), ((e + 1) % 3, b)] {
-                    if let Some(cu) = (0..3).find(|&cu| m.triangles[3 * u + cu] == v) {
-                        groups.union((3 * t + c) as u32, (3 * u + cu) as u32);
-                    }
-                }
-            }
-        }
-        let group = (0..3 * f as u32).map(|i| groups.find(i)).collect();
+        let joined = joined_sides(&object.mesh, object.kind);
+        let group = corner_groups(&object.mesh, &joined);
         Surface {
             object,
             joined,
@@ -313,22 +246,6 @@ impl<'a> Surface<'a> {
                 y: y as u32,
             },
         }
-    }
-}
-
-fn coarse_normal(object: &Object, t: usize) -> [f64; 3] {
-    let m = &object.mesh;
-    let p = |c: usize| {
-        let v = m.triangles[3 * t + c] as usize;
-        [0, 1, 2].map(|k| f64::from(m.positions.get(3 * v + k).copied().unwrap_or(0.0)))
-    };
-    let (p0, p1, p2) = (p(0), p(1), p(2));
-    let n = cross(sub(p1, p0), sub(p2, p0));
-    let l = dot(n, n).sqrt();
-    if l > 0.0 {
-        n.map(|x| x / l)
-    } else {
-        [0.0; 3]
     }
 }
 

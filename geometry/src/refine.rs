@@ -1,7 +1,8 @@
 //! One object refined to a level as the runtime draws it: Loop subdivision for
 //! multiresolution objects ([`crate::subdivide`](mod@crate::subdivide)) with the vertices split
 //! at sharp edges ([`crate::split`]), the linear 1-to-4
-//! split for flat ones ([`crate::flat`], SPEC.md A.7), then its baked colours
+//! split for flat ones ([`crate::flat`], SPEC.md A.7) with the vertices split at folds, then
+//! its baked colours
 //! ([`crate::colour`]). This is what `hce subdivide BAKED` writes and what
 //! `hce render --cpu-reference` draws.
 
@@ -9,7 +10,7 @@ use hce_format::{ControlMesh, Object, ObjectKind};
 
 use crate::colour::ColourError;
 use crate::flat::{refine_flat_cpu, FlatTopology};
-use crate::split::SplitTables;
+use crate::split::{SplitError, SplitTables};
 use crate::subdivide::{subdivide, Refined, SubdivError};
 use crate::tables::InvalidObject;
 
@@ -26,9 +27,9 @@ pub enum RefineError {
     /// The baked colours could not be applied.
     #[error(transparent)]
     Colour(#[from] ColourError),
-    /// The refined vertices could not be split at the sharp edges (SPEC.md F.5).
-    #[error("{0}")]
-    Split(String),
+    /// The refined vertices could not be split where the surface folds (SPEC.md F.5).
+    #[error(transparent)]
+    Split(#[from] SplitError),
 }
 
 /// One object refined to a level: what the runtime draws, plus normals.
@@ -66,13 +67,12 @@ pub fn refine_object_with(
 /// path-traces.
 pub fn subdivide_split(name: &str, mesh: &ControlMesh, level: u32) -> Result<Refined, RefineError> {
     let mut refined = subdivide(mesh, level)?;
-    SplitTables::new(name, mesh)?
-        .apply(mesh, &mut refined)
-        .map_err(RefineError::Split)?;
+    SplitTables::new(name, mesh, ObjectKind::Multiresolution)?.apply(mesh, &mut refined)?;
     Ok(refined)
 }
 
-/// The flat kernel's CPU twin, as a [`Refined`] (normals: per vertex, area-weighted).
+/// The flat kernel's CPU twin, as a [`Refined`]: vertices split where the surface folds
+/// (SPEC.md F.5, F.7), normals per vertex, area-weighted over the fine triangles that use it.
 fn refine_linear(object: &Object, level: u32) -> Result<Refined, RefineError> {
     if level > crate::subdivide::MAX_LOOP_LEVEL {
         return Err(SubdivError::Level(level).into());

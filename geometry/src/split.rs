@@ -1,22 +1,24 @@
-//! Split vertices at sharp edges (SPEC.md F.5 "Split vertices", F.6): a refined vertex on an
-//! edge that is sharp and has triangles on both sides is drawn once per side, so that the
-//! baked light (G.4) and the normals change across a crease instead of blending over one ring
-//! of fine triangles, as glTF exporters split vertices at hard edges.
+//! Split vertices where the surface folds (SPEC.md F.5 "Split vertices", F.6): a refined vertex
+//! on an edge that has a neighbour but does not join it (G.2: the edge is sharp, or, on a flat
+//! object, the two triangles fold by more than [`FLAT_JOIN_DEGREES`]) is drawn once per side,
+//! so that the baked light (G.4) and the normals change across a crease or a fold instead of
+//! blending over one ring of fine triangles, as glTF exporters split vertices at hard edges.
 //!
-//! The regions are the smooth regions of SPEC.md G.2 for a multiresolution object: groups of
-//! the corners at a control point joined across interior edges that are not sharp
-//! ([`joined_sides`], [`corner_groups`], shared with [`crate::lighting`]). The owner's region of
-//! a vertex keeps its F.5 number; every other region gets a copy appended after the F.5
-//! vertices: first one per extra region of each control point, then `M − 1` per split edge.
+//! The regions are the smooth regions of SPEC.md G.2: groups of the corners at a control point
+//! joined across edges ([`joined_sides`], [`corner_groups`], the one definition
+//! [`crate::lighting`] also reads). The owner's region of a vertex keeps its F.5 number; every
+//! other region gets a copy appended after the F.5 vertices: first one per extra region of each
+//! control point, then `M − 1` per split edge.
 //!
-//! [`SplitTables`] are level-independent and built once per object (the GPU Loop kernel
-//! uploads its slot lists); [`SplitTables::apply`] turns a Loop subdivision
+//! [`SplitTables`] are level-independent and built once per object (the GPU kernels upload its
+//! slot lists); [`SplitTables::apply`] turns a Loop subdivision
 //! ([`crate::subdivide`](mod@crate::subdivide)) into the split mesh: copies of the positions,
 //! the fine triangles' corners moved to their region's vertex, and each split vertex's normal
 //! summed over its own region's fine triangles in the order of the kernels' gather
-//! ([`crate::lattice::incident_paths`]).
+//! ([`crate::lattice::incident_paths`]). The flat refinement ([`crate::flat`]) applies the same
+//! tables with [`SplitTables::copy_sources`] and [`SplitTables::split_index`].
 
-use hce_format::{ControlMesh, NO_NEIGHBOUR, SPOKE_SHARP};
+use hce_format::{ControlMesh, ObjectKind, NO_NEIGHBOUR, SPOKE_SHARP};
 
 use crate::flat::FlatTopology;
 use crate::lattice::{corner_point, edge_point, incident_paths};
@@ -26,10 +28,40 @@ use crate::tables::InvalidObject;
 /// Marks a corner or an edge that keeps its F.5 vertex.
 pub const NO_COPY: u32 = u32::MAX;
 
-/// `joined[3t + e]`: side `e` of triangle `t` has a neighbour and its spoke is not sharp, so
-/// values and vertices are shared across it (SPEC.md G.2, without the flat-object rule).
-pub fn joined_sides(mesh: &ControlMesh) -> Vec<bool> {
+/// Flat objects join neighbouring coarse triangles whose geometric normals are within this many
+/// degrees (SPEC.md G.2); across a steeper fold (the corner of a room, the edge of a block)
+/// values and refined vertices are not shared.
+pub const FLAT_JOIN_DEGREES: f64 = 10.0;
+
+/// Why a refined mesh cannot be split: it is not the subdivision of the tables' control mesh at
+/// its level, or the split would number more vertices than 32-bit indices reach.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum SplitError {
+    #[error(
+        "the refined mesh has {found} vertices where its level-{level} numbering has \
+         {expected}: split a fresh subdivision of the same control mesh"
+    )]
+    Numbering {
+        level: u32,
+        found: usize,
+        expected: usize,
+    },
+    #[error("splitting at level {level} gives {total} refined vertices, more than 2^32")]
+    TooLarge { level: u32, total: usize },
+}
+
+/// `joined[3t + e]`: side `e` of triangle `t` is joined to its neighbour (SPEC.md G.2): the
+/// side has a neighbour, its spoke is not sharp, and, for a flat object, the two triangles'
+/// geometric normals (from `POSN`, in `f64`) are within [`FLAT_JOIN_DEGREES`]. Values mix and
+/// refined vertices are shared across joined sides only. This is the one definition the
+/// lighting table, the split and the kernels' tables read.
+pub fn joined_sides(mesh: &ControlMesh, kind: ObjectKind) -> Vec<bool> {
     let f = mesh.triangles.len() / 3;
+    let normals: Vec<[f64; 3]> = match kind {
+        ObjectKind::Flat => (0..f).map(|t| coarse_normal(mesh, t)).collect(),
+        ObjectKind::Multiresolution => Vec::new(),
+    };
+    let cos_join = FLAT_JOIN_DEGREES.to_radians().cos();
     (0..3 * f)
         .map(|s| {
             let u = mesh.neighbours.get(s).copied().unwrap_or(NO_NEIGHBOUR);
@@ -45,8 +77,41 @@ pub fn joined_sides(mesh: &ControlMesh) -> Vec<bool> {
                 .copied()
                 .unwrap_or(SPOKE_SHARP);
             spoke & SPOKE_SHARP == 0
+                && match kind {
+                    ObjectKind::Multiresolution => true,
+                    ObjectKind::Flat => dot(normals[s / 3], normals[u as usize]) >= cos_join,
+                }
         })
         .collect()
+}
+
+/// The unit geometric normal of coarse triangle `t` in `f64` from its `POSN` corners (SPEC.md
+/// G.2), the zero vector for a degenerate triangle (which then joins nothing).
+fn coarse_normal(mesh: &ControlMesh, t: usize) -> [f64; 3] {
+    let p = |c: usize| {
+        let v = mesh.triangles[3 * t + c] as usize;
+        [0, 1, 2].map(|k| f64::from(mesh.positions.get(3 * v + k).copied().unwrap_or(0.0)))
+    };
+    let (p0, p1, p2) = (p(0), p(1), p(2));
+    let (u, w) = (
+        [0, 1, 2].map(|k| p1[k] - p0[k]),
+        [0, 1, 2].map(|k| p2[k] - p0[k]),
+    );
+    let n = [
+        u[1] * w[2] - u[2] * w[1],
+        u[2] * w[0] - u[0] * w[2],
+        u[0] * w[1] - u[1] * w[0],
+    ];
+    let l = dot(n, n).sqrt();
+    if l > 0.0 {
+        n.map(|x| x / l)
+    } else {
+        [0.0; 3]
+    }
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// The group of every triangle corner `3t + c`: the smallest corner linked to it by a chain of
@@ -100,7 +165,7 @@ pub struct SplitTables {
     pub edge_copy: Vec<u32>,
     /// `X`: corner copies.
     pub copies: u32,
-    /// `S`: edges that are sharp and have triangles on both sides.
+    /// `S`: split edges, the edges with a neighbour that are not joined (SPEC.md G.2).
     pub split_edges: u32,
     /// CSR over corner slots (`V + X`: control point `v`'s owner region, then the copies):
     /// the region's corners `3t + c`, increasing.
@@ -117,18 +182,35 @@ pub struct SplitTables {
 }
 
 impl SplitTables {
-    /// The split of a multiresolution object's control mesh, whose triangles and edge ids must
-    /// pass the checks of [`FlatTopology::new`] (and whose rings and spokes those of Loop
-    /// subdivision).
-    pub fn new(name: &str, mesh: &ControlMesh) -> Result<Self, InvalidObject> {
+    /// The split of an object's control mesh of kind `kind`, whose triangles and edge ids must
+    /// pass the checks of [`FlatTopology::new`].
+    pub fn new(name: &str, mesh: &ControlMesh, kind: ObjectKind) -> Result<Self, InvalidObject> {
         let topo = FlatTopology::new(name, mesh)?;
-        let joined = joined_sides(mesh);
-        Ok(Self::from_topology(mesh, &topo, &joined))
+        Ok(Self::from_topology(mesh, &topo, kind))
     }
 
     /// [`SplitTables::new`] from the incidence tables already built.
-    pub fn from_topology(mesh: &ControlMesh, topo: &FlatTopology, joined: &[bool]) -> Self {
-        let group = corner_groups(mesh, joined);
+    ///
+    /// A mesh without a neighbour table (a plain mesh previewed as a flat object in memory,
+    /// never a container's object, whose `NBRS` is required) has no edge with a neighbour;
+    /// nothing is split there and its vertices keep their F.5 sharing.
+    pub fn from_topology(mesh: &ControlMesh, topo: &FlatTopology, kind: ObjectKind) -> Self {
+        let joined = joined_sides(mesh, kind);
+        let adjacency = mesh.neighbours.len() == mesh.triangles.len();
+        let group: Vec<u32> = if adjacency {
+            corner_groups(mesh, &joined)
+        } else {
+            // One region per control point: every corner in the group of the vertex's first.
+            let mut g = vec![0u32; mesh.triangles.len()];
+            for v in 0..topo.vertex_count as usize {
+                let corners = &topo.vertex_corners[topo.vertex_corner_offsets[v] as usize
+                    ..topo.vertex_corner_offsets[v + 1] as usize];
+                for &c in corners {
+                    g[c as usize] = corners[0];
+                }
+            }
+            g
+        };
         let nv = topo.vertex_count as usize;
         let ne = topo.edge_count as usize;
         let mut corner_copy = vec![NO_COPY; mesh.triangles.len()];
@@ -178,7 +260,9 @@ impl SplitTables {
         for id in 0..ne {
             let sides = &topo.edge_sides
                 [topo.edge_side_offsets[id] as usize..topo.edge_side_offsets[id + 1] as usize];
-            if sides.len() == 2 && !joined[sides[0] as usize] {
+            let neighboured =
+                sides.len() == 2 && mesh.neighbours.get(sides[0] as usize) == Some(&(sides[1] / 3));
+            if neighboured && !joined[sides[0] as usize] {
                 edge_copy[id] = copy_sides.len() as u32;
                 edge_split[id] = true;
                 edge_slot_sides.push(sides[0]);
@@ -216,7 +300,7 @@ impl SplitTables {
         }
     }
 
-    /// Whether nothing splits (no sharp edge has triangles on both sides).
+    /// Whether nothing splits (every edge with a neighbour is joined).
     pub fn is_empty(&self) -> bool {
         self.copies == 0 && self.split_edges == 0
     }
@@ -238,11 +322,55 @@ impl SplitTables {
             [self.edge_slot_offsets[slot] as usize..self.edge_slot_offsets[slot + 1] as usize]
     }
 
+    /// The F.5 vertex each appended vertex repeats at `level`, in order: a corner copy the
+    /// control point of its corners, an edge copy the owner's point `k` of its edge.
+    pub fn copy_sources(&self, mesh: &ControlMesh, level: u32) -> Vec<u32> {
+        let per_edge = (1u32 << level) - 1;
+        let nv = self.vertex_count as usize;
+        let mut out = Vec::with_capacity(self.appended(level) as usize);
+        for slot in nv..nv + self.copies as usize {
+            out.push(mesh.triangles[self.corner_slot(slot)[0] as usize]);
+        }
+        for id in 0..self.edge_count {
+            if self.edge_copy[id as usize] != NO_COPY {
+                out.extend((0..per_edge).map(|k| self.vertex_count + id * per_edge + k));
+            }
+        }
+        out
+    }
+
+    /// The vertex the fine triangles of coarse triangle `t` use where the F.5 numbering at
+    /// `level` (with `base` F.5 vertices) gives `i`: the copy of `t`'s region where `i` is split
+    /// (SPEC.md F.5), else `i`. `corners` are `t`'s three control points.
+    pub fn split_index(&self, level: u32, base: usize, t: usize, corners: [u32; 3], i: u32) -> u32 {
+        let per_edge = (1usize << level) - 1;
+        let nv = self.vertex_count as usize;
+        let iu = i as usize;
+        if iu < nv {
+            if let Some(c) = (0..3).find(|&c| corners[c] == i) {
+                let copy = self.corner_copy[3 * t + c];
+                if copy != NO_COPY {
+                    return (base + copy as usize) as u32;
+                }
+            }
+        } else if iu < nv + self.edge_count as usize * per_edge {
+            let id = (iu - nv) / per_edge;
+            let copy = self.edge_copy[id];
+            if copy != NO_COPY && self.edge_slot(id)[0] as usize / 3 != t {
+                return (base
+                    + self.copies as usize
+                    + copy as usize * per_edge
+                    + (iu - nv) % per_edge) as u32;
+            }
+        }
+        i
+    }
+
     /// Splits `r`, a Loop subdivision of the same control mesh numbered as F.5 says (before any
     /// split), in place: appends the copies (positions bit for bit, SPEC.md F.5), moves the
     /// fine triangles' corners to their region's vertex and gives every split vertex the
     /// normal of its own region (F.6).
-    pub fn apply(&self, mesh: &ControlMesh, r: &mut Refined) -> Result<(), String> {
+    pub fn apply(&self, mesh: &ControlMesh, r: &mut Refined) -> Result<(), SplitError> {
         let level = r.level;
         let m = 1i32 << level;
         let per_edge = (m - 1) as usize;
@@ -253,56 +381,35 @@ impl SplitTables {
             + self.edge_count as usize * per_edge
             + r.coarse_triangles * per_edge * per_edge.saturating_sub(1) / 2;
         if base != expected || r.normals.len() != base || r.coarse_vertices != nv {
-            return Err(format!(
-                "the refined mesh has {base} vertices where its level-{level} numbering has \
-                 {expected}: split a fresh subdivision of the same control mesh"
-            ));
+            return Err(SplitError::Numbering {
+                level,
+                found: base,
+                expected,
+            });
         }
         if self.is_empty() {
             return Ok(());
         }
         let x = self.copies as usize;
         let total = base + self.appended(level) as usize;
-        u32::try_from(total).map_err(|_| "more than 2^32 refined vertices".to_string())?;
+        if u32::try_from(total).is_err() {
+            return Err(SplitError::TooLarge { level, total });
+        }
         // Positions (and placeholder normals) of the copies.
-        for slot in nv..nv + x {
-            let c = self.corner_slot(slot)[0] as usize;
-            let v = mesh.triangles[c] as usize;
-            r.positions.push(r.positions[v]);
-            r.normals.push(r.normals[v]);
+        for i in self.copy_sources(mesh, level) {
+            r.positions.push(r.positions[i as usize]);
+            r.normals.push(r.normals[i as usize]);
         }
         let split_ids: Vec<usize> = (0..self.edge_count as usize)
             .filter(|&id| self.edge_copy[id] != NO_COPY)
             .collect();
-        for &id in &split_ids {
-            for k in 0..per_edge {
-                let i = edge_base + id * per_edge + k;
-                r.positions.push(r.positions[i]);
-                r.normals.push(r.normals[i]);
-            }
-        }
         // Fine triangles: each corner to its region's vertex.
         let per = 1usize << (2 * level);
         for t in 0..r.coarse_triangles {
             let tv = [0, 1, 2].map(|c| mesh.triangles[3 * t + c]);
             for f in &mut r.indices[t * per..(t + 1) * per] {
                 for o in f.iter_mut() {
-                    let i = *o as usize;
-                    if i < nv {
-                        if let Some(c) = (0..3).find(|&c| tv[c] == *o) {
-                            let copy = self.corner_copy[3 * t + c];
-                            if copy != NO_COPY {
-                                *o = (base + copy as usize) as u32;
-                            }
-                        }
-                    } else if i < edge_base + self.edge_count as usize * per_edge {
-                        let id = (i - edge_base) / per_edge;
-                        let copy = self.edge_copy[id];
-                        if copy != NO_COPY && self.edge_slot(id)[0] as usize / 3 != t {
-                            *o = (base + x + copy as usize * per_edge + (i - edge_base) % per_edge)
-                                as u32;
-                        }
-                    }
+                    *o = self.split_index(level, base, t, tv, *o);
                 }
             }
         }

@@ -8,6 +8,7 @@
 use hce_geometry::colour::apply_baked_colours;
 use hce_geometry::flat::{self, FlatTopology};
 use hce_geometry::lighting::Reconstruction;
+use hce_geometry::split::SplitTables;
 use hce_geometry::Refined;
 use hce_geometry::{decode, tables};
 use hce_runtime::gpu::testing::{
@@ -16,10 +17,24 @@ use hce_runtime::gpu::testing::{
 };
 use hce_runtime::gpu::{refine_flat, refine_flat_with};
 
+/// `object` with the full adjacency tables of a container's object (neighbours, rings,
+/// spokes), so that its refinement splits where the surface folds (SPEC.md F.5, G.2).
+fn with_adjacency(mut object: hce_format::Object, name: &str) -> hce_format::Object {
+    object.mesh = hce_format::example::control_mesh(
+        std::mem::take(&mut object.mesh.positions),
+        std::mem::take(&mut object.mesh.triangles),
+    );
+    object.name = name.into();
+    object
+}
+
+/// Two objects without adjacency tables (nothing splits) and the same two with them: every
+/// edge of the octahedron is a fold of 109 degrees; the bumpy grid folds by more than 10
+/// degrees at some edges and less at others.
 fn test_objects() -> Vec<hce_format::Object> {
     let (p, t) = octahedron();
     let (gp, gt) = grid(3, 2);
-    vec![
+    let plain = vec![
         random_object("octahedron", p, t, RandomTrees::default(), 1),
         random_object(
             "grid",
@@ -32,7 +47,12 @@ fn test_objects() -> Vec<hce_format::Object> {
             },
             2,
         ),
-    ]
+    ];
+    let folded: Vec<_> = plain
+        .iter()
+        .map(|o| with_adjacency(o.clone(), &format!("{} with folds", o.name)))
+        .collect();
+    plain.into_iter().chain(folded).collect()
 }
 
 /// Dot products of the candidate normals, to accept a different choice only on a near tie
@@ -108,8 +128,11 @@ fn gpu_flat_refinement_matches_cpu() {
     let Some(ctx) = context_or_skip("gpu_flat_refinement_matches_cpu") else {
         return;
     };
+    let mut split_objects = 0;
     for object in test_objects() {
         let topo = FlatTopology::new(&object.name, &object.mesh).unwrap();
+        let split = SplitTables::new(&object.name, &object.mesh, object.kind).unwrap();
+        split_objects += usize::from(!split.is_empty());
         let diag = {
             let p = &object.mesh.positions;
             let mut lo = [f32::MAX; 3];
@@ -127,11 +150,27 @@ fn gpu_flat_refinement_matches_cpu() {
             let gpu =
                 refine_flat_with(&ctx, &object, level, Reconstruction::NearestNormal).unwrap();
             let what = format!("{} level {level}", object.name);
+            let base = topo.refined_vertex_count(level) as usize;
             assert_eq!(
                 gpu.vertex_count(),
-                topo.refined_vertex_count(level) as usize,
+                base + split.appended(level) as usize,
                 "{what}"
             );
+            // Each copy of the split sits on its original, bit for bit (SPEC.md F.5).
+            for (j, src) in split.copy_sources(&object.mesh, level).iter().enumerate() {
+                let (i, src) = (base + j, *src as usize);
+                assert_eq!(
+                    gpu.positions[3 * i..3 * i + 3]
+                        .iter()
+                        .map(|x| x.to_bits())
+                        .collect::<Vec<_>>(),
+                    gpu.positions[3 * src..3 * src + 3]
+                        .iter()
+                        .map(|x| x.to_bits())
+                        .collect::<Vec<_>>(),
+                    "{what}: copy {i} of vertex {src}"
+                );
+            }
             assert_eq!(
                 gpu.triangle_count(),
                 object.triangles.len() << (2 * level),
@@ -199,6 +238,7 @@ fn gpu_flat_refinement_matches_cpu() {
             }
         }
     }
+    assert_eq!(split_objects, 2, "both objects with folds split");
 }
 
 #[test]

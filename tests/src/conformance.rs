@@ -10,8 +10,8 @@
 use std::path::Path;
 
 use hce_format::{
-    example, validate_bytes, write, Container, Problem, RULE_CORNER, RULE_CREASE, RULE_SMOOTH,
-    SPOKE_SHARP, VERTEX_BOUNDARY, VERTEX_RULE_SHIFT,
+    example, rgb9e5, validate_bytes, write, Container, Problem, RULE_CORNER, RULE_CREASE,
+    RULE_SMOOTH, SPOKE_SHARP, VERTEX_BOUNDARY, VERTEX_RULE_SHIFT,
 };
 use hce_format::{validate_asset, GltfAsset as Asset, EXTENSION_NAME};
 use hce_geometry::colour::{apply_baked_colours_with, Reconstruction};
@@ -91,6 +91,92 @@ fn creased_grid() -> Container {
     c
 }
 
+/// A flat strip of three unit squares (six triangles) along `x`: the first lies in `z = 0`, the
+/// second rises 5 degrees from it (a fold under 10 degrees: joined, its vertices shared), the
+/// third turns up 90 degrees from the second (a fold that splits, SPEC.md F.5, G.2). Every
+/// triangle has its geometric normal; the even ones a tree one level deep, the odd ones a
+/// single node; each square its own light, the upturned one dark.
+fn flat_fold() -> Container {
+    use hce_format::{geometry_hash, BitWriter, Metadata, Object, ObjectKind, TriangleRecord};
+    let (s5, c5) = 5f64.to_radians().sin_cos();
+    // Where the strip is at x = 0, 1, 2, 3 (in the xz plane).
+    let xz = [
+        [0.0, 0.0],
+        [1.0, 0.0],
+        [1.0 + c5, s5],
+        [1.0 + c5 - s5, s5 + c5],
+    ];
+    let mut positions = Vec::new();
+    for y in 0..2 {
+        for p in xz {
+            positions.extend([p[0] as f32, y as f32, p[1] as f32]);
+        }
+    }
+    let id = |x: u32, y: u32| y * 4 + x;
+    let mut triangles = Vec::new();
+    for x in 0..3 {
+        triangles.extend([id(x, 0), id(x + 1, 0), id(x + 1, 1)]);
+        triangles.extend([id(x, 0), id(x + 1, 1), id(x, 1)]);
+    }
+    let corner = |v: u32| {
+        let i = 3 * v as usize;
+        [positions[i], positions[i + 1], positions[i + 2]]
+    };
+    let hash = geometry_hash(triangles.iter().map(|&v| corner(v)));
+    let mut w = BitWriter::new();
+    let (mut records, mut normals, mut colours) = (Vec::new(), Vec::new(), Vec::new());
+    for (t, tri) in triangles.chunks_exact(3).enumerate() {
+        let flags: &[bool] = if t % 2 == 0 {
+            &[true, false, false, false, false]
+        } else {
+            &[false]
+        };
+        let bits_start = w.push_tree(flags).expect("a small tree") as u32;
+        records.push(TriangleRecord {
+            bits_start,
+            colour_start: colours.len() as u32,
+            normal_start: normals.len() as u32,
+            normal_count: 1,
+        });
+        let p = [0, 1, 2].map(|c| corner(tri[c]).map(f64::from));
+        let (u, v) = (
+            [0, 1, 2].map(|k| p[1][k] - p[0][k]),
+            [0, 1, 2].map(|k| p[2][k] - p[0][k]),
+        );
+        let n = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        normals.push(n.map(|x| (x / l) as f32));
+        let light = [[0.8, 0.7, 0.6], [0.6, 0.55, 0.5], [0.05, 0.04, 0.03]][t / 2];
+        for k in 0..flags.len() {
+            let f = 1.0 + 0.1 * k as f32;
+            colours.push(rgb9e5::encode(light.map(|c| c * f)));
+        }
+    }
+    let (bits, bit_len) = w.finish();
+    Container {
+        metadata: Metadata {
+            generator: "hce conformance flat fold".into(),
+            bake_parameters: String::new(),
+            source_hash: hash,
+        },
+        objects: vec![Object {
+            name: "fold".into(),
+            kind: ObjectKind::Flat,
+            geometry_hash: hash,
+            mesh: example::control_mesh(positions, triangles),
+            triangles: records,
+            normals,
+            bits,
+            bit_len,
+            colours,
+        }],
+    }
+}
+
 /// Every case, valid ones first. `cornell` is the bundled Cornell box, already baked.
 pub fn cases(cornell_baked: Vec<u8>) -> Vec<Case> {
     let case = |file: &str, bytes: Vec<u8>, description: &str| Case {
@@ -121,6 +207,13 @@ pub fn cases(cornell_baked: Vec<u8>) -> Vec<Case> {
             hce(&creased_grid()),
             "the grid with the line x = 1 a crease: its refined vertices split per side \
              (SPEC.md F.5), the last probes are copies",
+        ),
+        case(
+            "valid/flat-fold.hce",
+            hce(&flat_fold()),
+            "a flat strip folded 5 degrees (joined: vertices shared) and 90 degrees (split: \
+             the refined vertices on the fold are drawn once per side, SPEC.md F.5, G.2), the \
+             last probes are copies",
         ),
         case(
             "valid/triangle.glb",

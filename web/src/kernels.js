@@ -68,7 +68,7 @@ const recordsWords = (o) => o.records;
  * @property {number} treeDepth
  * @property {import('./topology.js').FlatTopology} topology
  * @property {ReturnType<typeof loopTables> | null} loop
- * @property {import('./topology.js').SplitTables | null} split the split at sharp edges (Loop only)
+ * @property {import('./topology.js').SplitTables} split the split where the surface folds (F.5)
  * @property {number[]} offsets where the packed sections start in `topo`
  * @property {Record<string, GPUBuffer>} buffers
  */
@@ -156,13 +156,12 @@ export class Kernels {
     const topology = flatTopology(object, checked);
     const m = object.mesh;
     let loop = null;
-    let split = null;
+    // The split where the surface folds (SPEC.md F.5): its slot lists replace the vertex and
+    // edge incidence, as loop_kernel.rs and flat.rs `upload_with` pack them.
+    const split = splitTables(object, topology);
     let packed;
     if (object.kind === 'multiresolution') {
       loop = loopTables(object, checked);
-      // The split at sharp edges (SPEC.md F.5): its slot lists replace the vertex and edge
-      // incidence, as loop_kernel.rs `upload_with` packs them.
-      split = splitTables(object, topology);
       packed = packSections([
         m.triangles, m.ringOffsets, m.ring, m.spokeFlags, m.vertexFlags, m.cornerSpokes, m.edges,
         loop.triFlags, loop.crease, loop.weights, split.edgeSlotOffsets, split.edgeSlotSides,
@@ -171,8 +170,8 @@ export class Kernels {
       ]);
     } else {
       packed = packSections([
-        m.triangles, m.edges, topology.edgeVerts, topology.edgeSideOffsets, topology.edgeSides,
-        topology.vertexCornerOffsets, topology.vertexCorners,
+        m.triangles, m.edges, topology.edgeVerts, split.edgeSlotOffsets, split.edgeSlotSides,
+        split.cornerSlotOffsets, split.cornerSlotCorners, split.cornerCopy, split.edgeCopy,
       ]);
     }
     let light;
@@ -213,7 +212,7 @@ export class Kernels {
     const n = 2 ** level;
     const perTri = ((n - 1) * Math.max(n - 2, 0)) / 2;
     // Vertices appended by the split at sharp edges (F.5): X + S (n − 1).
-    const appended = u.split ? u.split.copies + u.split.splitEdges * (n - 1) : 0;
+    const appended = u.split.copies + u.split.splitEdges * (n - 1);
     const v = t.vertexCount + t.edgeCount * (n - 1) + t.triangleCount * perTri + appended;
     const f = t.triangleCount * 4 ** level;
     if (v > 0xffffffff || 3 * f > 0xffffffff) throw new HceError('', `level ${level} of '${u.object.name}' needs more than 2^32 vertices or indices`);
@@ -272,7 +271,7 @@ export class Kernels {
     if (!isLoop) {
       const params = new Uint32Array([
         level, n, t.vertexCount, t.edgeCount, t.triangleCount, n < 2 ? 0 : ((n - 1) * (n - 2)) / 2, v, f,
-        ...u.offsets, smooth,
+        ...u.offsets.slice(0, 7), smooth, u.offsets[7], u.offsets[8], v - appended, u.split.copies,
       ]);
       uniform = d.createBuffer({ label: 'flat params', size: params.byteLength, usage: UNIFORM | COPY_DST });
       d.queue.writeBuffer(uniform, 0, params);
@@ -303,7 +302,7 @@ export class Kernels {
       const params = new Uint32Array([
         level, n, t.vertexCount, t.edgeCount, t.triangleCount, n - 1, ((n - 1) * Math.max(n - 2, 0)) / 2, v, f,
         slots, square, loop.maxValence, ...u.offsets, 1, smooth, v - appended,
-        u.split ? u.split.copies : 0,
+        u.split.copies,
       ]);
       uniform = d.createBuffer({ label: 'loop params', size: params.byteLength, usage: UNIFORM | COPY_DST });
       d.queue.writeBuffer(uniform, 0, params);

@@ -3,15 +3,13 @@
 // one linear model of colour over normals, fitted to the samples of every leaf meeting there,
 // T-vertices resolved, in the word layout `hce_light.wgsl` reads. Fits in f64, rounded once to
 // f32, as G.3 says.
-import { NO_NEIGHBOUR, SPOKE_SHARP } from './container.js';
+import { coarseNormalArea, cornerGroups, joinedSides } from './topology.js';
 
 /** @typedef {import('./container.js').HceObject} HceObject */
 
 const TREE_LATTICE = 1 << 12;
 /** Ridge weight of the normal fit (G.3). */
 export const RIDGE = 1e-4;
-/** Flat objects join neighbours whose normals differ by less than this (G.2). */
-export const FLAT_JOIN_DEGREES = 10;
 const MODEL_FLOATS = 12;
 const LEAF = 0x80000000;
 
@@ -29,25 +27,6 @@ export function rgb9e5(v) {
 const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 
 /**
- * @param {HceObject} o
- * @param {number} t
- * @returns {[number[], number]} the unit geometric normal (f64) and the area of coarse triangle t
- */
-function coarseNormalArea(o, t) {
-  const m = o.mesh;
-  const p = (/** @type {number} */ c) => {
-    const v = m.triangles[3 * t + c];
-    return [m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]];
-  };
-  const [p0, p1, p2] = [p(0), p(1), p(2)];
-  const u = [p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]];
-  const w = [p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]];
-  const n = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];
-  const l = Math.sqrt(dot(n, n));
-  return [l > 0 ? n.map((x) => x / l) : [0, 0, 0], 0.5 * l];
-}
-
-/**
  * The surface facts point identities need (lighting.rs `Surface`): which edges join their
  * triangles, and the group of each triangle corner's vertex.
  * @param {HceObject} o
@@ -55,50 +34,9 @@ function coarseNormalArea(o, t) {
 function surface(o) {
   const m = o.mesh;
   const F = m.triangles.length / 3;
-  const normals = [];
-  for (let t = 0; t < F; t++) normals.push(coarseNormalArea(o, t)[0]);
-  const cosJoin = Math.cos((FLAT_JOIN_DEGREES * Math.PI) / 180);
-  const joined = new Uint8Array(3 * F);
-  for (let t = 0; t < F; t++) {
-    for (let e = 0; e < 3; e++) {
-      const u = m.neighbours[3 * t + e];
-      if (u === NO_NEIGHBOUR || u >= F) continue;
-      const v = m.triangles[3 * t + e];
-      const spoke = m.spokeFlags[m.ringOffsets[v] + m.cornerSpokes[3 * t + e]];
-      const smooth = spoke !== undefined && (spoke & SPOKE_SHARP) === 0;
-      joined[3 * t + e] = smooth && (o.kind === 'multiresolution' || dot(normals[t], normals[u]) >= cosJoin) ? 1 : 0;
-    }
-  }
-  const parent = new Uint32Array(3 * F);
-  for (let i = 0; i < parent.length; i++) parent[i] = i;
-  const find = (/** @type {number} */ a) => {
-    while (parent[a] !== a) {
-      parent[a] = parent[parent[a]];
-      a = parent[a];
-    }
-    return a;
-  };
-  for (let t = 0; t < F; t++) {
-    for (let e = 0; e < 3; e++) {
-      if (!joined[3 * t + e]) continue;
-      const u = m.neighbours[3 * t + e];
-      const a = m.triangles[3 * t + e];
-      const b = m.triangles[3 * t + (e + 1) % 3];
-      for (const [c, v] of [[e, a], [(e + 1) % 3, b]]) {
-        for (let cu = 0; cu < 3; cu++) {
-          if (m.triangles[3 * u + cu] !== v) continue;
-          const ra = find(3 * t + c);
-          const rb = find(3 * u + cu);
-          // The smaller root wins, so the result does not depend on the order of the unions.
-          if (ra < rb) parent[rb] = ra;
-          else if (rb < ra) parent[ra] = rb;
-          break;
-        }
-      }
-    }
-  }
-  const group = new Uint32Array(3 * F);
-  for (let i = 0; i < group.length; i++) group[i] = find(i);
+  // Joined sides and corner groups: the one definition the split shares (topology.js, G.2).
+  const joined = joinedSides(o);
+  const group = cornerGroups(o, joined);
   /**
    * The key of lattice point (x, y) (denominator 4096) of coarse triangle t (G.2).
    * @param {number} t @param {number} x @param {number} y

@@ -126,30 +126,65 @@ export function loopTables(o, checked) {
   };
 }
 
+/** Flat objects join neighbours whose normals differ by less than this (G.2). */
+export const FLAT_JOIN_DEGREES = 10;
+
+/** @param {number[]} a @param {number[]} b */
+const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+
 /**
- * The split at sharp edges of a multiresolution object (SPEC.md F.5, geometry/src/split.rs
- * `SplitTables::from_topology`): the regions of each control point (its corners joined across
- * interior edges that are not sharp), the copies appended for every region but the owner's and
- * for the far side of every sharp interior edge, and the slot lists that replace the vertex and
- * edge incidence in the Loop kernel's topology (V + X corner slots, E + S edge slots).
  * @param {HceObject} o
- * @param {FlatTopology} t
+ * @param {number} t
+ * @returns {[number[], number]} the unit geometric normal (f64, zero when degenerate) and the
+ *   area of coarse triangle t, from its POSN corners (G.2)
  */
-export function splitTables(o, t) {
+export function coarseNormalArea(o, t) {
   const m = o.mesh;
-  const F = t.triangleCount;
-  const V = t.vertexCount;
-  const E = t.edgeCount;
-  const NO_COPY = 0xffffffff;
-  // Sides joined to their neighbour: it exists and the side's spoke is not sharp (G.2).
+  const p = (/** @type {number} */ c) => {
+    const v = m.triangles[3 * t + c];
+    return [m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]];
+  };
+  const [p0, p1, p2] = [p(0), p(1), p(2)];
+  const u = [p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]];
+  const w = [p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]];
+  const n = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];
+  const l = Math.sqrt(dot(n, n));
+  return [l > 0 ? n.map((x) => x / l) : [0, 0, 0], 0.5 * l];
+}
+
+/**
+ * Sides joined to their neighbour (G.2, geometry/src/split.rs `joined_sides`): the neighbour
+ * exists, the side's spoke is not sharp and, on a flat object, the two triangles' geometric
+ * normals are within FLAT_JOIN_DEGREES. The one definition the lighting table and the split
+ * read.
+ * @param {HceObject} o
+ */
+export function joinedSides(o) {
+  const m = o.mesh;
+  const F = m.triangles.length / 3;
+  const normals = [];
+  if (o.kind !== 'multiresolution') for (let t = 0; t < F; t++) normals.push(coarseNormalArea(o, t)[0]);
+  const cosJoin = Math.cos((FLAT_JOIN_DEGREES * Math.PI) / 180);
   const joined = new Uint8Array(3 * F);
   for (let s = 0; s < 3 * F; s++) {
     const u = m.neighbours[s];
-    if (u === NO_NEIGHBOUR || u >= F) continue;
-    const spoke = m.ringOffsets[m.triangles[s]] + m.cornerSpokes[s];
-    joined[s] = m.spokeFlags[spoke] & SPOKE_SHARP ? 0 : 1;
+    if (u === undefined || u === NO_NEIGHBOUR || u >= F) continue;
+    const spoke = m.spokeFlags[m.ringOffsets[m.triangles[s]] + m.cornerSpokes[s]];
+    const smooth = spoke !== undefined && (spoke & SPOKE_SHARP) === 0;
+    joined[s] = smooth && (o.kind === 'multiresolution' || dot(normals[Math.floor(s / 3)], normals[u]) >= cosJoin) ? 1 : 0;
   }
-  // Groups of corners (union-find; the smaller root wins).
+  return joined;
+}
+
+/**
+ * The group of every triangle corner 3t + c: the smallest corner linked to it by a chain of
+ * joined sides at the same vertex (union-find; the smaller root wins, split.rs `corner_groups`).
+ * @param {HceObject} o
+ * @param {Uint8Array} joined
+ */
+export function cornerGroups(o, joined) {
+  const m = o.mesh;
+  const F = m.triangles.length / 3;
   const up = new Uint32Array(3 * F);
   for (let i = 0; i < 3 * F; i++) up[i] = i;
   const find = (/** @type {number} */ a) => {
@@ -176,6 +211,30 @@ export function splitTables(o, t) {
       }
     }
   }
+  const group = new Uint32Array(3 * F);
+  for (let i = 0; i < 3 * F; i++) group[i] = find(i);
+  return group;
+}
+
+/**
+ * The split where the surface folds (SPEC.md F.5, geometry/src/split.rs
+ * `SplitTables::from_topology`), for both kinds of object: the regions of each control point
+ * (the groups of its corners joined across edges, G.2), the copies appended for every region
+ * but the owner's and for the far side of every split edge (an edge with a neighbour that is
+ * not joined), and the slot lists that replace the vertex and edge incidence in the kernels'
+ * topology (V + X corner slots, E + S edge slots).
+ * @param {HceObject} o
+ * @param {FlatTopology} t
+ */
+export function splitTables(o, t) {
+  const m = o.mesh;
+  const F = t.triangleCount;
+  const V = t.vertexCount;
+  const E = t.edgeCount;
+  const NO_COPY = 0xffffffff;
+  const joined = joinedSides(o);
+  const group = cornerGroups(o, joined);
+  const find = (/** @type {number} */ c) => group[c];
   const cornerCopy = new Uint32Array(3 * F).fill(NO_COPY);
   /** @type {number[][]} */
   const ownerLists = [];
@@ -226,7 +285,8 @@ export function splitTables(o, t) {
   const splitEdge = new Uint8Array(E);
   for (let id = 0; id < E; id++) {
     const sides = t.edgeSides.subarray(t.edgeSideOffsets[id], t.edgeSideOffsets[id + 1]);
-    if (sides.length === 2 && !joined[sides[0]]) {
+    const neighboured = sides.length === 2 && m.neighbours[sides[0]] === Math.floor(sides[1] / 3);
+    if (neighboured && !joined[sides[0]]) {
       edgeCopy[id] = copySides.length;
       splitEdge[id] = 1;
       edgeSlotSides.push(sides[0]);

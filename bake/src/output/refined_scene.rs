@@ -11,7 +11,9 @@
 //! multiresolution objects by Loop subdivision, flat objects by the linear 1-to-4 split of the
 //! flat kernel (SPEC.md A.7), both coloured by the reconstruction of SPEC.md Appendix G. Flat objects get their vertices split at
 //! coarse-triangle borders so that `NORMAL` can be the face normal (they are drawn faceted);
-//! positions and colours are the runtime's.
+//! positions and colours are the runtime's: across a fold of more than 10 degrees each side's
+//! copies carry that side's light (SPEC.md F.5), across a joined edge both carry the shared
+//! vertex's blend.
 //!
 //! # `COLOR_0`
 //!

@@ -1,6 +1,6 @@
 //! Flat refinement on the GPU (`flat.wgsl`): the linear 1-to-4 split of every coarse triangle to
-//! a level, HCE colours per fine triangle, and area-weighted vertex colours shared across coarse
-//! edges. This is how [`ObjectKind::Flat`](hce_format::ObjectKind::Flat) objects are drawn
+//! a level, the vertices split where the surface folds (SPEC.md F.5, F.7), HCE colours per fine
+//! triangle, and area-weighted vertex colours shared across the coarse edges that join. This is how [`ObjectKind::Flat`](hce_format::ObjectKind::Flat) objects are drawn
 //! (Concheiro et al., GRAPP 2012: "flat" objects keep their element colours, unsmoothed), and how
 //! `hce render` previews a plain mesh.
 //!
@@ -19,6 +19,7 @@ use super::{GpuContext, GpuError};
 use hce_geometry::decode::MAX_PATH_LEVEL;
 use hce_geometry::flat::{FlatTopology, RefinedMesh};
 use hce_geometry::lighting::Reconstruction;
+use hce_geometry::split::SplitTables;
 use hce_geometry::tables::validate_tables;
 
 /// The kernel's uniform block (`Params` in `flat.wgsl`).
@@ -42,6 +43,11 @@ pub(super) struct Params {
     pub(super) vertex_corners_off: u32,
     /// 0 for the nearest-normal rule, 1 for the reconstructions that read the lighting table.
     pub(super) smooth_light: u32,
+    pub(super) corner_copy_off: u32,
+    pub(super) edge_copy_off: u32,
+    /// The first vertex the split appends (the F.5 count), and its corner copies `X`.
+    pub(super) split_base: u32,
+    pub(super) split_copies: u32,
 }
 
 /// The compiled pipelines of the three steps.
@@ -54,9 +60,12 @@ pub struct FlatKernel {
 /// An object's tables on the GPU, validated.
 pub struct FlatObject {
     pub(crate) topology: FlatTopology,
+    /// Where the refined vertices split (SPEC.md F.5): its slot lists are the incidence the
+    /// kernel gathers over.
+    split: SplitTables,
     coarse_positions: wgpu::Buffer,
     topo: wgpu::Buffer,
-    section_offsets: [u32; 7],
+    section_offsets: [u32; 9],
     /// The baked lighting and how vertex colours are reconstructed from it.
     lighting: LightingBuffers,
 }
@@ -153,16 +162,21 @@ impl FlatKernel {
     ) -> Result<FlatObject, GpuError> {
         validate_tables(object)?;
         let topology = FlatTopology::new(&object.name, &object.mesh)?;
+        // The split where the surface folds (SPEC.md F.5): its slot lists replace the
+        // topology's vertex and edge incidence, so each region gathers its own side only.
+        let split = SplitTables::from_topology(&object.mesh, &topology, object.kind);
         let (packed, section_offsets) = pack_sections(
             ctx,
             [
                 &object.mesh.triangles,
                 &object.mesh.edges,
                 &topology.edge_verts,
-                &topology.edge_side_offsets,
-                &topology.edge_sides,
-                &topology.vertex_corner_offsets,
-                &topology.vertex_corners,
+                &split.edge_slot_offsets,
+                &split.edge_slot_sides,
+                &split.corner_slot_offsets,
+                &split.corner_slot_corners,
+                &split.corner_copy,
+                &split.edge_copy,
             ],
         )?;
         check_size(
@@ -176,6 +190,7 @@ impl FlatKernel {
             topo: storage_init(ctx, "topology", &packed),
             section_offsets,
             topology,
+            split,
         })
     }
 
@@ -265,6 +280,10 @@ impl FlatKernel {
             vertex_corner_offsets_off: s[5],
             vertex_corners_off: s[6],
             smooth_light: object.lighting.smooth_flag(),
+            corner_copy_off: s[7],
+            edge_copy_off: s[8],
+            split_base: v - object.split.appended(level) as u32,
+            split_copies: object.split.copies,
         };
         let uniform = super::util::uniform_init(ctx, "flat params", &params);
         let group = |pipeline: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| {
@@ -344,7 +363,7 @@ fn counts(object: &FlatObject, level: u32) -> Result<(u32, u32), GpuError> {
             max: MAX_PATH_LEVEL,
         });
     }
-    let v = object.topology.refined_vertex_count(level);
+    let v = object.topology.refined_vertex_count(level) + object.split.appended(level);
     let f = object.topology.refined_triangle_count(level);
     let too_large = |what, needed| GpuError::TooLarge {
         what,

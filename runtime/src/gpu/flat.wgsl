@@ -1,6 +1,8 @@
-// Flat refinement: linear 1-to-4 split of every coarse triangle to level L, one HCE colour per
-// fine triangle, and vertex colours as area-weighted means of the incident fine triangles,
-// across coarse edges and vertices. Three dispatches, each a pure gather with one writer per
+// Flat refinement: linear 1-to-4 split of every coarse triangle to level L, the vertices split
+// where the surface folds (SPEC.md F.5, F.7: one vertex per side of every edge with a neighbour
+// that does not join it), one HCE colour per fine triangle, and vertex colours as area-weighted
+// means of the incident fine triangles of the vertex's region, across the coarse edges and
+// vertices that join. Three dispatches, each a pure gather with one writer per
 // output element, so the result does not depend on scheduling (no float atomics).
 //
 // The lattice and the output numbering are those of hce_lattice.wgsl (prepended, with
@@ -26,6 +28,14 @@ struct Params {
     vertex_corners_off: u32,
     // 1: smooth reconstruction (hce_light.wgsl), 0: the paper's nearest normal.
     smooth_light: u32,
+    // The split where the surface folds (geometry/src/split.rs): the four incidence sections
+    // above are its slot lists (V + X corner slots, E + S edge slots); per corner its region's
+    // copy, per edge id its rank among the split edges (or NO_COPY); the first appended vertex
+    // (the F.5 count) and the number X of corner copies.
+    corner_copy_off: u32,
+    edge_copy_off: u32,
+    split_base: u32,
+    split_copies: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -73,13 +83,12 @@ fn lattice_edge_base(t: u32, e: u32) -> u32 {
     return params.coarse_vertices + topo[params.edges_off + 3u * t + e] * (params.n - 1u);
 }
 
-// Flat objects are not split at sharp edges (SPEC.md F.5): nothing is appended.
 fn lattice_split_base() -> u32 {
-    return params.vertex_total;
+    return params.split_base;
 }
 
 fn lattice_split_copies() -> u32 {
-    return 0u;
+    return params.split_copies;
 }
 
 fn lattice_interior_base(t: u32) -> u32 {
@@ -88,13 +97,18 @@ fn lattice_interior_base(t: u32) -> u32 {
 
 // Step 1 (one invocation per output vertex): positions. Coarse vertices are copied, edge points
 // are computed once from the owner's direction, interior points from their triangle — one
-// writer per vertex, so vertices shared along coarse edges are bitwise identical.
+// writer per vertex, so vertices shared along coarse edges are bitwise identical. A copy of the
+// split computes its original's position the same way, so it has the same bits.
 @compute @workgroup_size(64)
 fn positions_main(@builtin(global_invocation_id) gid: vec3<u32>,
                   @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = linear_id(gid, groups);
-    if (i >= params.vertex_total) {
+    let v = linear_id(gid, groups);
+    if (v >= params.vertex_total) {
         return;
+    }
+    var i = v;
+    if (v >= params.split_base) {
+        i = slot_source(vertex_slot(v));
     }
     var p: vec3<f32>;
     let ep = params.n - 1u;
@@ -114,9 +128,9 @@ fn positions_main(@builtin(global_invocation_id) gid: vec3<u32>,
         p = lattice_position(coarse_position(corner(t, 0u)), coarse_position(corner(t, 1u)),
                              coarse_position(corner(t, 2u)), bc.x, bc.y);
     }
-    out_positions[3u * i] = p.x;
-    out_positions[3u * i + 1u] = p.y;
-    out_positions[3u * i + 2u] = p.z;
+    out_positions[3u * v] = p.x;
+    out_positions[3u * v + 1u] = p.y;
+    out_positions[3u * v + 2u] = p.z;
 }
 
 // Step 2 (one invocation per fine triangle): its three vertex indices, its normal and area from
@@ -136,9 +150,11 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
     let i0 = vertex_index(t, cs[0].x, cs[0].y);
     let i1 = vertex_index(t, cs[1].x, cs[1].y);
     let i2 = vertex_index(t, cs[2].x, cs[2].y);
-    out_indices[3u * g] = i0;
-    out_indices[3u * g + 1u] = i1;
-    out_indices[3u * g + 2u] = i2;
+    // Drawn with the split vertices (hce_gather.wgsl `split_index`); measured with the F.5
+    // ones, whose positions the copies repeat.
+    out_indices[3u * g] = split_index(t, cs[0].x, cs[0].y, i0);
+    out_indices[3u * g + 1u] = split_index(t, cs[1].x, cs[1].y, i1);
+    out_indices[3u * g + 2u] = split_index(t, cs[2].x, cs[2].y, i2);
 
     let p0 = out_position(i0);
     let u = out_position(i1) - p0;
@@ -157,9 +173,10 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
     out_faces[g] = vec4<f32>(rgb, 0.5 * len);
 }
 
-// Step 3 (one invocation per output vertex): gather every incident fine triangle — from each
-// coarse triangle at a coarse vertex, from both sides of a coarse edge, or from the one
-// triangle of an interior point — and write the area-weighted mean colour.
+// Step 3 (one invocation per output vertex, copies included): gather every incident fine
+// triangle of the vertex's region — from each coarse triangle of its corner slot at a coarse
+// vertex, from the sides of its edge slot on a coarse edge, or from the one triangle of an
+// interior point — and write the area-weighted mean colour.
 @compute @workgroup_size(64)
 fn colours_main(@builtin(global_invocation_id) gid: vec3<u32>,
                 @builtin(num_workgroups) groups: vec3<u32>) {

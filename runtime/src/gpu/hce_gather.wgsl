@@ -4,12 +4,13 @@
 // writer per vertex and a fixed order of summation, so the result does not depend on scheduling.
 //
 // This file is prepended after hce_tree.wgsl, hce_light.wgsl and hce_lattice.wgsl to a kernel
-// that provides lattice_split_base() (the first vertex the split at sharp edges appends, SPEC.md
-// F.5; the vertex count where nothing is split) and lattice_split_copies() (its corner copies X),
-// and declares, with these names:
-//   params:     the kernel's uniform, with `level`, `coarse_vertices`, `edge_count`,
+// that provides lattice_split_base() (the first vertex the split where the surface folds
+// appends, SPEC.md F.5; the vertex count where nothing is split) and lattice_split_copies() (its
+// corner copies X), and declares, with these names:
+//   params:     the kernel's uniform, with `level`, `coarse_vertices`, `edge_count`, `edges_off`,
 //               `edge_side_offsets_off`, `edge_sides_off`, `vertex_corner_offsets_off`,
-//               `vertex_corners_off` (sections of `topo`) and `smooth_light`
+//               `vertex_corners_off`, `corner_copy_off`, `edge_copy_off` (sections of `topo`:
+//               the split's slot lists and copy ranks, geometry/src/split.rs) and `smooth_light`
 //   topo:       array<u32>
 //   out_faces:  array<vec4<f32>>   per fine triangle: its colour and, in w, its area
 
@@ -217,4 +218,41 @@ fn region_normal(s: Slot) -> vec3<f32> {
         }
     }
     return sum;
+}
+
+// Step 6: the vertex that fine triangles of t use at lattice point (b, c), whose F.5 number is
+// i: the copy of t's region where the point's vertex is split (SPEC.md F.5), else i
+// (geometry/src/split.rs `SplitTables::split_index`).
+const NO_COPY: u32 = 0xffffffffu;
+
+fn split_index(t: u32, b: i32, c: i32, i: u32) -> u32 {
+    let n = i32(lattice_n());
+    let per_edge = lattice_n() - 1u;
+    let a = n - b - c;
+    if (i < params.coarse_vertices) {
+        var k = 0u;
+        if (a == 0 && c == 0) {
+            k = 1u;
+        } else if (a == 0 && b == 0) {
+            k = 2u;
+        }
+        let copy = topo[params.corner_copy_off + 3u * t + k];
+        if (copy != NO_COPY) {
+            return lattice_split_base() + copy;
+        }
+    } else if (i < params.coarse_vertices + params.edge_count * per_edge) {
+        var e = 0u;
+        if (a == 0) {
+            e = 1u;
+        } else if (b == 0) {
+            e = 2u;
+        }
+        let local = i - params.coarse_vertices;
+        let copy = topo[params.edge_copy_off + local / per_edge];
+        if (copy != NO_COPY && !edge_from_owner(t, e)) {
+            return lattice_split_base() + lattice_split_copies() + copy * per_edge
+                + local % per_edge;
+        }
+    }
+    return i;
 }

@@ -73,7 +73,6 @@ struct Params {
     split_copies: u32,
 }
 
-const NO_COPY: u32 = 0xffffffffu;
 
 // The bits of the per-triangle flags word (OWNS_EDGE, OWNS_VERTEX, INTERIOR, SHARP) and of the
 // file's flags (RULE_CREASE, RULE_CORNER, SPOKE_SHARP, VERTEX_BOUNDARY) come from
@@ -495,39 +494,6 @@ fn lattice_split_base() -> u32 {
 
 fn lattice_split_copies() -> u32 {
     return params.split_copies;
-}
-
-// The vertex that fine triangles of t use at lattice point (b, c), whose F.5 number is i: the
-// copy of t's region where the point's vertex is split (SPEC.md F.5), else i.
-fn split_index(t: u32, b: i32, c: i32, i: u32) -> u32 {
-    let n = i32(params.m);
-    let a = n - b - c;
-    if (i < params.coarse_vertices) {
-        var k = 0u;
-        if (a == 0 && c == 0) {
-            k = 1u;
-        } else if (a == 0 && b == 0) {
-            k = 2u;
-        }
-        let copy = topo[params.corner_copy_off + 3u * t + k];
-        if (copy != NO_COPY) {
-            return params.split_base + copy;
-        }
-    } else if (i < params.coarse_vertices + params.edge_count * params.per_edge) {
-        var e = 0u;
-        if (a == 0) {
-            e = 1u;
-        } else if (b == 0) {
-            e = 2u;
-        }
-        let local = i - params.coarse_vertices;
-        let copy = topo[params.edge_copy_off + local / params.per_edge];
-        if (copy != NO_COPY && (topo[params.tri_flags_off + t] & (OWNS_EDGE << e)) == 0u) {
-            return params.split_base + params.split_copies + copy * params.per_edge
-                + local % params.per_edge;
-        }
-    }
-    return i;
 }
 
 // Step 2 (one invocation per fine triangle): its indices, then its area and, for the paper's

@@ -38,7 +38,7 @@
 //! are large enough, so a viewer can refine every frame without reallocating. The shape of the
 //! API is that of [`FlatKernel`](super::FlatKernel).
 
-use hce_format::Object;
+use hce_format::{Object, ObjectKind};
 
 use super::flat::KernelTiming;
 use super::util::{
@@ -49,7 +49,7 @@ use super::wgsl::{loop_source, loop_workgroup_source};
 use super::{AdapterKind, GpuContext, GpuError};
 use hce_geometry::flat::{FlatTopology, RefinedMesh};
 use hce_geometry::lighting::Reconstruction;
-use hce_geometry::split::{joined_sides, SplitTables};
+use hce_geometry::split::SplitTables;
 use hce_geometry::subdivide::{prepare, MAX_LOOP_LEVEL};
 use hce_geometry::tables::validate_tables;
 
@@ -436,7 +436,7 @@ impl LoopKernel {
         let topology = FlatTopology::new(&object.name, mesh)?;
         // The split at sharp edges (SPEC.md F.5): its slot lists replace the topology's vertex
         // and edge incidence, so that each region of a split vertex gathers its own side only.
-        let split = SplitTables::from_topology(mesh, &topology, &joined_sides(mesh));
+        let split = SplitTables::from_topology(mesh, &topology, ObjectKind::Multiresolution);
         let nv = mesh.vertex_count();
         let nf = mesh.triangle_count();
         let max_valence = (0..nv)

@@ -508,7 +508,7 @@ impl GpuScene {
                     });
                 }
                 subdivide_into(&object.mesh, level, scratch).map_err(|e| invalid(&name, e))?;
-                hce_geometry::split::SplitTables::new(&name, &object.mesh)
+                hce_geometry::split::SplitTables::new(&name, &object.mesh, object.kind)
                     .map_err(|e| invalid(&name, e))?
                     .apply(&object.mesh, scratch)
                     .map_err(|e| invalid(&name, e))?;

@@ -5,9 +5,12 @@
 //! [`hce_runtime::asset::Asset::open`] (or, for glTF, read once through
 //! [`hce_runtime::asset::GltfSource`] and loaded with `Asset::from_gltf`) and each object refined as the runtime refines it
 //! ([`hce_geometry::refine::refine_object`]: Loop for multiresolution objects, linear
-//! 1-to-4 for flat ones, colours from [`hce_geometry::colour::apply_baked_colours`]); the scene
-//! is written back whole ([`hce_bake::output::refined_scene::write_refined_scene`]), or with
-//! `--merge` as one mesh in object space.
+//! 1-to-4 for flat ones, the vertices split at sharp edges and at flat objects' folds of more
+//! than 10 degrees (SPEC.md F.5), colours from [`hce_geometry::colour::apply_baked_colours`]);
+//! the scene is written back whole ([`hce_bake::output::refined_scene::write_refined_scene`]:
+//! flat objects' vertices split further per coarse triangle, each with its face's normal), or
+//! with `--merge` as one mesh in object space (the refined vertices of SPEC.md F.5, copies
+//! included).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
