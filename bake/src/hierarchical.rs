@@ -1381,7 +1381,7 @@ const NEAR_SHADOW_REACH: f32 = 10.0;
 
 /// A link bringing less than this share of its receiver's radiance is faint: a few rays bound
 /// what its visibility can put wrong.
-const FAINT_LINK: f32 = 0.005;
+const FAINT_LINK: f32 = 0.01;
 
 /// Below `max_level`, direct light splits an element where a child's direct light differs from
 /// the element's by this fraction of the brightest of them (`Ctx::direct_tree`).
