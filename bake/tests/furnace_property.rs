@@ -11,6 +11,8 @@
 //! long thin triangles, or as barycentric grids of triangles, each face on its own (so T
 //! junctions along the shared edges are part of the test).
 
+mod common;
+
 use glam::Vec3;
 use hce_bake::element::Rng;
 use hce_bake::{bake, BakeParams, Scene, SolverObject};
@@ -102,16 +104,7 @@ impl Builder {
 
     /// The triangle `a, b, c` cut into `n²` triangles by a barycentric grid.
     fn triangle_grid(&mut self, a: Vec3, b: Vec3, c: Vec3, n: u32) {
-        let p =
-            |i: u32, j: u32| a + (b - a) * (i as f32 / n as f32) + (c - a) * (j as f32 / n as f32);
-        for j in 0..n {
-            for i in 0..n - j {
-                self.triangle(p(i, j), p(i + 1, j), p(i, j + 1));
-                if i + j + 1 < n {
-                    self.triangle(p(i + 1, j), p(i + 1, j + 1), p(i, j + 1));
-                }
-            }
-        }
+        common::barycentric_grid([a, b, c], n, |p, q, s| self.triangle(p, q, s));
     }
 
     fn object(self) -> SolverObject {
@@ -123,16 +116,7 @@ impl Builder {
 /// A closed box of size `s`, each face tessellated by `how(face)`.
 fn closed_box(s: Vec3, seed: u64, how: impl Fn(usize) -> Tessellation) -> SolverObject {
     let mut b = Builder::new(s * 0.5, seed);
-    let (x, y, z) = (Vec3::X * s.x, Vec3::Y * s.y, Vec3::Z * s.z);
-    let faces = [
-        (Vec3::ZERO, x, y),
-        (z, x, y),
-        (Vec3::ZERO, y, z),
-        (x, y, z),
-        (Vec3::ZERO, z, x),
-        (y, z, x),
-    ];
-    for (f, (o, u, v)) in faces.into_iter().enumerate() {
+    for (f, (o, u, v)) in common::box_faces(s).into_iter().enumerate() {
         b.parallelogram(o, u, v, how(f));
     }
     b.object()
@@ -317,19 +301,9 @@ fn multiresolution_normal_sets() {
 /// An outward-facing octahedron, each face a barycentric grid, centred at `c` with radius
 /// `r`.
 fn octahedron(b: &mut Builder, c: Vec3, r: f32, n: u32) {
-    let v = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z].map(|d| c + d * r);
-    for (i, j, k) in [
-        (0, 2, 4),
-        (2, 1, 4),
-        (1, 3, 4),
-        (3, 0, 4),
-        (2, 0, 5),
-        (1, 2, 5),
-        (3, 1, 5),
-        (0, 3, 5),
-    ] {
+    for [p, q, s] in common::octahedron_faces(c, r) {
         let start = b.triangles.len();
-        b.triangle_grid(v[i], v[j], v[k], n);
+        b.triangle_grid(p, q, s, n);
         // Facing outwards: away from the octahedron's centre.
         for t in &mut b.triangles[start..] {
             let [p, q, s] = t.map(|x| Vec3::from(b.positions[x as usize]));

@@ -9,6 +9,8 @@
 //! `HCE_REFERENCE_PATHS=N` sets the paths per face (default 16384); BENCHMARKS.md ("Leaves of
 //! the bake") records a run with more.
 
+mod common;
+
 use glam::Vec3;
 use hce_bake::reference::PathTracer;
 use hce_bake::{bake, BakeParams, Scene, SolverObject};
@@ -28,10 +30,8 @@ impl Mesh {
 
     /// The triangle `a, b, c` cut into `n²` triangles, each facing away from `inside` when
     /// `outward`, towards it otherwise.
-    fn grid(&mut self, [a, b, c]: [Vec3; 3], n: u32, inside: Vec3, outward: bool) {
-        let p =
-            |i: u32, j: u32| a + (b - a) * (i as f32 / n as f32) + (c - a) * (j as f32 / n as f32);
-        let mut add = |x: Vec3, y: Vec3, z: Vec3| {
+    fn grid(&mut self, corners: [Vec3; 3], n: u32, inside: Vec3, outward: bool) {
+        common::barycentric_grid(corners, n, |x, y, z| {
             let base = self.positions.len() as u32;
             self.positions.extend([x, y, z].map(|v| v.to_array()));
             let faces_in = (y - x).cross(z - x).dot(inside - (x + y + z) / 3.0) > 0.0;
@@ -40,15 +40,7 @@ impl Mesh {
             } else {
                 self.triangles.push([base, base + 2, base + 1]);
             }
-        };
-        for j in 0..n {
-            for i in 0..n - j {
-                add(p(i, j), p(i + 1, j), p(i, j + 1));
-                if i + j + 1 < n {
-                    add(p(i + 1, j), p(i + 1, j + 1), p(i, j + 1));
-                }
-            }
-        }
+        });
     }
 
     fn quad(&mut self, o: Vec3, u: Vec3, v: Vec3, n: u32, inside: Vec3, outward: bool) {
@@ -60,19 +52,9 @@ impl Mesh {
 /// An octahedron of radius `r` at `c`, each face a barycentric grid of `n²` triangles, the
 /// triangles of face `f` at `8 f * n² ..`.
 fn octahedron(c: Vec3, r: f32, n: u32) -> Mesh {
-    let v = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z].map(|d| c + d * r);
     let mut m = Mesh::new();
-    for (i, j, k) in [
-        (0, 2, 4),
-        (2, 1, 4),
-        (1, 3, 4),
-        (3, 0, 4),
-        (2, 0, 5),
-        (1, 2, 5),
-        (3, 1, 5),
-        (0, 3, 5),
-    ] {
-        m.grid([v[i], v[j], v[k]], n, c, true);
+    for face in common::octahedron_faces(c, r) {
+        m.grid(face, n, c, true);
     }
     m
 }
@@ -88,15 +70,7 @@ fn scene() -> Scene {
     let s = Vec3::new(3.0, 3.0, 2.5);
     let inside = s * 0.5;
     let mut room = Mesh::new();
-    let (x, y, z) = (Vec3::X * s.x, Vec3::Y * s.y, Vec3::Z * s.z);
-    for (o, u, v) in [
-        (Vec3::ZERO, x, y),
-        (z, x, y),
-        (Vec3::ZERO, y, z),
-        (x, y, z),
-        (Vec3::ZERO, z, x),
-        (y, z, x),
-    ] {
+    for (o, u, v) in common::box_faces(s) {
         for i in 0..3 {
             for j in 0..3 {
                 room.quad(
