@@ -30,6 +30,10 @@ pub struct Cluster {
     /// do not fit in a cone narrower than a hemisphere).
     pub cone_axis: Vec3,
     pub cone_angle: f32,
+    /// `cos` and `sin` of `cone_angle`, kept for [`Cluster::projected_area`], which the
+    /// solver calls for every cluster a receiver gathers from.
+    pub cone_cos: f32,
+    pub cone_sin: f32,
     /// Its triangles are `order[first .. first + count]`.
     pub first: u32,
     pub count: u32,
@@ -52,11 +56,13 @@ impl Cluster {
             }
         };
         let axes = pick(w.x, 0) + pick(w.y, 1) + pick(w.z, 2);
-        let theta = self.cone_axis.dot(w).clamp(-1.0, 1.0).acos();
-        let cone = if self.cone_angle >= std::f32::consts::PI {
+        // cos(max(0, θ − α)) for the angle θ between the cone's axis and `w`, by the
+        // difference formula rather than `acos` and `cos` (a tenth of the bake's time).
+        let d = self.cone_axis.dot(w).clamp(-1.0, 1.0);
+        let cone = if self.cone_angle >= std::f32::consts::PI || d >= self.cone_cos {
             1.0
         } else {
-            (theta - self.cone_angle).max(0.0).cos().max(0.0)
+            (d * self.cone_cos + (1.0 - d * d).max(0.0).sqrt() * self.cone_sin).max(0.0)
         };
         axes.min(self.area * cone)
     }
@@ -266,6 +272,8 @@ fn build_range(
         proj: proj.map(|p| p as f32),
         cone_axis,
         cone_angle,
+        cone_cos: cone_angle.cos(),
+        cone_sin: cone_angle.sin(),
         first,
         count: ids.len() as u32,
         children: [ClusterChild::Root(0); 2],
