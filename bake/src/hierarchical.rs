@@ -591,6 +591,12 @@ impl Ctx<'_> {
                 (c.radius(), c.area)
             })
             .collect();
+        // The receiver's radiance in the previous solution (normal 0), which the rules judged
+        // against the receiver weigh their errors by.
+        let receiver_radiance = |recv: ElemKey| {
+            let t = &trees[r as usize];
+            lum(t.l[t.deepest_toward(recv) as usize * nn])
+        };
         while let Some((recv, src)) = stack.pop() {
             let rt = self.elem_corners(recv);
             let r_area = root.area / 4f32.powi(recv.level as i32);
@@ -681,8 +687,7 @@ impl Ctx<'_> {
                         // radiance it puts wrong into the receiver against the radiance the
                         // receiver has: every leaf is drawn, so a small one next to an edge
                         // matters as much as a large one.
-                        let recv_l = lum(trees[r as usize].l
-                            [trees[r as usize].deepest_toward(recv) as usize * nn]);
+                        let recv_l = receiver_radiance(recv);
                         if bend * l * lum(self.reflectance(recv)) > BEND_TOLERANCE * recv_l
                             && self.splittable(recv, r_area)
                         {
@@ -790,8 +795,7 @@ impl Ctx<'_> {
                         let centre = f(rc);
                         let at = inset_corners(rt).map(f);
                         let bend = (centre - (at[0] + at[1] + at[2]) / 3.0).abs();
-                        let recv_l = lum(trees[r as usize].l
-                            [trees[r as usize].deepest_toward(recv) as usize * nn]);
+                        let recv_l = receiver_radiance(recv);
                         if bend * l * lum(self.reflectance(recv)) > BEND_TOLERANCE * recv_l {
                             for ch in (0..4).rev() {
                                 stack.push((recv.child(ch), src));
@@ -833,9 +837,7 @@ impl Ctx<'_> {
                     // rays, and next to an object resting on a floor the noise of a dozen
                     // half-hidden links left leaves 8% off in a closed furnace.
                     let nv = self.params.visibility_rays;
-                    let recv_l =
-                        lum(trees[r as usize].l
-                            [trees[r as usize].deepest_toward(recv) as usize * nn]);
+                    let recv_l = receiver_radiance(recv);
                     let share = est / (r_area * std::f32::consts::PI) * lum(self.reflectance(recv));
                     let rays = if est >= 0.05 * eps_power || share >= FAINT_LINK * recv_l {
                         nv
@@ -861,8 +863,7 @@ impl Ctx<'_> {
                     * (k[0] + k[nn] + k[2 * nn])
                     / 3.0;
                 let wrong = gathered * (1.0 - visible).min(visible) / visible;
-                let recv_l =
-                    lum(trees[r as usize].l[trees[r as usize].deepest_toward(recv) as usize * nn]);
+                let recv_l = receiver_radiance(recv);
                 if wrong > SHADOW_TOLERANCE * recv_l.max(gathered) {
                     for c in (0..4).rev() {
                         stack.push((recv.child(c), src));
