@@ -623,6 +623,9 @@ impl Ctx<'_> {
             let est;
             let s_area;
             let s_splittable;
+            // The geometric normal's form factors the split rules below computed, which the
+            // link's coefficients reuse.
+            let mut known = KnownFactors::default();
             match src {
                 Source::Elem(sk) => {
                     if sk.root == r {
@@ -673,6 +676,7 @@ impl Ctx<'_> {
                             // the receiver's side peaks there). The bend is the geometry's,
                             // alike for every normal: the geometric one judges it.
                             if j == 0 {
+                                known.corners = Some(at);
                                 bend = (centre - (at[0] + at[1] + at[2]) / 3.0).abs();
                                 for (a, b) in [(0, 1), (1, 2), (2, 0)] {
                                     let mid = f((inset[a] + inset[b]) * 0.5);
@@ -794,6 +798,10 @@ impl Ctx<'_> {
                         };
                         let centre = f(rc);
                         let at = inset_corners(rt).map(f);
+                        known = KnownFactors {
+                            centre: Some(centre),
+                            corners: Some(at),
+                        };
                         let bend = (centre - (at[0] + at[1] + at[2]) / 3.0).abs();
                         let recv_l = receiver_radiance(recv);
                         if bend * l * lum(self.reflectance(recv)) > BEND_TOLERANCE * recv_l {
@@ -844,7 +852,7 @@ impl Ctx<'_> {
                     } else {
                         nv.min(2)
                     };
-                    self.link_coefficients(recv, src, rays)
+                    self.link_coefficients(recv, src, rays, known)
                 }
             };
             if k.iter().all(|&v| v <= 0.0) {
@@ -887,8 +895,17 @@ impl Ctx<'_> {
         (links, ks)
     }
 
-    /// Form factor times visibility from receiver `recv` to `src`, per receiver normal.
-    fn link_coefficients(&self, recv: ElemKey, src: Source, nv: u32) -> (Vec<f32>, f32) {
+    /// Form factor times visibility from receiver `recv` to `src`, per receiver normal. A pair
+    /// whose form factor is nowhere positive (a cluster whose box reaches above the receiver's
+    /// plane while its triangles lie below it: half the pairs of the scaling scene's sphere)
+    /// is dropped by the caller, and casts no rays.
+    fn link_coefficients(
+        &self,
+        recv: ElemKey,
+        src: Source,
+        nv: u32,
+        known: KnownFactors,
+    ) -> (Vec<f32>, f32) {
         let root = &self.roots[recv.root as usize];
         let nn = root.normals.len();
         let rt = self.elem_corners(recv);
@@ -923,8 +940,13 @@ impl Ctx<'_> {
                 }
                 let inv = 1.0 / pts.len() as f32;
                 k.iter_mut().for_each(|v| *v *= inv);
-                let at_corners = inset_corners(rt).map(|p| point_to_polygon(p, root.normal, &st));
+                let at_corners = known.corners.unwrap_or_else(|| {
+                    inset_corners(rt).map(|p| point_to_polygon(p, root.normal, &st))
+                });
                 k = linear_over_receiver(&k, at_corners);
+                if k.iter().all(|&v| v <= 0.0) {
+                    return (k, 0.0);
+                }
                 let sn = self.roots[sk.root as usize].normal;
                 geometric_first(&root.normals, |normals| {
                     visible_fraction(nv, |i| {
@@ -942,13 +964,24 @@ impl Ctx<'_> {
             }
             Source::Cluster(c) => {
                 let c_size = 2.0 * self.clusters.clusters[c as usize].radius();
-                self.cluster_form_factors(c, rc, &root.normals, &mut k);
-                let at_corners = inset_corners(rt).map(|p| {
-                    let mut f = [0.0f32];
-                    self.cluster_form_factors(c, p, &[root.normal], &mut f);
-                    f[0]
+                match known.centre {
+                    Some(centre) => {
+                        k[0] = centre;
+                        self.cluster_form_factors(c, rc, &root.normals[1..], &mut k[1..]);
+                    }
+                    None => self.cluster_form_factors(c, rc, &root.normals, &mut k),
+                }
+                let at_corners = known.corners.unwrap_or_else(|| {
+                    inset_corners(rt).map(|p| {
+                        let mut f = [0.0f32];
+                        self.cluster_form_factors(c, p, &[root.normal], &mut f);
+                        f[0]
+                    })
                 });
                 k = linear_over_receiver(&k, at_corners);
+                if k.iter().all(|&v| v <= 0.0) {
+                    return (k, 0.0);
+                }
                 geometric_first(&root.normals, |normals| {
                     visible_fraction(nv, |i| {
                         let mut rng = Rng::new(recv.id(), src_id, u64::from(i));
@@ -1449,12 +1482,19 @@ const CHILD_CORNERS: [[(usize, usize); 3]; 4] = [
 /// dark (the geometric one included: 4-8% against path-traced images, BENCHMARKS.md); counting
 /// them only where the geometric normal has none made it 4.7% on spot and 6.2% on suzanne at
 /// level 3, against 3.8% and 4.5% this way.
+/// Form factors to a link's source with the receiver's geometric normal, already computed by
+/// the rules that decided to make the link: at the receiver's centre, and at its inset corners
+/// ([`inset_corners`]).
+#[derive(Clone, Copy, Default)]
+struct KnownFactors {
+    centre: Option<f32>,
+    corners: Option<[f32; 3]>,
+}
+
 fn geometric_first(normals: &[Vec3], visible: impl Fn(&[Vec3]) -> Option<f32>) -> f32 {
     visible(&normals[..1]).unwrap_or(1.0)
 }
 
-/// The fraction of the counted rays (`clear` gives `None` for a ray that does not count) that
-/// are clear, or `None` when no ray counts.
 /// The kernel-weighted fraction of the `n` rays (`clear` gives `None` for a ray whose two points
 /// cannot exchange light at all, else whether it is clear and its kernel) that are clear, or
 /// `None` when no ray counts. The form factor already weighs the pair by where it exchanges
