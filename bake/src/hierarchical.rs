@@ -948,6 +948,13 @@ impl Ctx<'_> {
                     return (k, 0.0);
                 }
                 let sn = self.roots[sk.root as usize].normal;
+                let (lo, hi) = (st[0].min(st[1]).min(st[2]), st[0].max(st[1]).max(st[2]));
+                if self
+                    .occ
+                    .shaft_clear(rt, root.normal, lo, hi, Some((sn, st[0])))
+                {
+                    return (k, 1.0);
+                }
                 geometric_first(&root.normals, |normals| {
                     visible_fraction(nv, |i| {
                         let mut rng = Rng::new(recv.id(), src_id, u64::from(i));
@@ -981,6 +988,13 @@ impl Ctx<'_> {
                 k = linear_over_receiver(&k, at_corners);
                 if k.iter().all(|&v| v <= 0.0) {
                     return (k, 0.0);
+                }
+                let cluster = &self.clusters.clusters[c as usize];
+                if self
+                    .occ
+                    .shaft_clear(rt, root.normal, cluster.lo, cluster.hi, None)
+                {
+                    return (k, 1.0);
                 }
                 geometric_first(&root.normals, |normals| {
                     visible_fraction(nv, |i| {
