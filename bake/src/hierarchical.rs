@@ -322,6 +322,10 @@ struct Ctx<'a> {
     /// cluster, and a room lit by a panel under its ceiling came out 2-6% darker than a path
     /// tracer shows it, one wall darker than its mirror image (`tests/objects_reference.rs`).
     mixes_emitters: Vec<bool>,
+    /// Per root: nothing but the scene's outer boundary lies in front of its plane (the convex
+    /// side of an object in a room), so that no link it receives needs rays
+    /// ([`Occluders::shaft_clear`] over the whole scene, once per root instead of per link).
+    unobstructed: Vec<bool>,
     min_area: f32,
     /// Distances to a plane below this count as lying in it (rounding of coplanar
     /// geometry), relative to the scene size.
@@ -949,9 +953,10 @@ impl Ctx<'_> {
                 }
                 let sn = self.roots[sk.root as usize].normal;
                 let (lo, hi) = (st[0].min(st[1]).min(st[2]), st[0].max(st[1]).max(st[2]));
-                if self
-                    .occ
-                    .shaft_clear(rt, root.normal, lo, hi, Some((sn, st[0])))
+                if self.unobstructed[recv.root as usize]
+                    || self
+                        .occ
+                        .shaft_clear(rt, root.normal, lo, hi, Some((sn, st[0])))
                 {
                     return (k, 1.0);
                 }
@@ -990,9 +995,10 @@ impl Ctx<'_> {
                     return (k, 0.0);
                 }
                 let cluster = &self.clusters.clusters[c as usize];
-                if self
-                    .occ
-                    .shaft_clear(rt, root.normal, cluster.lo, cluster.hi, None)
+                if self.unobstructed[recv.root as usize]
+                    || self
+                        .occ
+                        .shaft_clear(rt, root.normal, cluster.lo, cluster.hi, None)
                 {
                     return (k, 1.0);
                 }
@@ -1627,6 +1633,7 @@ pub fn bake_with_progress(
             e > 0 && e < ts.len()
         })
         .collect();
+    let occ = Occluders::new(all_tris.iter().copied());
     let ctx = Ctx {
         scene,
         params,
@@ -1644,8 +1651,12 @@ pub fn bake_with_progress(
                 })
                 .collect()
         },
-        occ: Occluders::new(all_tris.iter().copied()),
         mixes_emitters,
+        unobstructed: roots
+            .par_iter()
+            .map(|r| occ.shaft_clear(r.corners, r.normal, Vec3::MIN, Vec3::MAX, None))
+            .collect(),
+        occ,
         min_area: (total_area * f64::from(params.min_area_fraction)) as f32,
         plane_eps: {
             let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
