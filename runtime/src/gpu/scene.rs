@@ -57,10 +57,10 @@ use hce_format::{Object, ObjectKind};
 use super::framing::{auto_scene_camera, Placement};
 use super::lod::{choose_level, Camera, LodParams};
 use super::render::{render_draws, MeshDraw, RenderParams, RenderedImage};
-use super::util::{check_size, read_back};
+use super::util::{check_size, read_back, PassTimer};
 use super::{
     FlatKernel, FlatObject, FlatOutput, Framing, GpuContext, GpuError, LoopKernel, LoopObject,
-    LoopOutput,
+    LoopOutput, RefineJob,
 };
 use crate::asset::{Asset, Bounds};
 use hce_geometry::lighting::Reconstruction;
@@ -123,15 +123,27 @@ struct CpuOutput {
     indices: wgpu::Buffer,
 }
 
-/// How one object is refined, with its uploaded data and its current output.
+/// A refinement under way into buffers of its own (the object's current ones are still drawn).
+struct Next<O> {
+    level: u32,
+    out: O,
+    job: RefineJob,
+}
+
+/// How one object is refined, with its uploaded data, its current output, the refinement under
+/// way (if any) and the buffers of the output before, kept for the next refinement.
 enum Refiner {
     Flat {
         object: Box<FlatObject>,
         out: Option<FlatOutput>,
+        next: Option<Next<FlatOutput>>,
+        spare: Option<FlatOutput>,
     },
     Loop {
         object: Box<LoopObject>,
         out: Option<LoopOutput>,
+        next: Option<Next<LoopOutput>>,
+        spare: Option<LoopOutput>,
     },
     CpuReference {
         reconstruction: Reconstruction,
@@ -259,6 +271,8 @@ impl GpuScene {
                             options.reconstruction,
                         )?),
                         out: None,
+                        next: None,
+                        spare: None,
                     }
                 }
                 (ObjectKind::Multiresolution, MultiresPath::Gpu) => {
@@ -270,6 +284,8 @@ impl GpuScene {
                             options.reconstruction,
                         )?),
                         out: None,
+                        next: None,
+                        spare: None,
                     }
                 }
                 (ObjectKind::Multiresolution, MultiresPath::CpuReference) => {
@@ -435,13 +451,18 @@ impl GpuScene {
         Ok(levels)
     }
 
-    /// Refines object `i` to `levels[i]` for every `Some`.
+    /// Refines object `i` to `levels[i]` for every `Some`: every refinement recorded in one
+    /// command encoder and one submission.
     pub fn refine_to(&mut self, ctx: &GpuContext, levels: &[Option<u32>]) -> Result<(), GpuError> {
+        let mut work = Vec::new();
         for (i, level) in levels.iter().enumerate() {
             if let Some(level) = *level {
-                self.refine(ctx, i, level)?;
+                if self.begin_refine(ctx, i, level)? {
+                    work.push((i, u64::MAX));
+                }
             }
         }
+        self.refine_batch(ctx, &work, false)?;
         Ok(())
     }
 
@@ -462,35 +483,58 @@ impl GpuScene {
         level: u32,
         measure: bool,
     ) -> Result<Option<f64>, GpuError> {
+        if !self.begin_refine(ctx, object, level)? {
+            return Ok(None);
+        }
+        let report = self.refine_batch(ctx, &[(object, u64::MAX)], measure)?;
+        Ok(report.first().and_then(|r| r.gpu_seconds))
+    }
+
+    /// Starts refining `object` to `level` without recording any GPU work: the refinement
+    /// writes buffers of its own, and the object keeps drawing its current ones until
+    /// [`GpuScene::refine_batch`] has recorded the last piece. Returns whether a refinement is
+    /// under way (started now, or before for the same level). When the object is already at
+    /// `level` a refinement under way to another level is dropped and this returns `false`;
+    /// on the CPU reference path the object is refined at once and this returns `false`.
+    pub fn begin_refine(
+        &mut self,
+        ctx: &GpuContext,
+        object: usize,
+        level: u32,
+    ) -> Result<bool, GpuError> {
         let count = self.objects.len();
         let o = self.objects.get_mut(object).ok_or_else(|| {
             GpuError::InvalidParams(format!("object {object} does not exist ({count} objects)"))
         })?;
         let name = o.name.clone();
         match &mut o.refiner {
-            Refiner::Flat { object, out } => {
-                if out.as_ref().is_some_and(|b| b.level == level) {
-                    return Ok(None);
-                }
+            Refiner::Flat {
+                object,
+                out,
+                next,
+                spare,
+            } => {
                 let kernel = self
                     .flat
                     .as_ref()
                     .ok_or_else(|| invalid(&name, "the flat kernel was not created"))?;
-                return Ok(kernel
-                    .refine_into(ctx, object, level, out, measure)?
-                    .gpu_seconds);
+                begin_next(out, next, spare, level, |spare| {
+                    kernel.begin(ctx, object, level, spare)
+                })
             }
-            Refiner::Loop { object, out } => {
-                if out.as_ref().is_some_and(|b| b.level == level) {
-                    return Ok(None);
-                }
+            Refiner::Loop {
+                object,
+                out,
+                next,
+                spare,
+            } => {
                 let kernel = self
                     .loop_kernel
                     .as_ref()
                     .ok_or_else(|| invalid(&name, "the Loop kernel was not created"))?;
-                return Ok(kernel
-                    .refine_into(ctx, object, level, out, measure)?
-                    .gpu_seconds);
+                begin_next(out, next, spare, level, |spare| {
+                    kernel.begin(ctx, object, level, spare)
+                })
             }
             Refiner::CpuReference {
                 reconstruction,
@@ -499,7 +543,7 @@ impl GpuScene {
                 out,
             } => {
                 if out.as_ref().is_some_and(|b| b.level == level) {
-                    return Ok(None);
+                    return Ok(false);
                 }
                 if level > hce_geometry::subdivide::MAX_LOOP_LEVEL {
                     return Err(GpuError::LevelTooHigh {
@@ -520,9 +564,87 @@ impl GpuScene {
                 )
                 .map_err(|e| invalid(&name, e))?;
                 *out = Some(upload_cpu(ctx, out.take(), scratch, &colours, level)?);
+                Ok(false)
             }
         }
-        Ok(None)
+    }
+
+    /// The refinement under way for `object`: its level, the work not recorded yet and the
+    /// work of the whole refinement, in fine triangles per step ([`RefineJob::work_left`]).
+    pub fn refine_progress(&self, object: usize) -> Option<(u32, u64, u64)> {
+        let job = |level: u32, job: &RefineJob| (level, job.work_left(), job.total_work());
+        match &self.objects.get(object)?.refiner {
+            Refiner::Flat { next, .. } => next.as_ref().map(|n| job(n.level, &n.job)),
+            Refiner::Loop { next, .. } => next.as_ref().map(|n| job(n.level, &n.job)),
+            Refiner::CpuReference { .. } => None,
+        }
+    }
+
+    /// Records up to the given work (fine triangles, [`RefineJob::encode`]; `u64::MAX` for the
+    /// rest) of each listed object's refinement under way ([`GpuScene::begin_refine`]) in one
+    /// command encoder and one submission, and swaps in the refinements whose last piece it
+    /// recorded: their new level is drawn from the next draw submitted, never a partial one.
+    /// Objects with no refinement under way are skipped. With `measure`, each object's GPU
+    /// time of the pieces of this batch where the adapter has timestamp queries (waiting for
+    /// the GPU).
+    pub fn refine_batch(
+        &mut self,
+        ctx: &GpuContext,
+        work: &[(usize, u64)],
+        measure: bool,
+    ) -> Result<Vec<BatchReport>, GpuError> {
+        let mut timer = PassTimer::new(ctx, "hce refine timing", 3 * work.len() as u32, measure);
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("hce refine"),
+            });
+        let mut reports = Vec::with_capacity(work.len());
+        let mut passes = Vec::with_capacity(work.len());
+        for &(i, amount) in work {
+            let Some(o) = self.objects.get_mut(i) else {
+                continue;
+            };
+            let job = match &mut o.refiner {
+                Refiner::Flat { next: Some(n), .. } => &mut n.job,
+                Refiner::Loop { next: Some(n), .. } => &mut n.job,
+                _ => continue,
+            };
+            let encoded = job.encode(ctx, &mut encoder, amount, Some(&mut timer))?;
+            reports.push(BatchReport {
+                object: i,
+                work: encoded.work,
+                finished: job.is_done(),
+                gpu_seconds: None,
+            });
+            passes.push(encoded.passes);
+        }
+        if reports.is_empty() {
+            return Ok(reports);
+        }
+        timer.resolve(ctx, &mut encoder);
+        ctx.queue.submit([encoder.finish()]);
+        if let Some((_, spans)) = timer.read(ctx)? {
+            for (r, p) in reports.iter_mut().zip(&passes) {
+                if !p.is_empty() {
+                    r.gpu_seconds = Some(spans[p.start as usize..p.end as usize].iter().sum());
+                }
+            }
+        }
+        // Submitted: the finished refinements are drawn from now on, the buffers they replace
+        // kept for the next ones.
+        for r in reports.iter().filter(|r| r.finished) {
+            match &mut self.objects[r.object].refiner {
+                Refiner::Flat {
+                    out, next, spare, ..
+                } => finish_next(out, next, spare),
+                Refiner::Loop {
+                    out, next, spare, ..
+                } => finish_next(out, next, spare),
+                Refiner::CpuReference { .. } => {}
+            }
+        }
+        Ok(reports)
     }
 
     /// The current buffers of `object`, `None` before its first refinement.
@@ -631,6 +753,68 @@ impl GpuScene {
                 ..*params
             },
         )
+    }
+}
+
+/// What [`GpuScene::refine_batch`] did for one object.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BatchReport {
+    pub object: usize,
+    /// Work recorded, in fine triangles ([`RefineJob::encode`]).
+    pub work: u64,
+    /// Whether the refinement is complete and drawn from now on.
+    pub finished: bool,
+    /// GPU time of the pieces recorded, when measured with timestamp queries.
+    pub gpu_seconds: Option<f64>,
+}
+
+/// Kernel output buffers that report their level.
+trait Leveled {
+    fn level(&self) -> u32;
+}
+
+impl Leveled for FlatOutput {
+    fn level(&self) -> u32 {
+        self.level
+    }
+}
+
+impl Leveled for LoopOutput {
+    fn level(&self) -> u32 {
+        self.level
+    }
+}
+
+/// [`GpuScene::begin_refine`] for a kernel path: keeps a refinement under way to `level`,
+/// drops one to another level (its buffers become the spare ones), and starts one with `begin`
+/// (which refines into the spare buffers, reallocating them if too small) unless the object is
+/// already at `level`.
+fn begin_next<O: Leveled>(
+    out: &Option<O>,
+    next: &mut Option<Next<O>>,
+    spare: &mut Option<O>,
+    level: u32,
+    begin: impl FnOnce(&mut Option<O>) -> Result<RefineJob, GpuError>,
+) -> Result<bool, GpuError> {
+    if next.as_ref().is_some_and(|n| n.level == level) {
+        return Ok(true);
+    }
+    if let Some(dropped) = next.take() {
+        *spare = Some(dropped.out);
+    }
+    if out.as_ref().is_some_and(|o| o.level() == level) {
+        return Ok(false);
+    }
+    let job = begin(spare)?;
+    let out = spare.take().expect("begin allocates the output");
+    *next = Some(Next { level, out, job });
+    Ok(true)
+}
+
+/// Swaps a finished refinement in: its buffers are drawn, the ones it replaces kept.
+fn finish_next<O>(out: &mut Option<O>, next: &mut Option<Next<O>>, spare: &mut Option<O>) {
+    if let Some(n) = next.take() {
+        *spare = out.replace(n.out);
     }
 }
 

@@ -22,10 +22,15 @@ pub fn storage_init<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data: &[T])
 }
 
 pub fn uniform_init<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data: &T) -> wgpu::Buffer {
+    uniform_words(ctx, label, bytemuck::cast_slice(bytemuck::bytes_of(data)))
+}
+
+/// A uniform buffer holding `words`.
+pub fn uniform_words(ctx: &GpuContext, label: &str, words: &[u32]) -> wgpu::Buffer {
     ctx.device
         .create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(label),
-            contents: bytemuck::bytes_of(data),
+            contents: bytemuck::cast_slice(words),
             usage: wgpu::BufferUsages::UNIFORM,
         })
 }
@@ -132,16 +137,21 @@ pub fn map_and_copy<R>(
 }
 
 /// GPU timestamps around the compute passes of one submission (two per pass), when timing is
-/// asked for and the adapter has timestamp queries: the one timing path of every kernel.
+/// asked for and the adapter has timestamp queries: the one timing path of every kernel. It
+/// has room for `passes` passes; those timed are the ones given [`PassTimer::writes`] or
+/// [`PassTimer::next_pass`], numbered from 0.
 pub struct PassTimer {
     query: Option<wgpu::QuerySet>,
     resolve: Option<wgpu::Buffer>,
     passes: u32,
+    /// One past the highest pass given timestamp writes.
+    used: std::cell::Cell<u32>,
     measure: bool,
 }
 
 impl PassTimer {
     pub fn new(ctx: &GpuContext, label: &str, passes: u32, measure: bool) -> Self {
+        let passes = passes.max(1);
         let query = (measure && ctx.description.timestamps).then(|| {
             ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some(label),
@@ -153,31 +163,47 @@ impl PassTimer {
             query,
             resolve: None,
             passes,
+            used: std::cell::Cell::new(0),
             measure,
         }
     }
 
-    /// The timestamp writes of pass `pass` (none when not timing).
+    /// The next pass not timed yet, while there is room and timestamps are taken.
+    pub fn next_pass(&mut self) -> Option<u32> {
+        let next = self.used.get();
+        (self.query.is_some() && next < self.passes).then_some(next)
+    }
+
+    /// Passes given timestamp writes so far (numbered `0..used`).
+    pub fn used(&self) -> u32 {
+        self.used.get()
+    }
+
+    /// The timestamp writes of pass `pass` (none when not timing or past the timer's room).
     pub fn writes(&self, pass: u32) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        self.query
-            .as_ref()
-            .map(|q| wgpu::ComputePassTimestampWrites {
-                query_set: q,
-                beginning_of_pass_write_index: Some(2 * pass),
-                end_of_pass_write_index: Some(2 * pass + 1),
-            })
+        if pass >= self.passes {
+            return None;
+        }
+        let q = self.query.as_ref()?;
+        self.used.set(self.used.get().max(pass + 1));
+        Some(wgpu::ComputePassTimestampWrites {
+            query_set: q,
+            beginning_of_pass_write_index: Some(2 * pass),
+            end_of_pass_write_index: Some(2 * pass + 1),
+        })
     }
 
     /// Records the copy of the timestamps; call after the passes, before `encoder.finish()`.
     pub fn resolve(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder) {
-        if let Some(q) = &self.query {
+        let used = self.used.get();
+        if let (Some(q), true) = (&self.query, used > 0) {
             let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("timestamps"),
-                size: 16 * u64::from(self.passes),
+                size: 16 * u64::from(used),
                 usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             });
-            encoder.resolve_query_set(q, 0..2 * self.passes, &buf, 0);
+            encoder.resolve_query_set(q, 0..2 * used, &buf, 0);
             self.resolve = Some(buf);
         }
     }
@@ -192,11 +218,11 @@ impl PassTimer {
             }
             return Ok(None);
         };
-        let n = 2 * self.passes as usize;
+        let n = 2 * self.used.get() as usize;
         let ticks: Vec<u64> = read_back(ctx, buf, n)?;
         let period = f64::from(ctx.queue.get_timestamp_period());
         let span = |a: usize, b: usize| ticks[b].saturating_sub(ticks[a]) as f64 * period * 1e-9;
-        let passes = (0..self.passes as usize)
+        let passes = (0..n / 2)
             .map(|k| span(2 * k, 2 * k + 1))
             .collect();
         Ok(Some((span(0, n - 1), passes)))
