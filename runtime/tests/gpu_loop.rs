@@ -649,8 +649,14 @@ fn refinement_in_pieces_writes_the_bytes_of_one_submission() {
         return;
     };
     let loops = [
-        ("workgroup", LoopKernel::with_scheme(&ctx, PatchScheme::Workgroup)),
-        ("scratch", LoopKernel::with_scheme(&ctx, PatchScheme::Scratch)),
+        (
+            "workgroup",
+            LoopKernel::with_scheme(&ctx, PatchScheme::Workgroup),
+        ),
+        (
+            "scratch",
+            LoopKernel::with_scheme(&ctx, PatchScheme::Scratch),
+        ),
     ];
     let flat = FlatKernel::new(&ctx);
     for (i, (name, creases)) in [
@@ -668,7 +674,12 @@ fn refinement_in_pieces_writes_the_bytes_of_one_submission() {
             // One item (level 1 only: one submission per fine triangle), one coarse
             // triangle's fine triangles, an odd size, and most of a step.
             let one = if level == 1 { 1 } else { 1 << (2 * level) };
-            let pieces = [one, 1 << (2 * level), 3 * (1 << (2 * level)) + 5, fine * 2 / 3];
+            let pieces = [
+                one,
+                1 << (2 * level),
+                3 * (1 << (2 * level)) + 5,
+                fine * 2 / 3,
+            ];
             for (scheme, kernel) in &loops {
                 let uploaded = kernel.upload(&ctx, &object).unwrap();
                 let mut whole = None;
@@ -695,7 +706,9 @@ fn refinement_in_pieces_writes_the_bytes_of_one_submission() {
                     );
                     let n = out.read_back_normals(&ctx).unwrap();
                     assert!(
-                        n.iter().zip(&normals).all(|(a, b)| a.to_bits() == b.to_bits()),
+                        n.iter()
+                            .zip(&normals)
+                            .all(|(a, b)| a.to_bits() == b.to_bits()),
                         "{name} {scheme} level {level}, pieces of {piece}: normals"
                     );
                 }
@@ -709,7 +722,10 @@ fn refinement_in_pieces_writes_the_bytes_of_one_submission() {
                 let mut out = None;
                 let mut job = flat.begin(&ctx, &uploaded, level, &mut out).unwrap();
                 let submissions = refine_in_pieces(&ctx, &mut job, piece);
-                assert!(submissions >= 3 || piece >= fine, "{name} flat: {submissions}");
+                assert!(
+                    submissions >= 3 || piece >= fine,
+                    "{name} flat: {submissions}"
+                );
                 assert_eq!(
                     mesh_bits(&out.unwrap().read_back(&ctx).unwrap()),
                     expected,

@@ -12,8 +12,7 @@ use hce_format::Object;
 
 use super::job::{Lanes, RefineJob, Step};
 use super::util::{
-    check_size, pack_sections, read_back, storage_init, storage_output, LightingBuffers,
-    PassTimer,
+    check_size, pack_sections, read_back, storage_init, storage_output, LightingBuffers, PassTimer,
 };
 use super::wgsl::flat_source;
 use super::{GpuContext, GpuError};

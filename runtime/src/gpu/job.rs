@@ -134,7 +134,8 @@ impl RefineJob {
             return 0;
         }
         let items = self.steps[self.step].items.max(1);
-        let done_here = (u128::from(self.next) * u128::from(self.per_step) / u128::from(items)) as u64;
+        let done_here =
+            (u128::from(self.next) * u128::from(self.per_step) / u128::from(items)) as u64;
         self.total_work() - self.step as u64 * self.per_step - done_here
     }
 

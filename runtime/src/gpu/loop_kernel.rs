@@ -43,8 +43,8 @@ use hce_format::{Object, ObjectKind};
 use super::flat::KernelTiming;
 use super::job::{Lanes, RefineJob, Step};
 use super::util::{
-    check_size, pack_sections, read_back, storage_init, storage_output,
-    LightingBuffers, PassTimer, WORKGROUP,
+    check_size, pack_sections, read_back, storage_init, storage_output, LightingBuffers, PassTimer,
+    WORKGROUP,
 };
 use super::wgsl::{loop_source, loop_workgroup_source};
 use super::{AdapterKind, GpuContext, GpuError};

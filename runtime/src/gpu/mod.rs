@@ -56,8 +56,8 @@ pub use render::{
     view_projection, Framing, GpuMesh, MeshDraw, MeshPipeline, RenderParams, RenderedImage,
 };
 pub use scene::{
-    render_asset, resolve_camera, AssetRender, AssetRenderOptions, CameraChoice, CameraSource,
-    BatchReport, GpuScene, LevelChoice, MultiresPath, ObjectBuffers, ObjectMesh, SceneDraw,
+    render_asset, resolve_camera, AssetRender, AssetRenderOptions, BatchReport, CameraChoice,
+    CameraSource, GpuScene, LevelChoice, MultiresPath, ObjectBuffers, ObjectMesh, SceneDraw,
     SceneOptions,
 };
 pub use util::PassTimer;

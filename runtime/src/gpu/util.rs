@@ -222,9 +222,7 @@ impl PassTimer {
         let ticks: Vec<u64> = read_back(ctx, buf, n)?;
         let period = f64::from(ctx.queue.get_timestamp_period());
         let span = |a: usize, b: usize| ticks[b].saturating_sub(ticks[a]) as f64 * period * 1e-9;
-        let passes = (0..n / 2)
-            .map(|k| span(2 * k, 2 * k + 1))
-            .collect();
+        let passes = (0..n / 2).map(|k| span(2 * k, 2 * k + 1)).collect();
         Ok(Some((span(0, n - 1), passes)))
     }
 }
