@@ -57,7 +57,7 @@ use hce_format::{Object, ObjectKind};
 use super::framing::{auto_scene_camera, Placement};
 use super::lod::{choose_level, Camera, LodParams};
 use super::render::{render_draws, MeshDraw, RenderParams, RenderedImage};
-use super::util::{check_size, read_back, PassTimer};
+use super::util::{check_size, read_back, span, PassTimer};
 use super::{
     FlatKernel, FlatObject, FlatOutput, Framing, GpuContext, GpuError, LoopKernel, LoopObject,
     LoopOutput, RefineJob,
@@ -493,9 +493,11 @@ impl GpuScene {
     /// Starts refining `object` to `level` without recording any GPU work: the refinement
     /// writes buffers of its own, and the object keeps drawing its current ones until
     /// [`GpuScene::refine_batch`] has recorded the last piece. Returns whether a refinement is
-    /// under way (started now, or before for the same level). When the object is already at
-    /// `level` a refinement under way to another level is dropped and this returns `false`;
-    /// on the CPU reference path the object is refined at once and this returns `false`.
+    /// under way: started now, or before for `level` or for a level strictly between the
+    /// drawn one and `level` (a step towards it, kept so that a level that keeps changing
+    /// still lands; [`GpuScene::refine_progress`] says which). When the object is already at
+    /// `level` a refinement under way is dropped and this returns `false`; on the CPU
+    /// reference path the object is refined at once and this returns `false`.
     pub fn begin_refine(
         &mut self,
         ctx: &GpuContext,
@@ -624,10 +626,11 @@ impl GpuScene {
         }
         timer.resolve(ctx, &mut encoder);
         ctx.queue.submit([encoder.finish()]);
-        if let Some((_, spans)) = timer.read(ctx)? {
+        if let Some(stamps) = timer.read_stamps(ctx)? {
+            // From an object's first piece's start to its last piece's end ([`span`]).
             for (r, p) in reports.iter_mut().zip(&passes) {
                 if !p.is_empty() {
-                    r.gpu_seconds = Some(spans[p.start as usize..p.end as usize].iter().sum());
+                    r.gpu_seconds = Some(span(&stamps, p.clone()));
                 }
             }
         }
@@ -785,10 +788,11 @@ impl Leveled for LoopOutput {
     }
 }
 
-/// [`GpuScene::begin_refine`] for a kernel path: keeps a refinement under way to `level`,
-/// drops one to another level (its buffers become the spare ones), and starts one with `begin`
-/// (which refines into the spare buffers, reallocating them if too small) unless the object is
-/// already at `level`.
+/// [`GpuScene::begin_refine`] for a kernel path: keeps a refinement under way whose level lies
+/// between the drawn level (excluded) and `level` (included), a step towards it, so that a
+/// level that keeps changing (a camera moving on) still lands step by step; drops any other
+/// (its buffers become the spare ones) and starts one with `begin` (which refines into the
+/// spare buffers, reallocating them if too small) unless the object is already at `level`.
 fn begin_next<O: Leveled>(
     out: &Option<O>,
     next: &mut Option<Next<O>>,
@@ -796,7 +800,13 @@ fn begin_next<O: Leveled>(
     level: u32,
     begin: impl FnOnce(&mut Option<O>) -> Result<RefineJob, GpuError>,
 ) -> Result<bool, GpuError> {
-    if next.as_ref().is_some_and(|n| n.level == level) {
+    let drawn = out.as_ref().map(|o| o.level());
+    if next.as_ref().is_some_and(|n| {
+        n.level == level
+            || drawn.is_some_and(|d| {
+                d != level && (d < n.level && n.level < level || level < n.level && n.level < d)
+            })
+    }) {
         return Ok(true);
     }
     if let Some(dropped) = next.take() {

@@ -212,6 +212,16 @@ impl PassTimer {
     /// and of each pass, or `None` without timestamps (having waited for the GPU when timing
     /// was asked for, so that a wall clock around the call measures the work).
     pub fn read(self, ctx: &GpuContext) -> Result<Option<(f64, Vec<f64>)>, GpuError> {
+        Ok(self.read_stamps(ctx)?.map(|stamps| {
+            let passes = (stamps.len() / 2) as u32;
+            let each = (0..passes).map(|k| span(&stamps, k..k + 1)).collect();
+            (span(&stamps, 0..passes), each)
+        }))
+    }
+
+    /// [`PassTimer::read`] as the timestamps themselves: seconds since the first, two per pass
+    /// (its start and end); [`span`] measures passes with them.
+    pub fn read_stamps(self, ctx: &GpuContext) -> Result<Option<Vec<f64>>, GpuError> {
         let Some(buf) = &self.resolve else {
             if self.measure {
                 ctx.wait()?;
@@ -221,10 +231,25 @@ impl PassTimer {
         let n = 2 * self.used.get() as usize;
         let ticks: Vec<u64> = read_back(ctx, buf, n)?;
         let period = f64::from(ctx.queue.get_timestamp_period());
-        let span = |a: usize, b: usize| ticks[b].saturating_sub(ticks[a]) as f64 * period * 1e-9;
-        let passes = (0..n / 2).map(|k| span(2 * k, 2 * k + 1)).collect();
-        Ok(Some((span(0, n - 1), passes)))
+        Ok(Some(
+            ticks
+                .iter()
+                .map(|&t| t.saturating_sub(ticks[0]) as f64 * period * 1e-9)
+                .collect(),
+        ))
     }
+}
+
+/// GPU seconds from the start of the first of `passes` to the end of the last, from
+/// [`PassTimer::read_stamps`]; 0 for no passes. Measure spans of several passes rather than
+/// add up passes: on lavapipe the timestamps around one pass were seen to enclose next to none
+/// of its work while a span over several passes enclosed most of it.
+pub fn span(stamps: &[f64], passes: std::ops::Range<u32>) -> f64 {
+    if passes.is_empty() {
+        return 0.0;
+    }
+    let (a, b) = (2 * passes.start as usize, 2 * passes.end as usize - 1);
+    (stamps[b] - stamps[a]).max(0.0)
 }
 
 /// The `hce_light` buffer of `hce_light.wgsl` ([`hce_geometry::lighting::LightingTable::to_words`]).

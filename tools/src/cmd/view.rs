@@ -33,8 +33,8 @@ pub struct ViewArgs {
     /// Lower levels chosen from the view (highest first) to draw at most this many triangles.
     #[arg(long, default_value_t = 16_000_000)]
     pub max_triangles: u64,
-    /// Milliseconds of refinement per frame (the kernels' time by GPU timestamps where the
-    /// adapter has them, else wall time): a level change is refined in pieces (ranges of
+    /// Milliseconds of refinement per frame (wall time, GPU work waited for, at the cost
+    /// measured in the frames before): a level change is refined in pieces (ranges of
     /// coarse triangles, fine triangles and vertices) over as many frames as it needs, at
     /// least 1/32 of it per frame, the object drawn at its old level until the new one is
     /// complete; 0 refines every change whole in the frame it happens.

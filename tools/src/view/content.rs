@@ -24,10 +24,10 @@ pub struct Levels {
     pub lod: LodParams,
     /// Most fine triangles drawn, instances counted (as `hce render --max-triangles`).
     pub max_triangles: u64,
-    /// Milliseconds of refinement per frame (the kernels' GPU time where the adapter has
-    /// timestamps, else wall time): level changes are recorded in pieces sized to it at the
-    /// rate measured so far, over as many frames as they need (at least 1/[`MIN_PIECE`] of one
-    /// refinement per frame); 0: every change at once.
+    /// Milliseconds of refinement per frame (wall time, GPU work waited for): level changes
+    /// are recorded in pieces sized to it at the cost measured so far, over as many frames as
+    /// they need (at least 1/[`MIN_PIECE`] of one refinement per frame); 0: every change at
+    /// once.
     pub refine_budget_ms: f64,
 }
 
@@ -77,10 +77,13 @@ pub struct Refined {
     pub pending: usize,
 }
 
-/// A running estimate of what refinement work costs, in milliseconds per fine triangle of work
-/// (see `hce_runtime::gpu::RefineJob`): the kernels' GPU time where the adapter has timestamp
-/// queries, so that the budget buys kernel time and the submission's fixed cost (uniforms,
-/// zeroing new buffers, waiting) comes on top of it; the wall time otherwise.
+/// A running estimate of what refinement costs: the wall milliseconds of a frame's refinement
+/// per fine triangle of its work (see `hce_runtime::gpu::RefineJob`), a running mean. Wall
+/// times, because GPU timestamps are not there on every adapter and on lavapipe do not enclose
+/// all of the work. A frame's fixed cost (uniforms, zeroing new buffers, submitting, waiting)
+/// is part of the ratio, so the pieces it sizes settle where the fixed cost and the work
+/// together fill the budget. Frames that refine objects not drawn yet (the first: every object
+/// whole, with the driver's first-use costs) are left out.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct RefineCost {
     rate_ms: Option<f64>,
@@ -92,12 +95,12 @@ impl RefineCost {
         (budget_ms / self.rate_ms.unwrap_or(FIRST_RATE_MS)) as u64
     }
 
-    /// Takes in a frame that did `work` in `wall_ms`, `gpu_ms` of it in the kernels.
-    fn measured(&mut self, work: u64, wall_ms: f64, gpu_ms: Option<f64>) {
+    /// Takes in a frame that did `work` in `wall_ms`.
+    fn measured(&mut self, work: u64, wall_ms: f64) {
         if work == 0 {
             return;
         }
-        let rate = gpu_ms.unwrap_or(wall_ms) / work as f64;
+        let rate = wall_ms / work as f64;
         self.rate_ms = Some(self.rate_ms.map_or(rate, |r| 0.5 * (r + rate)));
     }
 }
@@ -367,6 +370,7 @@ impl Content {
                 } else {
                     u64::MAX
                 };
+                let whole_first = jobs.first().is_some_and(|j| j.1.is_none());
                 let mut plan = Vec::new();
                 for (k, &(i, now, left, total, _)) in jobs.iter().enumerate() {
                     let work = if now.is_none() {
@@ -414,7 +418,9 @@ impl Content {
                         refined.working.push(r.object);
                     }
                 }
-                cost.measured(work, refined.ms, refined.gpu_ms);
+                if !whole_first {
+                    cost.measured(work, refined.ms);
+                }
                 refined.objects.sort_unstable();
                 refined.pending = wanted
                     .iter()
