@@ -3,6 +3,13 @@
 //! [`choose_level`]) into output buffers that are reused while the level does not grow, and the
 //! buffers to draw (positions, normals, colours, indices) or to read back.
 //!
+//! A refinement writes a second set of buffers while the object keeps drawing its current ones,
+//! and is swapped in only when complete. [`GpuScene::refine_all`] and [`GpuScene::refine_to`]
+//! refine every object whose level changed in one submission; a viewer that must not stall a
+//! frame on a large level change starts the refinements with [`GpuScene::begin_refine`] and
+//! records them in pieces, a frame's worth at a time, with [`GpuScene::refine_batch`] (work in
+//! fine triangles, [`RefineJob`]): `hce view` does.
+//!
 //! Each object is refined by one of these paths (one variant of a private enum per object):
 //!
 //! * **Flat** objects ([`ObjectKind::Flat`]) by the [`FlatKernel`]: linear 1-to-4 split, colours
