@@ -202,16 +202,29 @@ mod gpu {
                 options.multires
             );
         };
+        let positions = |scene: &GpuScene| scene.buffers(i).unwrap().positions.clone();
         scene.refine(ctx, i, 2).unwrap();
         check(&scene, 2);
-        let buffer = scene.buffers(i).unwrap().positions.clone();
-        // A lower level fits in the same buffers: no reallocation.
+        let a = positions(&scene);
+        // On the GPU a refinement writes beside the buffers being drawn, never into them (it
+        // may be recorded over several frames); the CPU path uploads into them ...
         scene.refine(ctx, i, 1).unwrap();
         check(&scene, 1);
-        assert!(scene.buffers(i).unwrap().positions == &buffer);
+        let b = positions(&scene);
+        let gpu = options.multires == MultiresPath::Gpu;
+        assert_eq!(b != a, gpu);
+        // ... and the set it replaced is kept for the next one: no reallocation while the
+        // level fits.
+        scene.refine(ctx, i, 2).unwrap();
+        check(&scene, 2);
+        assert!(positions(&scene) == a);
+        scene.refine(ctx, i, 1).unwrap();
+        check(&scene, 1);
+        assert!(positions(&scene) == b);
+        // Level 3 fits neither set.
         scene.refine(ctx, i, 3).unwrap();
         check(&scene, 3);
-        assert!(scene.buffers(i).unwrap().positions != &buffer);
+        assert!(positions(&scene) != a && positions(&scene) != b);
         // Flat objects go to their tree depth whatever level is asked for.
         let flat = asset
             .objects
