@@ -38,8 +38,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         fov_y_degrees: 45.0,
     };
     for frame in 0..4 {
-        // Only objects whose level changed are refined again; buffers are reused unless they
-        // grow.
+        // Only objects whose level changed are refined again, all in one submission; buffers
+        // are reused unless they grow. To spread a large level change over frames instead,
+        // `begin_refine` it and record a frame's worth per frame with `refine_batch`.
         scene.refine_all(
             &ctx,
             &LevelChoice::Auto {

@@ -605,3 +605,133 @@ fn workgroup_kernel_spans_two_dispatch_dimensions() {
         assert_eq!(r.positions_bitwise, r.positions);
     }
 }
+
+/// Every output word of a refinement as bits, for comparisons that must be exact.
+fn mesh_bits(m: &hce_runtime::gpu::RefinedMesh) -> Vec<Vec<u32>> {
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
+    vec![
+        bits(&m.positions),
+        bits(&m.colours),
+        m.indices.clone(),
+        bits(&m.face_colours),
+    ]
+}
+
+/// Records `job` in pieces of `piece` fine triangles, one submission each, and returns how many
+/// submissions it took.
+fn refine_in_pieces(ctx: &GpuContext, job: &mut hce_runtime::gpu::RefineJob, piece: u64) -> usize {
+    let total = job.total_work();
+    let mut submissions = 0;
+    while !job.is_done() {
+        let before = job.work_left();
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        let done = job.encode(ctx, &mut encoder, piece, None).unwrap();
+        ctx.queue.submit([encoder.finish()]);
+        submissions += 1;
+        assert_eq!(done.work, before - job.work_left());
+        assert!(done.work > 0, "a piece records at least one item");
+        assert!(submissions as u64 <= 3 * total + 3, "the job does not end");
+    }
+    assert_eq!(job.work_left(), 0);
+    submissions
+}
+
+/// A refinement recorded in pieces, one submission each (as a viewer spreads a large level
+/// change over frames), writes exactly the bytes of the same refinement recorded whole: Loop
+/// (workgroup and scratch patches) and flat, pieces from one item to most of a step, on meshes
+/// with boundaries, extraordinary vertices and creases. The whole refinement is the one the
+/// other tests compare with the CPU reference.
+#[test]
+fn refinement_in_pieces_writes_the_bytes_of_one_submission() {
+    use hce_runtime::gpu::FlatKernel;
+    let Some(ctx) = context_or_skip("refinement_in_pieces_writes_the_bytes_of_one_submission")
+    else {
+        return;
+    };
+    let loops = [
+        (
+            "workgroup",
+            LoopKernel::with_scheme(&ctx, PatchScheme::Workgroup),
+        ),
+        (
+            "scratch",
+            LoopKernel::with_scheme(&ctx, PatchScheme::Scratch),
+        ),
+    ];
+    let flat = FlatKernel::new(&ctx);
+    for (i, (name, creases)) in [
+        ("grid_open", Creases::None),
+        ("bipyramid9", Creases::None),
+        ("cube_creased", Creases::Angle(45.0)),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let object = baked(name, &data_mesh(name, creases).mesh, 500 + i as u64);
+        let coarse = object.mesh.triangle_count() as u64;
+        for level in [1, 3, 4] {
+            let fine = coarse << (2 * level);
+            // One item (level 1 only: one submission per fine triangle), one coarse
+            // triangle's fine triangles, an odd size, and most of a step.
+            let one = if level == 1 { 1 } else { 1 << (2 * level) };
+            let pieces = [
+                one,
+                1 << (2 * level),
+                3 * (1 << (2 * level)) + 5,
+                fine * 2 / 3,
+            ];
+            for (scheme, kernel) in &loops {
+                let uploaded = kernel.upload(&ctx, &object).unwrap();
+                let mut whole = None;
+                kernel
+                    .refine_into(&ctx, &uploaded, level, &mut whole, false)
+                    .unwrap();
+                let whole = whole.unwrap();
+                let expected = mesh_bits(&whole.read_back(&ctx).unwrap());
+                let normals = whole.read_back_normals(&ctx).unwrap();
+                for piece in pieces {
+                    let mut out = None;
+                    let mut job = kernel.begin(&ctx, &uploaded, level, &mut out).unwrap();
+                    assert_eq!(job.total_work(), 3 * fine);
+                    let submissions = refine_in_pieces(&ctx, &mut job, piece);
+                    assert!(
+                        submissions as u64 >= (3 * fine).div_ceil(piece.max(1)).min(3),
+                        "{name} {scheme} level {level}: {submissions} submissions for pieces of {piece}"
+                    );
+                    let out = out.unwrap();
+                    assert_eq!(
+                        mesh_bits(&out.read_back(&ctx).unwrap()),
+                        expected,
+                        "{name} {scheme} level {level}, pieces of {piece}"
+                    );
+                    let n = out.read_back_normals(&ctx).unwrap();
+                    assert!(
+                        n.iter()
+                            .zip(&normals)
+                            .all(|(a, b)| a.to_bits() == b.to_bits()),
+                        "{name} {scheme} level {level}, pieces of {piece}: normals"
+                    );
+                }
+            }
+            let uploaded = flat.upload(&ctx, &object).unwrap();
+            let mut whole = None;
+            flat.refine_into(&ctx, &uploaded, level, &mut whole, false)
+                .unwrap();
+            let expected = mesh_bits(&whole.unwrap().read_back(&ctx).unwrap());
+            for piece in pieces {
+                let mut out = None;
+                let mut job = flat.begin(&ctx, &uploaded, level, &mut out).unwrap();
+                let submissions = refine_in_pieces(&ctx, &mut job, piece);
+                assert!(
+                    submissions >= 3 || piece >= fine,
+                    "{name} flat: {submissions}"
+                );
+                assert_eq!(
+                    mesh_bits(&out.unwrap().read_back(&ctx).unwrap()),
+                    expected,
+                    "{name} flat level {level}, pieces of {piece}"
+                );
+            }
+        }
+    }
+}

@@ -153,6 +153,76 @@ mod gpu {
         }
     }
 
+    /// A refinement recorded in pieces over several submissions (as `hce view` spreads a level
+    /// change over frames) leaves the object drawing its old buffers, to the bit, until the
+    /// last piece, and then draws exactly what a refinement in one submission gives; several
+    /// objects' refinements share one submission, each timed where the adapter has timestamps.
+    #[test]
+    fn a_refinement_in_pieces_is_drawn_only_when_complete() {
+        let Some(ctx) = context_or_skip("a_refinement_in_pieces_is_drawn_only_when_complete")
+        else {
+            return;
+        };
+        let asset = Asset::open(baked("teatime.glb")).unwrap();
+        let options = SceneOptions::default();
+        let multires: Vec<usize> = (0..asset.objects.len())
+            .filter(|&k| asset.objects[k].kind() == ObjectKind::Multiresolution)
+            .collect();
+        let i = multires[0];
+        let mut whole = GpuScene::new(&ctx, &asset, &options).unwrap();
+        whole.refine(&ctx, i, 3).unwrap();
+        let want = whole.read_back(&ctx, i).unwrap();
+
+        let mut scene = GpuScene::new(&ctx, &asset, &options).unwrap();
+        scene.refine(&ctx, i, 1).unwrap();
+        let old = scene.read_back(&ctx, i).unwrap();
+        assert!(scene.begin_refine(&ctx, i, 3).unwrap());
+        let (level, left, total) = scene.refine_progress(i).unwrap();
+        assert_eq!((level, left), (3, total));
+        let mut batches = 0;
+        loop {
+            let report = scene.refine_batch(&ctx, &[(i, total / 7)], false).unwrap();
+            batches += 1;
+            assert_eq!(report.len(), 1);
+            if report[0].finished {
+                break;
+            }
+            assert!(report[0].work > 0 && report[0].work <= total / 7 + total / 3);
+            assert_eq!(scene.level(i), Some(1), "drawn before the last piece");
+            assert_eq!(scene.read_back(&ctx, i).unwrap(), old, "batch {batches}");
+            assert!(batches < 100, "the refinement does not end");
+        }
+        assert!(batches >= 7, "{batches} batches for pieces of a seventh");
+        assert_eq!(scene.refine_progress(i), None);
+        assert_eq!(scene.read_back(&ctx, i).unwrap(), want);
+        // Already there: nothing starts. A refinement under way is dropped when the drawn
+        // level is asked for again.
+        assert!(!scene.begin_refine(&ctx, i, 3).unwrap());
+        assert!(scene.begin_refine(&ctx, i, 2).unwrap());
+        assert!(!scene.begin_refine(&ctx, i, 3).unwrap());
+        assert_eq!(scene.refine_progress(i), None);
+        assert_eq!(scene.read_back(&ctx, i).unwrap(), want);
+
+        // Two objects in one submission, each timed.
+        let j = multires[1];
+        assert!(scene.begin_refine(&ctx, i, 2).unwrap());
+        assert!(scene.begin_refine(&ctx, j, 2).unwrap());
+        let report = scene
+            .refine_batch(&ctx, &[(i, u64::MAX), (j, u64::MAX)], true)
+            .unwrap();
+        assert_eq!(report.len(), 2);
+        for r in &report {
+            assert!(r.finished);
+            assert_eq!(r.gpu_seconds.is_some(), ctx.description.timestamps);
+            assert_eq!(scene.level(r.object), Some(2));
+        }
+        whole.refine(&ctx, j, 2).unwrap();
+        assert_eq!(
+            scene.read_back(&ctx, j).unwrap(),
+            whole.read_back(&ctx, j).unwrap()
+        );
+    }
+
     fn scene_matches(ctx: &hce_runtime::gpu::GpuContext, asset: &Asset, options: &SceneOptions) {
         let mut scene = GpuScene::new(ctx, asset, options).unwrap();
         let i = asset
@@ -202,16 +272,29 @@ mod gpu {
                 options.multires
             );
         };
+        let positions = |scene: &GpuScene| scene.buffers(i).unwrap().positions.clone();
         scene.refine(ctx, i, 2).unwrap();
         check(&scene, 2);
-        let buffer = scene.buffers(i).unwrap().positions.clone();
-        // A lower level fits in the same buffers: no reallocation.
+        let a = positions(&scene);
+        // On the GPU a refinement writes beside the buffers being drawn, never into them (it
+        // may be recorded over several frames); the CPU path uploads into them ...
         scene.refine(ctx, i, 1).unwrap();
         check(&scene, 1);
-        assert!(scene.buffers(i).unwrap().positions == &buffer);
+        let b = positions(&scene);
+        let gpu = options.multires == MultiresPath::Gpu;
+        assert_eq!(b != a, gpu);
+        // ... and the set it replaced is kept for the next one: no reallocation while the
+        // level fits.
+        scene.refine(ctx, i, 2).unwrap();
+        check(&scene, 2);
+        assert!(positions(&scene) == a);
+        scene.refine(ctx, i, 1).unwrap();
+        check(&scene, 1);
+        assert!(positions(&scene) == b);
+        // Level 3 fits neither set.
         scene.refine(ctx, i, 3).unwrap();
         check(&scene, 3);
-        assert!(scene.buffers(i).unwrap().positions != &buffer);
+        assert!(positions(&scene) != a && positions(&scene) != b);
         // Flat objects go to their tree depth whatever level is asked for.
         let flat = asset
             .objects

@@ -196,6 +196,8 @@ fn screenshot_matches_hce_render() {
 struct Frame {
     levels: Vec<u32>,
     refined: Vec<String>,
+    working: Vec<String>,
+    pending: usize,
     triangles: u64,
 }
 
@@ -210,10 +212,12 @@ struct Stats {
 struct Object {
     name: String,
     instances: usize,
+    level: u32,
+    triangles: u64,
 }
 
 /// Walking into the scene raises the levels: every frame is drawn, the levels change along the
-/// way, and each frame refines exactly the objects whose level changed.
+/// way, and each frame refines exactly the objects whose level changed, and nothing in part.
 #[test]
 fn camera_path_changes_levels_and_draws_every_frame() {
     let Some(mut cmd) = xvfb("camera_path_changes_levels_and_draws_every_frame") else {
@@ -236,6 +240,11 @@ fn camera_path_changes_levels_and_draws_every_frame() {
             "1.2,1.6,2.6:-0.6,0.7,-1.2:40",
             "--camera-path",
             "approach:0.8",
+            // Every change refined whole in its frame, so that the levels follow the walk
+            // within its ten frames however loaded the machine is (the budget's pieces are
+            // checked by the next test, in frames rather than milliseconds).
+            "--refine-budget",
+            "0",
         ])
         .arg("--stats")
         .arg(&stats)
@@ -267,6 +276,7 @@ fn camera_path_changes_levels_and_draws_every_frame() {
             f.refined, changed,
             "frame {i} refined other objects than changed level"
         );
+        assert!(f.working.is_empty() && f.pending == 0, "frame {i}");
     }
     let first = &s.frames[0].levels;
     let raised = s
@@ -283,6 +293,102 @@ fn camera_path_changes_levels_and_draws_every_frame() {
         changes >= 2,
         "levels changed only {changes} times:\n{}",
         text(&out)
+    );
+}
+
+/// A scripted run of `frames` frames along `path` with `budget` ms of refinement per frame:
+/// its statistics and its last frame.
+fn flight(path: &str, frames: usize, budget: &str, shot: &Path) -> (Stats, Vec<u8>) {
+    let stats = shot.with_extension("json");
+    let out = xvfb("flight")
+        .unwrap()
+        .arg("view")
+        .arg(baked())
+        .args(["--frames", &frames.to_string(), "--no-panel"])
+        .args(["--size", &format!("{W}x{H}")])
+        .args(["--camera-path", path, "--refine-budget", budget])
+        .arg("--stats")
+        .arg(&stats)
+        .arg("--screenshot")
+        .arg(shot)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out));
+    let s: Stats = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    assert_eq!(s.frames.len(), frames, "{}", text(&out));
+    (s, read_png(shot).2)
+}
+
+/// A level change under a small refine budget is refined in pieces over several frames while
+/// the object keeps drawing its old level: the triangles drawn are always those of whole
+/// objects at the levels reported, a level changes only in the frame its refinement finishes,
+/// and the run ends at the levels and with the image of the same path refined all at once.
+#[test]
+fn a_level_change_is_spread_over_frames_and_never_drawn_in_part() {
+    let Some(_) = xvfb("a_level_change_is_spread_over_frames_and_never_drawn_in_part") else {
+        return;
+    };
+    // Ten frames towards the teapot, then the camera holds still while the pieces land.
+    let near = "-0.24,0.88,-0.44:-0.6,0.7,-1.2:40";
+    let mut keys = vec!["1.2,1.6,2.6:-0.6,0.7,-1.2:40"];
+    keys.extend([near; 12]);
+    let path = keys.join(";");
+    let frames = 130;
+    let dir = tempfile::tempdir().unwrap();
+    let (whole, whole_png) = flight(&path, frames, "0", &dir.path().join("whole.png"));
+    let (pieces, pieces_png) = flight(&path, frames, "0.01", &dir.path().join("pieces.png"));
+    let drawn: Vec<&Object> = pieces.objects.iter().filter(|o| o.instances > 0).collect();
+    // Coarse triangles per object, from the last frame's level and fine triangles.
+    let coarse: Vec<u64> = drawn.iter().map(|o| o.triangles >> (2 * o.level)).collect();
+    assert!(whole.frames.iter().all(|f| f.working.is_empty()));
+    let mut spread = Vec::new();
+    for (i, f) in pieces.frames.iter().enumerate() {
+        // Whole objects only: the triangles drawn are those of the levels reported.
+        let expected: u64 = (0..drawn.len())
+            .map(|k| (coarse[k] << (2 * f.levels[k])) * drawn[k].instances as u64)
+            .sum();
+        assert_eq!(f.triangles, expected, "frame {i} drew part of an object");
+        if i > 0 {
+            let prev = &pieces.frames[i - 1];
+            for (k, o) in drawn.iter().enumerate() {
+                let changed = f.levels[k] != prev.levels[k];
+                assert_eq!(
+                    changed,
+                    f.refined.contains(&o.name),
+                    "frame {i}, {}: a level changes exactly when its refinement finishes",
+                    o.name
+                );
+                // Pieces in earlier frames, then the refinement finished here.
+                if changed && prev.working.contains(&o.name) {
+                    spread.push((i, o.name.clone()));
+                }
+            }
+        }
+        assert!(
+            f.refined.iter().all(|n| !f.working.contains(n)),
+            "frame {i}: an object both finished and in part"
+        );
+    }
+    assert!(
+        !spread.is_empty(),
+        "no level change was spread over frames with a budget of 0.01 ms"
+    );
+    eprintln!("level changes finished after pieces in earlier frames: {spread:?}");
+    let (last, last_whole) = (pieces.frames.last().unwrap(), whole.frames.last().unwrap());
+    assert_eq!(last.pending, 0, "the refinements did not all land");
+    assert_eq!(last.levels, last_whole.levels);
+    assert!(
+        last.levels
+            .iter()
+            .zip(&pieces.frames[0].levels)
+            .any(|(a, b)| a > b),
+        "the path raised no level"
+    );
+    let (mean, off) = difference(&pieces_png, &whole_png, 0);
+    assert_eq!(
+        (mean, off),
+        (0.0, 0.0),
+        "the last frames of the two runs differ"
     );
 }
 

@@ -272,6 +272,8 @@ export class Kernels {
       const params = new Uint32Array([
         level, n, t.vertexCount, t.edgeCount, t.triangleCount, n < 2 ? 0 : ((n - 1) * (n - 2)) / 2, v, f,
         ...u.offsets.slice(0, 7), smooth, u.offsets[7], u.offsets[8], v - appended, u.split.copies,
+        // range_first, range_end: every item of each step in one dispatch.
+        0, 0xffffffff,
       ]);
       uniform = d.createBuffer({ label: 'flat params', size: params.byteLength, usage: UNIFORM | COPY_DST });
       d.queue.writeBuffer(uniform, 0, params);
@@ -302,7 +304,7 @@ export class Kernels {
       const params = new Uint32Array([
         level, n, t.vertexCount, t.edgeCount, t.triangleCount, n - 1, ((n - 1) * Math.max(n - 2, 0)) / 2, v, f,
         slots, square, loop.maxValence, ...u.offsets, 1, smooth, v - appended,
-        u.split.copies,
+        u.split.copies, 0, 0xffffffff,
       ]);
       uniform = d.createBuffer({ label: 'loop params', size: params.byteLength, usage: UNIFORM | COPY_DST });
       d.queue.writeBuffer(uniform, 0, params);

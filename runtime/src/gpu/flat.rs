@@ -10,9 +10,9 @@
 
 use hce_format::Object;
 
+use super::job::{Lanes, RefineJob, Step};
 use super::util::{
-    bind_buffers_at, check_size, dispatch_size, pack_sections, read_back, storage_init,
-    storage_output, LightingBuffers, PassTimer,
+    check_size, pack_sections, read_back, storage_init, storage_output, LightingBuffers, PassTimer,
 };
 use super::wgsl::flat_source;
 use super::{GpuContext, GpuError};
@@ -48,6 +48,9 @@ pub(super) struct Params {
     /// The first vertex the split appends (the F.5 count), and its corner copies `X`.
     pub(super) split_base: u32,
     pub(super) split_copies: u32,
+    /// The items of one dispatch (`range_first .. range_end`; see [`RefineJob`]).
+    pub(super) range_first: u32,
+    pub(super) range_end: u32,
 }
 
 /// The compiled pipelines of the three steps.
@@ -235,8 +238,8 @@ impl FlatKernel {
     }
 
     /// Refines `object` to `level` into `out`, reallocating only when `out` is too small (or
-    /// absent). With `measure`, returns the GPU time of the three dispatches when the adapter
-    /// has timestamp queries (this waits for the GPU).
+    /// absent), in one submission. With `measure`, returns the GPU time of the three
+    /// dispatches when the adapter has timestamp queries (this waits for the GPU).
     pub fn refine_into(
         &self,
         ctx: &GpuContext,
@@ -245,6 +248,32 @@ impl FlatKernel {
         out: &mut Option<FlatOutput>,
         measure: bool,
     ) -> Result<KernelTiming, GpuError> {
+        let mut job = self.begin(ctx, object, level, out)?;
+        let mut timer = PassTimer::new(ctx, "hce flat timing", 3, measure);
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        job.encode(ctx, &mut encoder, u64::MAX, Some(&mut timer))?;
+        timer.resolve(ctx, &mut encoder);
+        ctx.queue.submit([encoder.finish()]);
+        let timing = KernelTiming {
+            gpu_seconds: timer.read(ctx)?.map(|(total, _)| total),
+            step_seconds: None,
+        };
+        Ok(timing)
+    }
+
+    /// Prepares the refinement of `object` to `level` into `out` (reallocated only when too
+    /// small or absent) without recording anything: the returned job records the three steps
+    /// in pieces ([`RefineJob::encode`]), over one submission or many. `out` holds the refined
+    /// mesh once every piece has been submitted; until then it must not be drawn.
+    pub fn begin(
+        &self,
+        ctx: &GpuContext,
+        object: &FlatObject,
+        level: u32,
+        out: &mut Option<FlatOutput>,
+    ) -> Result<RefineJob, GpuError> {
         let (v, f) = counts(object, level)?;
         let fits = out.as_ref().is_some_and(|o| {
             o.positions.size() >= u64::from(v) * 12
@@ -284,74 +313,57 @@ impl FlatKernel {
             edge_copy_off: s[8],
             split_base: v - object.split.appended(level) as u32,
             split_copies: object.split.copies,
-        };
-        let uniform = super::util::uniform_init(ctx, "flat params", &params);
-        let group = |pipeline: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| {
-            bind_buffers_at(ctx, "hce flat", &pipeline.get_bind_group_layout(0), buffers)
+            range_first: 0,
+            range_end: u32::MAX,
         };
         // The bindings of `flat.wgsl` each step reads or writes, by number.
-        let positions_group = group(
-            &self.positions,
-            &[
-                (0, &uniform),
-                (1, &object.coarse_positions),
-                (2, &object.topo),
-                (7, &o.positions),
-            ],
-        );
-        let faces_group = group(
-            &self.faces,
-            &[
-                (0, &uniform),
-                (2, &object.topo),
-                (3, &object.lighting.records),
-                (4, &object.lighting.bits),
-                (5, &object.lighting.normals),
-                (6, &object.lighting.colours),
-                (7, &o.positions),
-                (8, &o.indices),
-                (9, &o.faces),
-            ],
-        );
-        let colours_group = group(
-            &self.colours,
-            &[
-                (0, &uniform),
-                (2, &object.topo),
-                (9, &o.faces),
-                (10, &o.colours),
-                (11, &object.lighting.light),
-            ],
-        );
-        let mut timer = PassTimer::new(ctx, "hce flat timing", 1, measure);
-        let vertex_groups = dispatch_size(ctx, u64::from(v))?;
-        let face_groups = dispatch_size(ctx, u64::from(f))?;
-        let mut encoder = ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("hce flat"),
-                timestamp_writes: timer.writes(0),
-            });
-            // wgpu orders the dispatches: each one sees the previous one's writes.
-            pass.set_pipeline(&self.positions);
-            pass.set_bind_group(0, &positions_group, &[]);
-            pass.dispatch_workgroups(vertex_groups.0, vertex_groups.1, 1);
-            pass.set_pipeline(&self.faces);
-            pass.set_bind_group(0, &faces_group, &[]);
-            pass.dispatch_workgroups(face_groups.0, face_groups.1, 1);
-            pass.set_pipeline(&self.colours);
-            pass.set_bind_group(0, &colours_group, &[]);
-            pass.dispatch_workgroups(vertex_groups.0, vertex_groups.1, 1);
-        }
-        timer.resolve(ctx, &mut encoder);
-        ctx.queue.submit([encoder.finish()]);
-        let timing = KernelTiming {
-            gpu_seconds: timer.read(ctx)?.map(|(total, _)| total),
-            step_seconds: None,
-        };
-        Ok(timing)
+        let lit = &object.lighting;
+        let steps = vec![
+            Step {
+                pipeline: self.positions.clone(),
+                bindings: vec![
+                    (1, object.coarse_positions.clone()),
+                    (2, object.topo.clone()),
+                    (7, o.positions.clone()),
+                ],
+                items: u64::from(v),
+                lanes: Lanes::PerItem,
+            },
+            Step {
+                pipeline: self.faces.clone(),
+                bindings: vec![
+                    (2, object.topo.clone()),
+                    (3, lit.records.clone()),
+                    (4, lit.bits.clone()),
+                    (5, lit.normals.clone()),
+                    (6, lit.colours.clone()),
+                    (7, o.positions.clone()),
+                    (8, o.indices.clone()),
+                    (9, o.faces.clone()),
+                ],
+                items: u64::from(f),
+                lanes: Lanes::PerItem,
+            },
+            Step {
+                pipeline: self.colours.clone(),
+                bindings: vec![
+                    (2, object.topo.clone()),
+                    (9, o.faces.clone()),
+                    (10, o.colours.clone()),
+                    (11, lit.light.clone()),
+                ],
+                items: u64::from(v),
+                lanes: Lanes::PerItem,
+            },
+        ];
+        RefineJob::new(
+            ctx,
+            "hce flat",
+            &params,
+            std::mem::offset_of!(Params, range_first) / 4,
+            u64::from(f),
+            steps,
+        )
     }
 }
 

@@ -36,6 +36,12 @@ struct Params {
     edge_copy_off: u32,
     split_base: u32,
     split_copies: u32,
+    // The range of this dispatch's items (output vertices in steps 1 and 3, fine triangles in
+    // step 2): items range_first .. min(total, range_end). A refinement split over frames
+    // dispatches each step in pieces (runtime/src/gpu/job.rs); a one-shot refinement passes 0
+    // and 0xffffffff.
+    range_first: u32,
+    range_end: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -102,8 +108,8 @@ fn lattice_interior_base(t: u32) -> u32 {
 @compute @workgroup_size(64)
 fn positions_main(@builtin(global_invocation_id) gid: vec3<u32>,
                   @builtin(num_workgroups) groups: vec3<u32>) {
-    let v = linear_id(gid, groups);
-    if (v >= params.vertex_total) {
+    let v = params.range_first + linear_id(gid, groups);
+    if (v >= min(params.vertex_total, params.range_end)) {
         return;
     }
     var i = v;
@@ -139,8 +145,8 @@ fn positions_main(@builtin(global_invocation_id) gid: vec3<u32>,
 @compute @workgroup_size(64)
 fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
               @builtin(num_workgroups) groups: vec3<u32>) {
-    let g = linear_id(gid, groups);
-    if (g >= params.fine_total) {
+    let g = params.range_first + linear_id(gid, groups);
+    if (g >= min(params.fine_total, params.range_end)) {
         return;
     }
     let per = 1u << (2u * params.level);
@@ -180,8 +186,8 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
 @compute @workgroup_size(64)
 fn colours_main(@builtin(global_invocation_id) gid: vec3<u32>,
                 @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = linear_id(gid, groups);
-    if (i >= params.vertex_total) {
+    let i = params.range_first + linear_id(gid, groups);
+    if (i >= min(params.vertex_total, params.range_end)) {
         return;
     }
     // A flat object has one normal per triangle, so the smooth field does not depend on it.

@@ -71,6 +71,12 @@ struct Params {
     // The first appended vertex (the F.5 count) and the number X of corner copies.
     split_base: u32,
     split_copies: u32,
+    // The range of this dispatch's items (coarse triangles in step 1, fine triangles in step
+    // 2, output vertices in step 3): items range_first .. min(total, range_end). A refinement
+    // split over frames dispatches each step in pieces (runtime/src/gpu/job.rs); a one-shot
+    // refinement passes 0 and 0xffffffff.
+    range_first: u32,
+    range_end: u32,
 }
 
 
@@ -400,7 +406,8 @@ fn patch_main(@builtin(global_invocation_id) gid: vec3<u32>,
     let rg_a = 2u * params.square_floats;
     let rg_b = rg_a + ring_floats;
     let mm = i32(params.m);
-    for (var t = slot; t < params.triangle_count; t += params.slots) {
+    let t_end = min(params.triangle_count, params.range_end);
+    for (var t = params.range_first + slot; t < t_end; t += params.slots) {
         var cs = array<Corner, 3>(load_corner(t, 0u), load_corner(t, 1u), load_corner(t, 2u));
         let flags = topo[params.tri_flags_off + t];
         // Level 0: the three corners, their rings and the one opposite vertex per band.
@@ -503,8 +510,8 @@ fn lattice_split_copies() -> u32 {
 @compute @workgroup_size(64)
 fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
               @builtin(num_workgroups) groups: vec3<u32>) {
-    let g = linear_id(gid, groups);
-    if (g >= params.fine_total) {
+    let g = params.range_first + linear_id(gid, groups);
+    if (g >= min(params.fine_total, params.range_end)) {
         return;
     }
     // 4^L fine triangles per coarse one: a shift and a mask, not a division.
@@ -537,8 +544,8 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
 @compute @workgroup_size(64)
 fn colours_main(@builtin(global_invocation_id) gid: vec3<u32>,
                 @builtin(num_workgroups) groups: vec3<u32>) {
-    let v = linear_id(gid, groups);
-    if (v >= params.vertex_total) {
+    let v = params.range_first + linear_id(gid, groups);
+    if (v >= min(params.vertex_total, params.range_end)) {
         return;
     }
     let slot = vertex_slot(v);

@@ -41,9 +41,10 @@
 use hce_format::{Object, ObjectKind};
 
 use super::flat::KernelTiming;
+use super::job::{Lanes, RefineJob, Step};
 use super::util::{
-    bind_buffers_at, check_size, dispatch_size, pack_sections, read_back, storage_init,
-    storage_output, LightingBuffers, PassTimer, WORKGROUP,
+    check_size, pack_sections, read_back, storage_init, storage_output, LightingBuffers, PassTimer,
+    WORKGROUP,
 };
 use super::wgsl::{loop_source, loop_workgroup_source};
 use super::{AdapterKind, GpuContext, GpuError};
@@ -82,6 +83,9 @@ pub(super) struct Params {
     pub(super) split_base: u32,
     /// Corner copies `X` of the split.
     pub(super) split_copies: u32,
+    /// The items of one dispatch (`range_first .. range_end`; see [`RefineJob`]).
+    pub(super) range_first: u32,
+    pub(super) range_end: u32,
 }
 
 /// Sections packed into the `topo` buffer, in this order (see [`LoopKernel::upload`]).
@@ -589,8 +593,8 @@ impl LoopKernel {
     }
 
     /// Refines `object` to `level` (0..=6) into `out`, reallocating only when `out` is too
-    /// small (or absent). With `measure`, returns the GPU time of the three dispatches when the
-    /// adapter has timestamp queries (this waits for the GPU).
+    /// small (or absent), in one submission. With `measure`, returns the GPU time of the three
+    /// dispatches when the adapter has timestamp queries (this waits for the GPU).
     pub fn refine_into(
         &self,
         ctx: &GpuContext,
@@ -599,6 +603,36 @@ impl LoopKernel {
         out: &mut Option<LoopOutput>,
         measure: bool,
     ) -> Result<KernelTiming, GpuError> {
+        let mut job = self.begin(ctx, object, level, out)?;
+        // Two timestamps per step (one compute pass each), so the time of each step is known.
+        let mut timer = PassTimer::new(ctx, "hce loop timing", 3, measure);
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        job.encode(ctx, &mut encoder, u64::MAX, Some(&mut timer))?;
+        timer.resolve(ctx, &mut encoder);
+        ctx.queue.submit([encoder.finish()]);
+        let mut timing = KernelTiming::default();
+        if let Some((total, steps)) = timer.read(ctx)? {
+            timing.gpu_seconds = Some(total);
+            if let [a, b, c] = steps[..] {
+                timing.step_seconds = Some([a, b, c]);
+            }
+        }
+        Ok(timing)
+    }
+
+    /// Prepares the refinement of `object` to `level` into `out` (reallocated only when too
+    /// small or absent) without recording anything: the returned job records its three steps
+    /// in pieces ([`RefineJob::encode`]), over one submission or many. `out` holds the refined
+    /// mesh once every piece has been submitted; until then it must not be drawn.
+    pub fn begin(
+        &self,
+        ctx: &GpuContext,
+        object: &LoopObject,
+        level: u32,
+        out: &mut Option<LoopOutput>,
+    ) -> Result<RefineJob, GpuError> {
         let (v, f) = counts(object, level)?;
         let plan = self.plan(ctx, object, level)?;
         let fits = out.as_ref().is_some_and(|o| {
@@ -653,102 +687,73 @@ impl LoopKernel {
             smooth_light: object.lighting.smooth_flag(),
             split_base: v - split_appended(object, level) as u32,
             split_copies: object.split_copies,
+            range_first: 0,
+            range_end: u32::MAX,
         };
-        let uniform = super::util::uniform_init(ctx, "loop params", &params);
-        let group = |pipeline: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| {
-            bind_buffers_at(ctx, "hce loop", &pipeline.get_bind_group_layout(0), buffers)
-        };
+        let triangles = u64::from(object.triangle_count);
         // Step 1: the workgroup kernel (no scratch binding), a workgroup per `tris` triangles,
         // or the scratch kernel, an invocation per slot.
-        let (patch, patch_group, patch_groups) = match plan {
-            PatchPlan::Workgroup(shape) => {
-                let pipeline = self.workgroup_pipeline(ctx, shape);
-                let bind = group(
-                    &pipeline,
-                    &[
-                        (0, &uniform),
-                        (1, &object.coarse_positions),
-                        (2, &object.topo),
-                        (8, &o.positions),
-                        (9, &o.normals),
-                    ],
-                );
-                let workgroups = u64::from(object.triangle_count).div_ceil(u64::from(shape.tris));
-                let size = dispatch_size(ctx, workgroups * u64::from(WORKGROUP))?;
-                (pipeline, bind, size)
-            }
-            PatchPlan::Scratch { .. } => {
-                let bind = group(
-                    &self.patch,
-                    &[
-                        (0, &uniform),
-                        (1, &object.coarse_positions),
-                        (2, &object.topo),
-                        (7, &o.scratch),
-                        (8, &o.positions),
-                        (9, &o.normals),
-                    ],
-                );
-                let size = dispatch_size(ctx, u64::from(slots))?;
-                (self.patch.clone(), bind, size)
-            }
+        let patch = match plan {
+            PatchPlan::Workgroup(shape) => Step {
+                pipeline: self.workgroup_pipeline(ctx, shape),
+                bindings: vec![
+                    (1, object.coarse_positions.clone()),
+                    (2, object.topo.clone()),
+                    (8, o.positions.clone()),
+                    (9, o.normals.clone()),
+                ],
+                items: triangles,
+                lanes: Lanes::Groups(shape.tris),
+            },
+            PatchPlan::Scratch { .. } => Step {
+                pipeline: self.patch.clone(),
+                bindings: vec![
+                    (1, object.coarse_positions.clone()),
+                    (2, object.topo.clone()),
+                    (7, o.scratch.clone()),
+                    (8, o.positions.clone()),
+                    (9, o.normals.clone()),
+                ],
+                items: triangles,
+                lanes: Lanes::Slots(slots),
+            },
         };
-        let faces_group = group(
-            &self.faces,
-            &[
-                (0, &uniform),
-                (2, &object.topo),
-                (3, &object.lighting.records),
-                (4, &object.lighting.bits),
-                (5, &object.lighting.normals),
-                (6, &object.lighting.colours),
-                (8, &o.positions),
-                (10, &o.indices),
-                (11, &o.faces),
+        let faces = Step {
+            pipeline: self.faces.clone(),
+            bindings: vec![
+                (2, object.topo.clone()),
+                (3, object.lighting.records.clone()),
+                (4, object.lighting.bits.clone()),
+                (5, object.lighting.normals.clone()),
+                (6, object.lighting.colours.clone()),
+                (8, o.positions.clone()),
+                (10, o.indices.clone()),
+                (11, o.faces.clone()),
             ],
-        );
-        let colours_group = group(
-            &self.colours,
-            &[
-                (0, &uniform),
-                (2, &object.topo),
-                (8, &o.positions),
-                (9, &o.normals),
-                (11, &o.faces),
-                (12, &o.colours),
-                (13, &object.lighting.light),
+            items: u64::from(f),
+            lanes: Lanes::PerItem,
+        };
+        let colours = Step {
+            pipeline: self.colours.clone(),
+            bindings: vec![
+                (2, object.topo.clone()),
+                (8, o.positions.clone()),
+                (9, o.normals.clone()),
+                (11, o.faces.clone()),
+                (12, o.colours.clone()),
+                (13, object.lighting.light.clone()),
             ],
-        );
-        // Two timestamps per step (one compute pass each), so the time of each step is known.
-        let mut timer = PassTimer::new(ctx, "hce loop timing", 3, measure);
-        let face_groups = dispatch_size(ctx, u64::from(f))?;
-        let vertex_groups = dispatch_size(ctx, u64::from(v))?;
-        let mut encoder = ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        let steps: [(&wgpu::ComputePipeline, &wgpu::BindGroup, (u32, u32)); 3] = [
-            (&patch, &patch_group, patch_groups),
-            (&self.faces, &faces_group, face_groups),
-            (&self.colours, &colours_group, vertex_groups),
-        ];
-        // wgpu orders the passes: each one sees the previous one's writes.
-        for (k, (pipeline, bind, size)) in steps.into_iter().enumerate() {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("hce loop"),
-                timestamp_writes: timer.writes(k as u32),
-            });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, bind, &[]);
-            pass.dispatch_workgroups(size.0, size.1, 1);
-        }
-        timer.resolve(ctx, &mut encoder);
-        ctx.queue.submit([encoder.finish()]);
-        let mut timing = KernelTiming::default();
-        if let Some((total, steps)) = timer.read(ctx)? {
-            timing.gpu_seconds = Some(total);
-            timing.step_seconds = Some([steps[0], steps[1], steps[2]]);
-        }
-        Ok(timing)
+            items: u64::from(v),
+            lanes: Lanes::PerItem,
+        };
+        RefineJob::new(
+            ctx,
+            "hce loop",
+            &params,
+            std::mem::offset_of!(Params, range_first) / 4,
+            u64::from(f),
+            vec![patch, faces, colours],
+        )
     }
 }
 

@@ -314,9 +314,10 @@ fn patch_wg_main(@builtin(local_invocation_index) lid: u32,
     let slot = lid / WG_LANES;
     let lane = lid % WG_LANES;
     let slot_base = slot * WG_SLOT;
-    let t = (wid.x + wid.y * groups.x) * WG_TRIS + slot;
-    // Lanes past the last triangle idle but still meet every barrier.
-    let live = t < params.triangle_count;
+    let t = params.range_first + (wid.x + wid.y * groups.x) * WG_TRIS + slot;
+    // Lanes past the last triangle (of the mesh or of the dispatch's range) idle but still
+    // meet every barrier.
+    let live = t < min(params.triangle_count, params.range_end);
     // Three lanes per triangle fill its corner table; every lane counts its ring points. Level 0
     // (the three corners, the one opposite vertex per band and the rings, straight from the
     // coarse positions) reads the tables directly, so one barrier serves both.

@@ -34,6 +34,7 @@ mod flat;
 mod framing;
 #[cfg(any(feature = "testing", feature = "bench"))]
 mod inputs;
+mod job;
 mod lod;
 mod loop_kernel;
 mod render;
@@ -47,6 +48,7 @@ pub use context::{AdapterDescription, AdapterKind, ContextOptions, GpuContext};
 pub use flat::{refine_flat, refine_flat_with, FlatKernel, FlatObject, FlatOutput, KernelTiming};
 pub use framing::{auto_scene_camera, Placement};
 pub use hce_geometry::flat::RefinedMesh;
+pub use job::{Encoded, RefineJob};
 pub use lod::{choose_level, Camera, LodParams};
 pub use loop_kernel::{LoopKernel, LoopObject, LoopOutput, PatchScheme};
 pub use render::{
@@ -54,9 +56,11 @@ pub use render::{
     view_projection, Framing, GpuMesh, MeshDraw, MeshPipeline, RenderParams, RenderedImage,
 };
 pub use scene::{
-    render_asset, resolve_camera, AssetRender, AssetRenderOptions, CameraChoice, CameraSource,
-    GpuScene, LevelChoice, MultiresPath, ObjectBuffers, ObjectMesh, SceneDraw, SceneOptions,
+    render_asset, resolve_camera, AssetRender, AssetRenderOptions, BatchReport, CameraChoice,
+    CameraSource, GpuScene, LevelChoice, MultiresPath, ObjectBuffers, ObjectMesh, SceneDraw,
+    SceneOptions,
 };
+pub use util::PassTimer;
 
 /// Everything that can go wrong on the GPU path.
 #[derive(Debug, thiserror::Error)]

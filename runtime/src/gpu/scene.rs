@@ -3,6 +3,13 @@
 //! [`choose_level`]) into output buffers that are reused while the level does not grow, and the
 //! buffers to draw (positions, normals, colours, indices) or to read back.
 //!
+//! A refinement writes a second set of buffers while the object keeps drawing its current ones,
+//! and is swapped in only when complete. [`GpuScene::refine_all`] and [`GpuScene::refine_to`]
+//! refine every object whose level changed in one submission; a viewer that must not stall a
+//! frame on a large level change starts the refinements with [`GpuScene::begin_refine`] and
+//! records them in pieces, a frame's worth at a time, with [`GpuScene::refine_batch`] (work in
+//! fine triangles, [`RefineJob`]): `hce view` does.
+//!
 //! Each object is refined by one of these paths (one variant of a private enum per object):
 //!
 //! * **Flat** objects ([`ObjectKind::Flat`]) by the [`FlatKernel`]: linear 1-to-4 split, colours
@@ -57,10 +64,10 @@ use hce_format::{Object, ObjectKind};
 use super::framing::{auto_scene_camera, Placement};
 use super::lod::{choose_level, Camera, LodParams};
 use super::render::{render_draws, MeshDraw, RenderParams, RenderedImage};
-use super::util::{check_size, read_back};
+use super::util::{check_size, read_back, span, PassTimer};
 use super::{
     FlatKernel, FlatObject, FlatOutput, Framing, GpuContext, GpuError, LoopKernel, LoopObject,
-    LoopOutput,
+    LoopOutput, RefineJob,
 };
 use crate::asset::{Asset, Bounds};
 use hce_geometry::lighting::Reconstruction;
@@ -123,15 +130,27 @@ struct CpuOutput {
     indices: wgpu::Buffer,
 }
 
-/// How one object is refined, with its uploaded data and its current output.
+/// A refinement under way into buffers of its own (the object's current ones are still drawn).
+struct Next<O> {
+    level: u32,
+    out: O,
+    job: RefineJob,
+}
+
+/// How one object is refined, with its uploaded data, its current output, the refinement under
+/// way (if any) and the buffers of the output before, kept for the next refinement.
 enum Refiner {
     Flat {
         object: Box<FlatObject>,
         out: Option<FlatOutput>,
+        next: Option<Next<FlatOutput>>,
+        spare: Option<FlatOutput>,
     },
     Loop {
         object: Box<LoopObject>,
         out: Option<LoopOutput>,
+        next: Option<Next<LoopOutput>>,
+        spare: Option<LoopOutput>,
     },
     CpuReference {
         reconstruction: Reconstruction,
@@ -259,6 +278,8 @@ impl GpuScene {
                             options.reconstruction,
                         )?),
                         out: None,
+                        next: None,
+                        spare: None,
                     }
                 }
                 (ObjectKind::Multiresolution, MultiresPath::Gpu) => {
@@ -270,6 +291,8 @@ impl GpuScene {
                             options.reconstruction,
                         )?),
                         out: None,
+                        next: None,
+                        spare: None,
                     }
                 }
                 (ObjectKind::Multiresolution, MultiresPath::CpuReference) => {
@@ -435,13 +458,18 @@ impl GpuScene {
         Ok(levels)
     }
 
-    /// Refines object `i` to `levels[i]` for every `Some`.
+    /// Refines object `i` to `levels[i]` for every `Some`: every refinement recorded in one
+    /// command encoder and one submission.
     pub fn refine_to(&mut self, ctx: &GpuContext, levels: &[Option<u32>]) -> Result<(), GpuError> {
+        let mut work = Vec::new();
         for (i, level) in levels.iter().enumerate() {
             if let Some(level) = *level {
-                self.refine(ctx, i, level)?;
+                if self.begin_refine(ctx, i, level)? {
+                    work.push((i, u64::MAX));
+                }
             }
         }
+        self.refine_batch(ctx, &work, false)?;
         Ok(())
     }
 
@@ -462,35 +490,60 @@ impl GpuScene {
         level: u32,
         measure: bool,
     ) -> Result<Option<f64>, GpuError> {
+        if !self.begin_refine(ctx, object, level)? {
+            return Ok(None);
+        }
+        let report = self.refine_batch(ctx, &[(object, u64::MAX)], measure)?;
+        Ok(report.first().and_then(|r| r.gpu_seconds))
+    }
+
+    /// Starts refining `object` to `level` without recording any GPU work: the refinement
+    /// writes buffers of its own, and the object keeps drawing its current ones until
+    /// [`GpuScene::refine_batch`] has recorded the last piece. Returns whether a refinement is
+    /// under way: started now, or before for `level` or for a level strictly between the
+    /// drawn one and `level` (a step towards it, kept so that a level that keeps changing
+    /// still lands; [`GpuScene::refine_progress`] says which). When the object is already at
+    /// `level` a refinement under way is dropped and this returns `false`; on the CPU
+    /// reference path the object is refined at once and this returns `false`.
+    pub fn begin_refine(
+        &mut self,
+        ctx: &GpuContext,
+        object: usize,
+        level: u32,
+    ) -> Result<bool, GpuError> {
         let count = self.objects.len();
         let o = self.objects.get_mut(object).ok_or_else(|| {
             GpuError::InvalidParams(format!("object {object} does not exist ({count} objects)"))
         })?;
         let name = o.name.clone();
         match &mut o.refiner {
-            Refiner::Flat { object, out } => {
-                if out.as_ref().is_some_and(|b| b.level == level) {
-                    return Ok(None);
-                }
+            Refiner::Flat {
+                object,
+                out,
+                next,
+                spare,
+            } => {
                 let kernel = self
                     .flat
                     .as_ref()
                     .ok_or_else(|| invalid(&name, "the flat kernel was not created"))?;
-                return Ok(kernel
-                    .refine_into(ctx, object, level, out, measure)?
-                    .gpu_seconds);
+                begin_next(out, next, spare, level, |spare| {
+                    kernel.begin(ctx, object, level, spare)
+                })
             }
-            Refiner::Loop { object, out } => {
-                if out.as_ref().is_some_and(|b| b.level == level) {
-                    return Ok(None);
-                }
+            Refiner::Loop {
+                object,
+                out,
+                next,
+                spare,
+            } => {
                 let kernel = self
                     .loop_kernel
                     .as_ref()
                     .ok_or_else(|| invalid(&name, "the Loop kernel was not created"))?;
-                return Ok(kernel
-                    .refine_into(ctx, object, level, out, measure)?
-                    .gpu_seconds);
+                begin_next(out, next, spare, level, |spare| {
+                    kernel.begin(ctx, object, level, spare)
+                })
             }
             Refiner::CpuReference {
                 reconstruction,
@@ -499,7 +552,7 @@ impl GpuScene {
                 out,
             } => {
                 if out.as_ref().is_some_and(|b| b.level == level) {
-                    return Ok(None);
+                    return Ok(false);
                 }
                 if level > hce_geometry::subdivide::MAX_LOOP_LEVEL {
                     return Err(GpuError::LevelTooHigh {
@@ -520,9 +573,88 @@ impl GpuScene {
                 )
                 .map_err(|e| invalid(&name, e))?;
                 *out = Some(upload_cpu(ctx, out.take(), scratch, &colours, level)?);
+                Ok(false)
             }
         }
-        Ok(None)
+    }
+
+    /// The refinement under way for `object`: its level, the work not recorded yet and the
+    /// work of the whole refinement, in fine triangles per step ([`RefineJob::work_left`]).
+    pub fn refine_progress(&self, object: usize) -> Option<(u32, u64, u64)> {
+        let job = |level: u32, job: &RefineJob| (level, job.work_left(), job.total_work());
+        match &self.objects.get(object)?.refiner {
+            Refiner::Flat { next, .. } => next.as_ref().map(|n| job(n.level, &n.job)),
+            Refiner::Loop { next, .. } => next.as_ref().map(|n| job(n.level, &n.job)),
+            Refiner::CpuReference { .. } => None,
+        }
+    }
+
+    /// Records up to the given work (fine triangles, [`RefineJob::encode`]; `u64::MAX` for the
+    /// rest) of each listed object's refinement under way ([`GpuScene::begin_refine`]) in one
+    /// command encoder and one submission, and swaps in the refinements whose last piece it
+    /// recorded: their new level is drawn from the next draw submitted, never a partial one.
+    /// Objects with no refinement under way are skipped. With `measure`, each object's GPU
+    /// time of the pieces of this batch where the adapter has timestamp queries (waiting for
+    /// the GPU).
+    pub fn refine_batch(
+        &mut self,
+        ctx: &GpuContext,
+        work: &[(usize, u64)],
+        measure: bool,
+    ) -> Result<Vec<BatchReport>, GpuError> {
+        let mut timer = PassTimer::new(ctx, "hce refine timing", 3 * work.len() as u32, measure);
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("hce refine"),
+            });
+        let mut reports = Vec::with_capacity(work.len());
+        let mut passes = Vec::with_capacity(work.len());
+        for &(i, amount) in work {
+            let Some(o) = self.objects.get_mut(i) else {
+                continue;
+            };
+            let job = match &mut o.refiner {
+                Refiner::Flat { next: Some(n), .. } => &mut n.job,
+                Refiner::Loop { next: Some(n), .. } => &mut n.job,
+                _ => continue,
+            };
+            let encoded = job.encode(ctx, &mut encoder, amount, Some(&mut timer))?;
+            reports.push(BatchReport {
+                object: i,
+                work: encoded.work,
+                finished: job.is_done(),
+                gpu_seconds: None,
+            });
+            passes.push(encoded.passes);
+        }
+        if reports.is_empty() {
+            return Ok(reports);
+        }
+        timer.resolve(ctx, &mut encoder);
+        ctx.queue.submit([encoder.finish()]);
+        if let Some(stamps) = timer.read_stamps(ctx)? {
+            // From an object's first piece's start to its last piece's end ([`span`]).
+            for (r, p) in reports.iter_mut().zip(&passes) {
+                if !p.is_empty() {
+                    r.gpu_seconds = Some(span(&stamps, p.clone()));
+                }
+            }
+        }
+        // Submitted: the finished refinements are drawn from now on, the buffers they replace
+        // kept for the next ones.
+        for r in reports.iter().filter(|r| r.finished) {
+            match &mut self.objects[r.object].refiner {
+                Refiner::Flat {
+                    out, next, spare, ..
+                } => finish_next(out, next, spare),
+                Refiner::Loop {
+                    out, next, spare, ..
+                } => finish_next(out, next, spare),
+                Refiner::CpuReference { .. } => {}
+            }
+        }
+        Ok(reports)
     }
 
     /// The current buffers of `object`, `None` before its first refinement.
@@ -631,6 +763,75 @@ impl GpuScene {
                 ..*params
             },
         )
+    }
+}
+
+/// What [`GpuScene::refine_batch`] did for one object.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BatchReport {
+    pub object: usize,
+    /// Work recorded, in fine triangles ([`RefineJob::encode`]).
+    pub work: u64,
+    /// Whether the refinement is complete and drawn from now on.
+    pub finished: bool,
+    /// GPU time of the pieces recorded, when measured with timestamp queries.
+    pub gpu_seconds: Option<f64>,
+}
+
+/// Kernel output buffers that report their level.
+trait Leveled {
+    fn level(&self) -> u32;
+}
+
+impl Leveled for FlatOutput {
+    fn level(&self) -> u32 {
+        self.level
+    }
+}
+
+impl Leveled for LoopOutput {
+    fn level(&self) -> u32 {
+        self.level
+    }
+}
+
+/// [`GpuScene::begin_refine`] for a kernel path: keeps a refinement under way whose level lies
+/// between the drawn level (excluded) and `level` (included), a step towards it, so that a
+/// level that keeps changing (a camera moving on) still lands step by step; drops any other
+/// (its buffers become the spare ones) and starts one with `begin` (which refines into the
+/// spare buffers, reallocating them if too small) unless the object is already at `level`.
+fn begin_next<O: Leveled>(
+    out: &Option<O>,
+    next: &mut Option<Next<O>>,
+    spare: &mut Option<O>,
+    level: u32,
+    begin: impl FnOnce(&mut Option<O>) -> Result<RefineJob, GpuError>,
+) -> Result<bool, GpuError> {
+    let drawn = out.as_ref().map(|o| o.level());
+    if next.as_ref().is_some_and(|n| {
+        n.level == level
+            || drawn.is_some_and(|d| {
+                d != level && (d < n.level && n.level < level || level < n.level && n.level < d)
+            })
+    }) {
+        return Ok(true);
+    }
+    if let Some(dropped) = next.take() {
+        *spare = Some(dropped.out);
+    }
+    if out.as_ref().is_some_and(|o| o.level() == level) {
+        return Ok(false);
+    }
+    let job = begin(spare)?;
+    let out = spare.take().expect("begin allocates the output");
+    *next = Some(Next { level, out, job });
+    Ok(true)
+}
+
+/// Swaps a finished refinement in: its buffers are drawn, the ones it replaces kept.
+fn finish_next<O>(out: &mut Option<O>, next: &mut Option<Next<O>>, spare: &mut Option<O>) {
+    if let Some(n) = next.take() {
+        *spare = out.replace(n.out);
     }
 }
 

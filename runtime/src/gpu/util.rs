@@ -22,10 +22,15 @@ pub fn storage_init<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data: &[T])
 }
 
 pub fn uniform_init<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data: &T) -> wgpu::Buffer {
+    uniform_words(ctx, label, bytemuck::cast_slice(bytemuck::bytes_of(data)))
+}
+
+/// A uniform buffer holding `words`.
+pub fn uniform_words(ctx: &GpuContext, label: &str, words: &[u32]) -> wgpu::Buffer {
     ctx.device
         .create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(label),
-            contents: bytemuck::bytes_of(data),
+            contents: bytemuck::cast_slice(words),
             usage: wgpu::BufferUsages::UNIFORM,
         })
 }
@@ -132,16 +137,21 @@ pub fn map_and_copy<R>(
 }
 
 /// GPU timestamps around the compute passes of one submission (two per pass), when timing is
-/// asked for and the adapter has timestamp queries: the one timing path of every kernel.
+/// asked for and the adapter has timestamp queries: the one timing path of every kernel. It
+/// has room for `passes` passes; those timed are the ones given [`PassTimer::writes`] or
+/// [`PassTimer::next_pass`], numbered from 0.
 pub struct PassTimer {
     query: Option<wgpu::QuerySet>,
     resolve: Option<wgpu::Buffer>,
     passes: u32,
+    /// One past the highest pass given timestamp writes.
+    used: std::cell::Cell<u32>,
     measure: bool,
 }
 
 impl PassTimer {
     pub fn new(ctx: &GpuContext, label: &str, passes: u32, measure: bool) -> Self {
+        let passes = passes.max(1);
         let query = (measure && ctx.description.timestamps).then(|| {
             ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some(label),
@@ -153,31 +163,47 @@ impl PassTimer {
             query,
             resolve: None,
             passes,
+            used: std::cell::Cell::new(0),
             measure,
         }
     }
 
-    /// The timestamp writes of pass `pass` (none when not timing).
+    /// The next pass not timed yet, while there is room and timestamps are taken.
+    pub fn next_pass(&mut self) -> Option<u32> {
+        let next = self.used.get();
+        (self.query.is_some() && next < self.passes).then_some(next)
+    }
+
+    /// Passes given timestamp writes so far (numbered `0..used`).
+    pub fn used(&self) -> u32 {
+        self.used.get()
+    }
+
+    /// The timestamp writes of pass `pass` (none when not timing or past the timer's room).
     pub fn writes(&self, pass: u32) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        self.query
-            .as_ref()
-            .map(|q| wgpu::ComputePassTimestampWrites {
-                query_set: q,
-                beginning_of_pass_write_index: Some(2 * pass),
-                end_of_pass_write_index: Some(2 * pass + 1),
-            })
+        if pass >= self.passes {
+            return None;
+        }
+        let q = self.query.as_ref()?;
+        self.used.set(self.used.get().max(pass + 1));
+        Some(wgpu::ComputePassTimestampWrites {
+            query_set: q,
+            beginning_of_pass_write_index: Some(2 * pass),
+            end_of_pass_write_index: Some(2 * pass + 1),
+        })
     }
 
     /// Records the copy of the timestamps; call after the passes, before `encoder.finish()`.
     pub fn resolve(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder) {
-        if let Some(q) = &self.query {
+        let used = self.used.get();
+        if let (Some(q), true) = (&self.query, used > 0) {
             let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("timestamps"),
-                size: 16 * u64::from(self.passes),
+                size: 16 * u64::from(used),
                 usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             });
-            encoder.resolve_query_set(q, 0..2 * self.passes, &buf, 0);
+            encoder.resolve_query_set(q, 0..2 * used, &buf, 0);
             self.resolve = Some(buf);
         }
     }
@@ -186,21 +212,44 @@ impl PassTimer {
     /// and of each pass, or `None` without timestamps (having waited for the GPU when timing
     /// was asked for, so that a wall clock around the call measures the work).
     pub fn read(self, ctx: &GpuContext) -> Result<Option<(f64, Vec<f64>)>, GpuError> {
+        Ok(self.read_stamps(ctx)?.map(|stamps| {
+            let passes = (stamps.len() / 2) as u32;
+            let each = (0..passes).map(|k| span(&stamps, k..k + 1)).collect();
+            (span(&stamps, 0..passes), each)
+        }))
+    }
+
+    /// [`PassTimer::read`] as the timestamps themselves: seconds since the first, two per pass
+    /// (its start and end); [`span`] measures passes with them.
+    pub fn read_stamps(self, ctx: &GpuContext) -> Result<Option<Vec<f64>>, GpuError> {
         let Some(buf) = &self.resolve else {
             if self.measure {
                 ctx.wait()?;
             }
             return Ok(None);
         };
-        let n = 2 * self.passes as usize;
+        let n = 2 * self.used.get() as usize;
         let ticks: Vec<u64> = read_back(ctx, buf, n)?;
         let period = f64::from(ctx.queue.get_timestamp_period());
-        let span = |a: usize, b: usize| ticks[b].saturating_sub(ticks[a]) as f64 * period * 1e-9;
-        let passes = (0..self.passes as usize)
-            .map(|k| span(2 * k, 2 * k + 1))
-            .collect();
-        Ok(Some((span(0, n - 1), passes)))
+        Ok(Some(
+            ticks
+                .iter()
+                .map(|&t| t.saturating_sub(ticks[0]) as f64 * period * 1e-9)
+                .collect(),
+        ))
     }
+}
+
+/// GPU seconds from the start of the first of `passes` to the end of the last, from
+/// [`PassTimer::read_stamps`]; 0 for no passes. Measure spans of several passes rather than
+/// add up passes: on lavapipe the timestamps around one pass were seen to enclose next to none
+/// of its work while a span over several passes enclosed most of it.
+pub fn span(stamps: &[f64], passes: std::ops::Range<u32>) -> f64 {
+    if passes.is_empty() {
+        return 0.0;
+    }
+    let (a, b) = (2 * passes.start as usize, 2 * passes.end as usize - 1);
+    (stamps[b] - stamps[a]).max(0.0)
 }
 
 /// The `hce_light` buffer of `hce_light.wgsl` ([`hce_geometry::lighting::LightingTable::to_words`]).

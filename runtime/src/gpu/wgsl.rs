@@ -300,6 +300,12 @@ mod tests {
             at(&members, "smooth_light"),
             offset_of!(FlatParams, smooth_light)
         );
+        // A refinement in pieces (job.rs) writes the range where the twins put it.
+        assert_eq!(
+            at(&members, "range_first"),
+            offset_of!(FlatParams, range_first)
+        );
+        assert_eq!(at(&members, "range_end"), offset_of!(FlatParams, range_end));
 
         let lp = parse("loop", &loop_source());
         let (size, members) = wgsl_struct(&lp, "Params");
@@ -321,6 +327,11 @@ mod tests {
             at(&members, "smooth_light"),
             offset_of!(LoopParams, smooth_light)
         );
+        assert_eq!(
+            at(&members, "range_first"),
+            offset_of!(LoopParams, range_first)
+        );
+        assert_eq!(at(&members, "range_end"), offset_of!(LoopParams, range_end));
 
         let decode = parse("decode", &decode_source());
         let (size, members) = wgsl_struct(&decode, "Query");

@@ -33,9 +33,11 @@ pub struct ViewArgs {
     /// Lower levels chosen from the view (highest first) to draw at most this many triangles.
     #[arg(long, default_value_t = 16_000_000)]
     pub max_triangles: u64,
-    /// Milliseconds of refinement per frame: level changes beyond it wait for the next frames
-    /// (the largest changes first, at least one object per frame), so that a frame where many
-    /// levels change is not one long stall; 0 refines every change in the frame it happens.
+    /// Milliseconds of refinement per frame (wall time, GPU work waited for, at the cost
+    /// measured in the frames before): a level change is refined in pieces (ranges of
+    /// coarse triangles, fine triangles and vertices) over as many frames as it needs, at
+    /// least 1/32 of it per frame, the object drawn at its old level until the new one is
+    /// complete; 0 refines every change whole in the frame it happens.
     #[arg(long, default_value_t = 4.0)]
     pub refine_budget: f64,
     /// `smooth`, `nearest` or `gouraud`, as for `hce render` (N cycles them in the window).

@@ -24,8 +24,10 @@ pub struct Levels {
     pub lod: LodParams,
     /// Most fine triangles drawn, instances counted (as `hce render --max-triangles`).
     pub max_triangles: u64,
-    /// Milliseconds of refinement per frame after which the remaining level changes wait for
-    /// the next frame (at least one object is refined per frame); 0: every change at once.
+    /// Milliseconds of refinement per frame (wall time, GPU work waited for): level changes
+    /// are recorded in pieces sized to it at the cost measured so far, over as many frames as
+    /// they need (at least 1/[`MIN_PIECE`] of one refinement per frame); 0: every change at
+    /// once.
     pub refine_budget_ms: f64,
 }
 
@@ -38,32 +40,77 @@ pub struct ObjectStats {
     /// Fine triangles per instance.
     pub triangles: u64,
     pub instances: usize,
-    /// Wall time of its last refinement, GPU work waited for, in milliseconds.
+    /// Wall time of its last refinement, GPU work waited for, in milliseconds: the frames' wall
+    /// times shared among the objects refined in them by work, summed over its pieces.
     pub refine_ms: f64,
     /// GPU time of its last refinement's dispatches (timestamp queries), in milliseconds,
-    /// where the adapter has them.
+    /// where the adapter has them, summed over its pieces.
     pub refine_gpu_ms: Option<f64>,
+    /// Frames its last refinement was spread over.
+    pub refine_frames: u32,
 }
+
+/// Least part of one refinement recorded in a frame whatever the budget (1/32 of its work):
+/// a level change is drawn at most 32 frames after it starts.
+pub const MIN_PIECE: u64 = 32;
+
+/// Milliseconds per fine triangle of refinement work assumed before any has been measured
+/// (lavapipe's order of magnitude; the first frame refines everything and measures it).
+const FIRST_RATE_MS: f64 = 2e-4;
 
 /// What one frame's level update did.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Refined {
-    /// Indices (into [`Content::objects`]) of the objects refined this frame.
+    /// Indices (into [`Content::objects`]) of the objects whose refinement finished this frame:
+    /// their new level is drawn from this frame on.
     pub objects: Vec<usize>,
-    /// Their refinement's wall time, GPU work waited for, in milliseconds.
+    /// Indices of the objects refined in part this frame, still drawn at their old level.
+    pub working: Vec<usize>,
+    /// The wall time of this frame's refinement work (one submission), GPU work waited for,
+    /// in milliseconds.
     pub ms: f64,
     /// The GPU time of their dispatches (timestamp queries), where the adapter has them.
     pub gpu_ms: Option<f64>,
     /// Levels lowered for the triangle budget.
     pub notes: Vec<String>,
-    /// Objects whose level should change but were left for a later frame (refine budget).
+    /// Objects whose level should change and is not drawn yet (refine budget).
     pub pending: usize,
+}
+
+/// A running estimate of what refinement costs: the wall milliseconds of a frame's refinement
+/// per fine triangle of its work (see `hce_runtime::gpu::RefineJob`), a running mean. Wall
+/// times, because GPU timestamps are not there on every adapter and on lavapipe do not enclose
+/// all of the work. A frame's fixed cost (uniforms, zeroing new buffers, submitting, waiting)
+/// is part of the ratio, so the pieces it sizes settle where the fixed cost and the work
+/// together fill the budget. Frames that refine objects not drawn yet (the first: every object
+/// whole, with the driver's first-use costs) are left out.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct RefineCost {
+    rate_ms: Option<f64>,
+}
+
+impl RefineCost {
+    /// Work that fits `budget_ms`.
+    fn work_within(&self, budget_ms: f64) -> u64 {
+        (budget_ms / self.rate_ms.unwrap_or(FIRST_RATE_MS)) as u64
+    }
+
+    /// Takes in a frame that did `work` in `wall_ms`.
+    fn measured(&mut self, work: u64, wall_ms: f64) {
+        if work == 0 {
+            return;
+        }
+        let rate = wall_ms / work as f64;
+        self.rate_ms = Some(self.rate_ms.map_or(rate, |r| 0.5 * (r + rate)));
+    }
 }
 
 enum Source {
     Baked {
         asset: Box<Asset>,
         scene: Box<GpuScene>,
+        /// What refinement has cost so far, to size the next frame's pieces.
+        cost: RefineCost,
     },
     Plain(Box<Plain>),
 }
@@ -171,6 +218,7 @@ impl Content {
                 instances: scene.instance_count(i),
                 refine_ms: 0.0,
                 refine_gpu_ms: None,
+                refine_frames: 0,
             })
             .collect();
         Ok(Self {
@@ -178,6 +226,7 @@ impl Content {
             source: Source::Baked {
                 asset: Box::new(asset),
                 scene: Box::new(scene),
+                cost: RefineCost::default(),
             },
             bounds: (bounds.min, bounds.max),
             objects,
@@ -202,6 +251,7 @@ impl Content {
             instances: 1,
             refine_ms: 0.0,
             refine_gpu_ms: None,
+            refine_frames: 0,
         }];
         Ok(Self {
             path: path.to_owned(),
@@ -255,8 +305,10 @@ impl Content {
     }
 
     /// Chooses every object's level for `camera` on a viewport `viewport_height` pixels high
-    /// and refines the objects whose level changed (only those), waiting for each so that its
-    /// time is its own.
+    /// and refines the objects whose level changed (only those): objects not drawn yet whole,
+    /// the others in pieces within the refine budget, all of the frame's pieces in one
+    /// submission, waited for so that the frame's refinement time is its own. An object keeps
+    /// drawing its old level until its refinement is complete.
     pub fn update(
         &mut self,
         ctx: &GpuContext,
@@ -276,7 +328,7 @@ impl Content {
         // GPU timestamps where the adapter has them (reading them waits, as the frame does).
         let measure = ctx.description.timestamps;
         match &mut self.source {
-            Source::Baked { scene, .. } => {
+            Source::Baked { scene, cost, .. } => {
                 let choice = match levels.forced {
                     Some(l) => LevelChoice::Fixed(l),
                     None => LevelChoice::Auto {
@@ -287,46 +339,94 @@ impl Content {
                 };
                 let (wanted, notes) = scene.levels_within(&choice, levels.max_triangles)?;
                 refined.notes = notes;
-                // Objects not drawn yet first (all of them: there is nothing else to draw),
-                // then the largest level changes; past the frame's refine budget the rest keep
-                // their level and are drawn as they are until a later frame.
-                let mut changed: Vec<(usize, u32, Option<u32>)> = wanted
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(i, l)| l.map(|l| (i, l, scene.level(i))))
-                    .filter(|&(_, l, now)| now != Some(l))
+                // A refinement under way for every object whose level changes (kept while the
+                // level asked for stays the same, dropped when the object's own level is asked
+                // for again).
+                for (i, level) in wanted.iter().enumerate() {
+                    if let Some(level) = *level {
+                        scene.begin_refine(ctx, i, level)?;
+                    }
+                }
+                // Objects not drawn yet first and whole (there is nothing else to draw), then
+                // refinements already begun, then the largest level changes.
+                let mut jobs: Vec<(usize, Option<u32>, u64, u64, u32)> = (0..wanted.len())
+                    .filter_map(|i| {
+                        let (level, left, total) = scene.refine_progress(i)?;
+                        Some((i, scene.level(i), left, total, level))
+                    })
                     .collect();
-                changed.sort_by_key(|&(i, l, now)| {
+                jobs.sort_by_key(|&(i, now, left, total, level)| {
                     (
                         now.is_some(),
-                        std::cmp::Reverse(now.map(|n| n.abs_diff(l))),
+                        left == total,
+                        std::cmp::Reverse(now.map(|n| n.abs_diff(level))),
                         i,
                     )
                 });
-                refined.pending = changed.len();
-                for (i, level, now) in changed {
-                    if now.is_some()
-                        && levels.refine_budget_ms > 0.0
-                        && refined.ms >= levels.refine_budget_ms
-                    {
+                // The work this frame's budget buys at the rate measured so far.
+                let budget = levels.refine_budget_ms;
+                let mut allowance = if budget > 0.0 {
+                    cost.work_within(budget)
+                } else {
+                    u64::MAX
+                };
+                let whole_first = jobs.first().is_some_and(|j| j.1.is_none());
+                let mut plan = Vec::new();
+                for (k, &(i, now, left, total, _)) in jobs.iter().enumerate() {
+                    let work = if now.is_none() {
+                        left
+                    } else if k == 0 || allowance > 0 {
+                        // At least a 1/MIN_PIECE of the first refinement, so each one ends.
+                        let least = if k == 0 { total.div_ceil(MIN_PIECE) } else { 1 };
+                        left.min(allowance.max(least))
+                    } else {
                         break;
+                    };
+                    allowance = allowance.saturating_sub(work);
+                    plan.push((i, if work == left { u64::MAX } else { work }));
+                    // Each object's share of the frame's time is counted from its first piece.
+                    if left == total {
+                        let s = &mut self.objects[i];
+                        s.refine_ms = 0.0;
+                        s.refine_gpu_ms = None;
+                        s.refine_frames = 0;
                     }
-                    refined.pending -= 1;
-                    let t = Instant::now();
-                    let gpu = scene.refine_timed(ctx, i, level, measure)?;
-                    ctx.wait()?;
-                    let ms = t.elapsed().as_secs_f64() * 1e3;
-                    let s = &mut self.objects[i];
-                    s.level = level;
-                    s.triangles = scene.triangles_at(i, level);
-                    s.refine_ms = ms;
-                    s.refine_gpu_ms = gpu.map(|g| g * 1e3);
-                    if let Some(g) = s.refine_gpu_ms {
-                        *refined.gpu_ms.get_or_insert(0.0) += g;
-                    }
-                    refined.objects.push(i);
-                    refined.ms += ms;
                 }
+                let t = Instant::now();
+                let reports = scene.refine_batch(ctx, &plan, measure)?;
+                ctx.wait()?;
+                refined.ms = if reports.is_empty() {
+                    0.0
+                } else {
+                    t.elapsed().as_secs_f64() * 1e3
+                };
+                let work: u64 = reports.iter().map(|r| r.work).sum();
+                for r in &reports {
+                    let s = &mut self.objects[r.object];
+                    s.refine_ms += refined.ms * r.work as f64 / work.max(1) as f64;
+                    s.refine_frames += 1;
+                    if let Some(g) = r.gpu_seconds {
+                        *s.refine_gpu_ms.get_or_insert(0.0) += g * 1e3;
+                        *refined.gpu_ms.get_or_insert(0.0) += g * 1e3;
+                    }
+                    if r.finished {
+                        let level = scene.level(r.object).unwrap_or(0);
+                        s.level = level;
+                        s.triangles = scene.triangles_at(r.object, level);
+                        refined.objects.push(r.object);
+                    } else {
+                        refined.working.push(r.object);
+                    }
+                }
+                if !whole_first {
+                    cost.measured(work, refined.ms);
+                }
+                refined.objects.sort_unstable();
+                refined.pending = wanted
+                    .iter()
+                    .enumerate()
+                    .filter(|&(i, l)| l.is_some() && *l != scene.level(i))
+                    .count();
             }
             Source::Plain(p) => {
                 let Plain {
@@ -361,6 +461,7 @@ impl Content {
                     s.triangles = out.as_ref().map_or(0, |o| u64::from(o.triangle_count));
                     s.refine_ms = ms;
                     s.refine_gpu_ms = timing.gpu_seconds.map(|g| g * 1e3);
+                    s.refine_frames = 1;
                     refined.gpu_ms = s.refine_gpu_ms;
                     refined.objects.push(0);
                     refined.ms += ms;

@@ -67,12 +67,16 @@ struct FrameStats {
     target: [f32; 3],
     /// Level of every object drawn, in object order.
     levels: Vec<u32>,
-    /// Names of the objects refined in this frame.
+    /// Names of the objects whose refinement finished in this frame: their new level is drawn
+    /// from this frame on.
     refined: Vec<String>,
-    /// Objects whose level should change, left for later frames by the refine budget.
+    /// Names of the objects refined in part in this frame (a piece of a refinement spread over
+    /// frames by the refine budget), still drawn at their old level.
+    working: Vec<String>,
+    /// Objects whose level should change and is not drawn yet.
     pending: usize,
     triangles: u64,
-    /// Refinement of the objects whose level changed, GPU work waited for.
+    /// This frame's refinement work (one submission), GPU work waited for.
     refine_ms: f64,
     /// The GPU time of their dispatches, where the adapter has timestamp queries.
     refine_gpu_ms: Option<f64>,
@@ -444,7 +448,7 @@ impl App {
             None => Default::default(),
         };
         let refine_ms = refined.ms;
-        if !refined.objects.is_empty() {
+        if !refined.objects.is_empty() || !refined.working.is_empty() {
             self.refine_ms = refine_ms;
         }
         for n in &refined.notes {
@@ -604,12 +608,23 @@ impl App {
                 .filter(|o| o.instances > 0)
                 .map(|o| o.level)
                 .collect();
+            let working: Vec<String> = refined
+                .working
+                .iter()
+                .filter_map(|&i| objects.get(i))
+                .map(|o| o.name.clone())
+                .collect();
             println!(
-                "frame {}: {} triangles{}, refined [{}] in {:.1} ms{}, frame {:.1} ms",
+                "frame {}: {} triangles{}, refined [{}]{} in {:.1} ms{}, frame {:.1} ms",
                 self.frame_index,
                 triangles,
                 if drawn { "" } else { " (not presented)" },
                 names.join(" "),
+                if working.is_empty() {
+                    String::new()
+                } else {
+                    format!(", in part [{}]", working.join(" "))
+                },
                 refine_ms,
                 match refined.pending {
                     0 => String::new(),
@@ -631,6 +646,7 @@ impl App {
                     .filter_map(|&i| objects.get(i))
                     .map(|o| o.name.clone())
                     .collect(),
+                working,
                 pending: refined.pending,
                 triangles,
                 refine_ms,
@@ -657,14 +673,17 @@ impl App {
         }
         let n = frames.len() as f64;
         let mean = |f: &dyn Fn(&FrameStats) -> f64| frames.iter().map(f).sum::<f64>() / n;
-        let changed: Vec<&FrameStats> = frames.iter().filter(|f| !f.refined.is_empty()).collect();
+        let changed: Vec<&FrameStats> = frames
+            .iter()
+            .filter(|f| !f.refined.is_empty() || !f.working.is_empty())
+            .collect();
         let draw = mean(&|f| f.draw_ms);
         let refine = mean(&|f| f.refine_ms);
         let gpu = mean(&|f| f.refine_gpu_ms.unwrap_or(0.0));
         println!(
             "{} frames after the first: frame {:.1} ms, draw {draw:.1} ms, refine {refine:.1} ms \
-             ({gpu:.1} ms in GPU timestamps; refine / draw {:.2}); {} frames changed levels, \
-             refining {:.1} ms each, longest frame {:.1} ms",
+             ({gpu:.1} ms in GPU timestamps; refine / draw {:.2}); {} frames refined (a level \
+             change finished or a piece of one), {:.1} ms each, longest frame {:.1} ms",
             frames.len(),
             mean(&|f| f.frame_ms),
             refine / draw.max(1e-9),

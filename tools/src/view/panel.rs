@@ -142,11 +142,18 @@ pub fn show(ui: &mut egui::Ui, facts: &Facts<'_>, settings: &mut Settings) -> Ac
                         } else {
                             ui.label(format!("{} x {}", o.triangles, o.instances));
                         }
+                        let frames = match o.refine_frames {
+                            0 | 1 => String::new(),
+                            n => format!(" / {n} frames"),
+                        };
                         match o.refine_gpu_ms {
-                            Some(g) => ui.label(format!("{:.2} ({g:.2})", o.refine_ms)),
-                            None => ui.label(format!("{:.2}", o.refine_ms)),
+                            Some(g) => ui.label(format!("{:.2} ({g:.2}){frames}", o.refine_ms)),
+                            None => ui.label(format!("{:.2}{frames}", o.refine_ms)),
                         }
-                        .on_hover_text("wall time, GPU work waited for (GPU timestamps)");
+                        .on_hover_text(
+                            "wall time, GPU work waited for (GPU timestamps), over the frames \
+                             the refinement was spread over",
+                        );
                         ui.end_row();
                     }
                 });

@@ -1,0 +1,204 @@
+//! A refinement as a list of steps whose items can be dispatched in pieces: the one way the Loop
+//! and flat kernels record their work, whether all of it at once ([`LoopKernel::refine_into`],
+//! [`FlatKernel::refine_into`]) or a piece per frame ([`GpuScene::refine_batch`]).
+//!
+//! Each step of a kernel is a pure gather or an owned write over its items (coarse triangles,
+//! fine triangles or output vertices), and reads only what earlier steps wrote. Dispatching a
+//! step's items in ranges (`range_first`, `range_end` in the kernel's `Params`), the steps in
+//! order, therefore writes the same bytes as dispatching each step whole: only the order in
+//! which the invocations of one step run changes, and the output never depended on it.
+//!
+//! Work is counted in fine triangles: every step of a refinement to `F` fine triangles is worth
+//! `F`, so a piece of `w` covers `w / F` of the step's items (the coarse triangles of `w / 4^L`
+//! of them in the Loop kernel's first step), and a viewer can spread `3 F` over frames at a rate
+//! it measures.
+//!
+//! [`LoopKernel::refine_into`]: super::LoopKernel::refine_into
+//! [`FlatKernel::refine_into`]: super::FlatKernel::refine_into
+//! [`GpuScene::refine_batch`]: super::GpuScene::refine_batch
+
+use super::util::{bind_buffers_at, dispatch_size, uniform_words, PassTimer, WORKGROUP};
+use super::{GpuContext, GpuError};
+
+/// How the invocations of a dispatch cover a range of `n` items.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Lanes {
+    /// One invocation per item.
+    PerItem,
+    /// At most this many invocations, each striding over the items (the Loop kernel's scratch
+    /// slots).
+    Slots(u32),
+    /// One workgroup of [`WORKGROUP`] invocations per this many items (the Loop kernel's
+    /// workgroup patches).
+    Groups(u32),
+}
+
+impl Lanes {
+    fn threads(self, n: u64) -> u64 {
+        match self {
+            Self::PerItem => n,
+            Self::Slots(slots) => n.min(u64::from(slots)).max(1),
+            Self::Groups(per) => n.div_ceil(u64::from(per.max(1))) * u64::from(WORKGROUP),
+        }
+    }
+}
+
+/// One step of a refinement: a pipeline, its bindings other than the parameters (binding 0),
+/// and its items.
+pub(super) struct Step {
+    pub(super) pipeline: wgpu::ComputePipeline,
+    pub(super) bindings: Vec<(u32, wgpu::Buffer)>,
+    pub(super) items: u64,
+    pub(super) lanes: Lanes,
+}
+
+/// What one call of [`RefineJob::encode`] recorded.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Encoded {
+    /// Work recorded, in fine triangles (see the module documentation).
+    pub work: u64,
+    /// The timer passes it wrote timestamps to (none without timing).
+    pub passes: std::ops::Range<u32>,
+}
+
+/// A refinement under way: its steps and how far their dispatches have been recorded. The
+/// output buffers it writes belong to whoever started it ([`LoopKernel::begin`],
+/// [`FlatKernel::begin`]); they hold the refined mesh once every piece has been recorded and
+/// submitted.
+///
+/// [`LoopKernel::begin`]: super::LoopKernel::begin
+/// [`FlatKernel::begin`]: super::FlatKernel::begin
+pub struct RefineJob {
+    label: &'static str,
+    /// The kernel's `Params` as words, the range at `range_at` and `range_at + 1`.
+    params: Vec<u32>,
+    range_at: usize,
+    steps: Vec<Step>,
+    /// Fine triangles: the work of each step.
+    per_step: u64,
+    /// The step being recorded and its next item.
+    step: usize,
+    next: u64,
+}
+
+impl RefineJob {
+    /// A job of `steps` over a refinement to `fine` fine triangles; `params` is the kernel's
+    /// uniform block, whose `range_first` and `range_end` sit at word `range_at`. An error when
+    /// a step dispatched whole would not fit the device's grid (then no piece does).
+    pub(super) fn new<P: bytemuck::Pod>(
+        ctx: &GpuContext,
+        label: &'static str,
+        params: &P,
+        range_at: usize,
+        fine: u64,
+        steps: Vec<Step>,
+    ) -> Result<Self, GpuError> {
+        for step in &steps {
+            dispatch_size(ctx, step.lanes.threads(step.items))?;
+        }
+        let params: Vec<u32> = bytemuck::pod_collect_to_vec(bytemuck::bytes_of(params));
+        debug_assert!(range_at + 1 < params.len());
+        let mut job = Self {
+            label,
+            params,
+            range_at,
+            steps,
+            per_step: fine.max(1),
+            step: 0,
+            next: 0,
+        };
+        job.skip_empty();
+        Ok(job)
+    }
+
+    fn skip_empty(&mut self) {
+        while self.step < self.steps.len() && self.next >= self.steps[self.step].items {
+            self.step += 1;
+            self.next = 0;
+        }
+    }
+
+    /// Whether every piece has been recorded.
+    pub fn is_done(&self) -> bool {
+        self.step >= self.steps.len()
+    }
+
+    /// Work of the whole refinement, in fine triangles (the steps together).
+    pub fn total_work(&self) -> u64 {
+        self.per_step * self.steps.len() as u64
+    }
+
+    /// Work not recorded yet.
+    pub fn work_left(&self) -> u64 {
+        if self.is_done() {
+            return 0;
+        }
+        let items = self.steps[self.step].items.max(1);
+        let done_here =
+            (u128::from(self.next) * u128::from(self.per_step) / u128::from(items)) as u64;
+        self.total_work() - self.step as u64 * self.per_step - done_here
+    }
+
+    /// Records about `work` of the refinement (see the module documentation) into `encoder`,
+    /// at least one item when any is left, one compute pass per dispatch, each timestamped by
+    /// `timer` while it has room. Steps follow one another in the order recorded: wgpu orders
+    /// the passes of a queue, so each sees the previous ones' writes.
+    pub fn encode(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        work: u64,
+        mut timer: Option<&mut PassTimer>,
+    ) -> Result<Encoded, GpuError> {
+        let first_pass = timer.as_ref().map_or(0, |t| t.used());
+        let before = self.work_left();
+        let mut left = work;
+        while !self.is_done() {
+            let step = &self.steps[self.step];
+            let remaining = step.items - self.next;
+            // The items `left` is worth in this step, at least one.
+            let wanted =
+                (u128::from(left) * u128::from(step.items)).div_ceil(u128::from(self.per_step));
+            let n = (wanted.min(u128::from(remaining)) as u64).max(1);
+            let first = self.next;
+            let mut params = self.params.clone();
+            params[self.range_at] = first as u32;
+            params[self.range_at + 1] = (first + n) as u32;
+            let uniform = uniform_words(ctx, self.label, &params);
+            let mut entries: Vec<(u32, &wgpu::Buffer)> = vec![(0, &uniform)];
+            entries.extend(step.bindings.iter().map(|(b, buf)| (*b, buf)));
+            let group = bind_buffers_at(
+                ctx,
+                self.label,
+                &step.pipeline.get_bind_group_layout(0),
+                &entries,
+            );
+            let size = dispatch_size(ctx, step.lanes.threads(n))?;
+            let pass_index = timer.as_mut().and_then(|t| t.next_pass());
+            {
+                let writes = match (&timer, pass_index) {
+                    (Some(t), Some(i)) => t.writes(i),
+                    _ => None,
+                };
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some(self.label),
+                    timestamp_writes: writes,
+                });
+                pass.set_pipeline(&step.pipeline);
+                pass.set_bind_group(0, &group, &[]);
+                pass.dispatch_workgroups(size.0, size.1, 1);
+            }
+            let worth = (u128::from(n) * u128::from(self.per_step) / u128::from(step.items)) as u64;
+            self.next += n;
+            self.skip_empty();
+            left = left.saturating_sub(worth.max(1));
+            if left == 0 {
+                break;
+            }
+        }
+        Ok(Encoded {
+            work: before - self.work_left(),
+            passes: first_pass..timer.as_ref().map_or(0, |t| t.used()),
+        })
+    }
+}
