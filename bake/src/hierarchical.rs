@@ -581,7 +581,18 @@ impl Ctx<'_> {
             ClusterChild::Cluster(c) => Source::Cluster(c),
             ClusterChild::Root(x) => Source::Elem(ElemKey::root(x)),
         };
-        let mut stack = vec![(ElemKey::root(r), top)];
+        let corners_of = |s: Source| match s {
+            Source::Elem(k) => self.elem_corners(k),
+            Source::Cluster(_) => [Vec3::ZERO; 3],
+        };
+        // Each pair with the corners of its receiver and (an element) source, carried down as
+        // they split.
+        let mut stack: Vec<Pair> = vec![(
+            ElemKey::root(r),
+            self.roots[r as usize].corners,
+            top,
+            corners_of(top),
+        )];
         let mut near_shadow: std::collections::HashMap<ElemKey, bool> = Default::default();
         let root = &self.roots[r as usize];
         // Radius and area of the clusters of its own object holding this root, largest
@@ -601,27 +612,24 @@ impl Ctx<'_> {
             let t = &trees[r as usize];
             lum(t.l[t.deepest_toward(recv) as usize * nn])
         };
-        while let Some((recv, src)) = stack.pop() {
-            let rt = self.elem_corners(recv);
+        while let Some((recv, rt, src, st)) = stack.pop() {
             let r_area = root.area / 4f32.powi(recv.level as i32);
             if self.detail_splittable(recv, r_area)
                 && *near_shadow
                     .entry(recv)
                     .or_insert_with(|| self.near_shadow(recv))
             {
-                for c in (0..4).rev() {
-                    stack.push((recv.child(c), src));
-                }
+                split_receiver(&mut stack, recv, rt, src, st);
                 continue;
             }
             let rc = (rt[0] + rt[1] + rt[2]) / 3.0;
-            let open = |c: u32, stack: &mut Vec<(ElemKey, Source)>| {
+            let open = |c: u32, stack: &mut Vec<Pair>| {
                 for ch in self.clusters.clusters[c as usize].children.iter().rev() {
                     let s = match *ch {
                         ClusterChild::Cluster(c) => Source::Cluster(c),
                         ClusterChild::Root(x) => Source::Elem(ElemKey::root(x)),
                     };
-                    stack.push((recv, s));
+                    stack.push((recv, rt, s, corners_of(s)));
                 }
             };
             let est;
@@ -635,7 +643,6 @@ impl Ctx<'_> {
                     if sk.root == r {
                         continue; // A planar triangle does not see itself.
                     }
-                    let st = self.elem_corners(sk);
                     let sn = self.roots[sk.root as usize].normal;
                     // Receiver entirely behind the source, or source behind every normal.
                     if rt.iter().all(|&v| sn.dot(v - st[0]) <= self.plane_eps) {
@@ -699,9 +706,7 @@ impl Ctx<'_> {
                         if bend * l * lum(self.reflectance(recv)) > BEND_TOLERANCE * recv_l
                             && self.splittable(recv, r_area)
                         {
-                            for c in (0..4).rev() {
-                                stack.push((recv.child(c), src));
-                            }
+                            split_receiver(&mut stack, recv, rt, src, st);
                             continue;
                         }
                         // The form factor varies over the receiver: only a smaller receiver
@@ -710,15 +715,11 @@ impl Ctx<'_> {
                         let var = (fmax - fmin) * l * r_area * std::f32::consts::PI;
                         if var > eps_power * 0.2 {
                             if self.splittable(recv, r_area) {
-                                for c in (0..4).rev() {
-                                    stack.push((recv.child(c), src));
-                                }
+                                split_receiver(&mut stack, recv, rt, src, st);
                                 continue;
                             }
                             if s_splittable {
-                                for c in (0..4).rev() {
-                                    stack.push((recv, Source::Elem(sk.child(c))));
-                                }
+                                split_source(&mut stack, recv, rt, sk, st);
                                 continue;
                             }
                         }
@@ -749,9 +750,7 @@ impl Ctx<'_> {
                             .map_or(root.area, |&(_, area)| area.max(root.area));
                         let svar = f_bound * spread * sharing * std::f32::consts::PI;
                         if svar > eps_power {
-                            for c in (0..4).rev() {
-                                stack.push((recv, Source::Elem(sk.child(c))));
-                            }
+                            split_source(&mut stack, recv, rt, sk, st);
                             continue;
                         }
                     }
@@ -809,9 +808,7 @@ impl Ctx<'_> {
                         let bend = (centre - (at[0] + at[1] + at[2]) / 3.0).abs();
                         let recv_l = receiver_radiance(recv);
                         if bend * l * lum(self.reflectance(recv)) > BEND_TOLERANCE * recv_l {
-                            for ch in (0..4).rev() {
-                                stack.push((recv.child(ch), src));
-                            }
+                            split_receiver(&mut stack, recv, rt, src, st);
                             continue;
                         }
                     }
@@ -821,18 +818,14 @@ impl Ctx<'_> {
                 let r_split = self.splittable(recv, r_area);
                 let split_recv = r_split && (r_area >= s_area || !s_splittable);
                 if split_recv {
-                    for c in (0..4).rev() {
-                        stack.push((recv.child(c), src));
-                    }
+                    split_receiver(&mut stack, recv, rt, src, st);
                     continue;
                 }
                 if s_splittable {
                     match src {
                         Source::Cluster(c) => open(c, &mut stack),
                         Source::Elem(sk) => {
-                            for c in (0..4).rev() {
-                                stack.push((recv, Source::Elem(sk.child(c))));
-                            }
+                            split_source(&mut stack, recv, rt, sk, st);
                         }
                     }
                     continue;
@@ -856,7 +849,7 @@ impl Ctx<'_> {
                     } else {
                         nv.min(2)
                     };
-                    self.link_coefficients(recv, src, rays, known)
+                    self.link_coefficients((recv, rt), (src, st), rays, known)
                 }
             };
             if k.iter().all(|&v| v <= 0.0) {
@@ -877,9 +870,7 @@ impl Ctx<'_> {
                 let wrong = gathered * (1.0 - visible).min(visible) / visible;
                 let recv_l = receiver_radiance(recv);
                 if wrong > SHADOW_TOLERANCE * recv_l.max(gathered) {
-                    for c in (0..4).rev() {
-                        stack.push((recv.child(c), src));
-                    }
+                    split_receiver(&mut stack, recv, rt, src, st);
                     continue;
                 }
             }
@@ -905,14 +896,13 @@ impl Ctx<'_> {
     /// is dropped by the caller, and casts no rays.
     fn link_coefficients(
         &self,
-        recv: ElemKey,
-        src: Source,
+        (recv, rt): (ElemKey, [Vec3; 3]),
+        (src, st): (Source, [Vec3; 3]),
         nv: u32,
         known: KnownFactors,
     ) -> (Vec<f32>, f32) {
         let root = &self.roots[recv.root as usize];
         let nn = root.normals.len();
-        let rt = self.elem_corners(recv);
         let rc = (rt[0] + rt[1] + rt[2]) / 3.0;
         let r_size = (rt[1] - rt[0]).length().max((rt[2] - rt[0]).length());
         let src_id = match src {
@@ -922,7 +912,6 @@ impl Ctx<'_> {
         let mut k = vec![0.0f32; nn];
         let visible = match src {
             Source::Elem(sk) => {
-                let st = self.elem_corners(sk);
                 let sc = (st[0] + st[1] + st[2]) / 3.0;
                 let s_size = (st[1] - st[0]).length().max((st[2] - st[0]).length());
                 // Far pairs: the centroid suffices; near pairs: four stratified points.
@@ -1502,6 +1491,26 @@ const CHILD_CORNERS: [[(usize, usize); 3]; 4] = [
 /// dark (the geometric one included: 4-8% against path-traced images, BENCHMARKS.md); counting
 /// them only where the geometric normal has none made it 4.7% on spot and 6.2% on suzanne at
 /// level 3, against 3.8% and 4.5% this way.
+/// A receiver and a source that may exchange light, with the corners of the receiver and of the
+/// source (when an element).
+type Pair = (ElemKey, [Vec3; 3], Source, [Vec3; 3]);
+
+/// Pushes the pairs of the four children of receiver `recv` (corners `rt`) with `src`.
+fn split_receiver(stack: &mut Vec<Pair>, recv: ElemKey, rt: [Vec3; 3], src: Source, st: [Vec3; 3]) {
+    let children = split(rt);
+    for c in (0..4).rev() {
+        stack.push((recv.child(c), children[c as usize], src, st));
+    }
+}
+
+/// Pushes the pairs of `recv` with the four children of source element `sk` (corners `st`).
+fn split_source(stack: &mut Vec<Pair>, recv: ElemKey, rt: [Vec3; 3], sk: ElemKey, st: [Vec3; 3]) {
+    let children = split(st);
+    for c in (0..4).rev() {
+        stack.push((recv, rt, Source::Elem(sk.child(c)), children[c as usize]));
+    }
+}
+
 /// Form factors to a link's source with the receiver's geometric normal, already computed by
 /// the rules that decided to make the link: at the receiver's centre, and at its inset corners
 /// ([`inset_corners`]).
