@@ -794,13 +794,7 @@ impl Ctx<'_> {
                     // form factor bends more than a linear link follows.
                     if self.splittable(recv, r_area) {
                         // With the geometric normal: the bend is the geometry's.
-                        let f = |p: Vec3| {
-                            let mut f = [0.0f32];
-                            self.cluster_form_factors(c, p, &[root.normal], &mut f);
-                            f[0]
-                        };
-                        let centre = f(rc);
-                        let at = inset_corners(rt).map(f);
+                        let (centre, at) = self.cluster_factors_over(c, rt, root.normal);
                         known = KnownFactors {
                             centre: Some(centre),
                             corners: Some(at),
@@ -965,20 +959,12 @@ impl Ctx<'_> {
             }
             Source::Cluster(c) => {
                 let c_size = 2.0 * self.clusters.clusters[c as usize].radius();
-                match known.centre {
-                    Some(centre) => {
-                        k[0] = centre;
-                        self.cluster_form_factors(c, rc, &root.normals[1..], &mut k[1..]);
-                    }
-                    None => self.cluster_form_factors(c, rc, &root.normals, &mut k),
-                }
-                let at_corners = known.corners.unwrap_or_else(|| {
-                    inset_corners(rt).map(|p| {
-                        let mut f = [0.0f32];
-                        self.cluster_form_factors(c, p, &[root.normal], &mut f);
-                        f[0]
-                    })
-                });
+                let (centre, at_corners) = match (known.centre, known.corners) {
+                    (Some(centre), Some(at)) => (centre, at),
+                    _ => self.cluster_factors_over(c, rt, root.normal),
+                };
+                k[0] = centre;
+                self.cluster_form_factors(c, rc, &root.normals[1..], &mut k[1..]);
                 k = linear_over_receiver(&k, at_corners);
                 if k.iter().all(|&v| v <= 0.0) {
                     return (k, 0.0);
@@ -1026,6 +1012,9 @@ impl Ctx<'_> {
     /// whole hemisphere, issue 20). The link stays one link; only its coefficient is summed
     /// finer. Adds the form factor for each of `normals` to `out`.
     fn cluster_form_factors(&self, c: u32, p: Vec3, normals: &[Vec3], out: &mut [f32]) {
+        if normals.is_empty() {
+            return;
+        }
         let cluster = &self.clusters.clusters[c as usize];
         let d = cluster.centre - p;
         let d2 = d.length_squared().max(1e-20);
@@ -1045,6 +1034,56 @@ impl Ctx<'_> {
                     let tri = &self.roots[x as usize].corners;
                     for (o, n) in out.iter_mut().zip(normals) {
                         *o += point_to_polygon(p, *n, tri);
+                    }
+                }
+            }
+        }
+    }
+
+    /// [`Ctx::cluster_form_factors`] with normal `n` at the centre of receiver triangle `rt` and
+    /// at its inset corners, in one walk of the cluster tree: the centre's, and the corners'.
+    /// Each point opens the clusters it would open alone and sums in the same order, so the
+    /// four values are those of four walks.
+    fn cluster_factors_over(&self, c: u32, rt: [Vec3; 3], n: Vec3) -> (f32, [f32; CORNERS]) {
+        let [a, b, d] = inset_corners(rt);
+        let pts = [(rt[0] + rt[1] + rt[2]) / 3.0, a, b, d];
+        let mut out = [0.0f32; 4];
+        self.cluster_factors_at(c, &pts, n, 0b1111, &mut out);
+        (out[0], [out[1], out[2], out[3]])
+    }
+
+    /// Adds to `out[i]` the form factor from point `pts[i]` (normal `n`) to cluster `c`, for
+    /// every point `i` whose bit is set in `active`.
+    fn cluster_factors_at(&self, c: u32, pts: &[Vec3; 4], n: Vec3, active: u8, out: &mut [f32; 4]) {
+        let cluster = &self.clusters.clusters[c as usize];
+        let mut open = 0u8;
+        for (i, p) in pts.iter().enumerate() {
+            if active & (1 << i) == 0 {
+                continue;
+            }
+            let d = cluster.centre - *p;
+            let d2 = d.length_squared().max(1e-20);
+            let dist = d2.sqrt();
+            if cluster.radius() < dist * CLUSTER_DISC_OPENING {
+                let w = d / dist;
+                let proj = cluster.projected_area(-w);
+                out[i] += (n.dot(w).max(0.0) * proj / (std::f32::consts::PI * d2 + proj)).min(1.0);
+            } else {
+                open |= 1 << i;
+            }
+        }
+        if open == 0 {
+            return;
+        }
+        for ch in cluster.children {
+            match ch {
+                ClusterChild::Cluster(x) => self.cluster_factors_at(x, pts, n, open, out),
+                ClusterChild::Root(x) => {
+                    let tri = &self.roots[x as usize].corners;
+                    for (i, p) in pts.iter().enumerate() {
+                        if open & (1 << i) != 0 {
+                            out[i] += point_to_polygon(*p, n, tri);
+                        }
                     }
                 }
             }

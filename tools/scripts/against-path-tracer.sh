@@ -13,12 +13,15 @@
 #     and its error;
 # each error the relative RMS difference from the two references with their own noise taken
 # out, sqrt((e1² + e2²)/2 − d²/2), d the relative RMS difference of the two references, as
-# tools/scripts/reconstruction-error.sh does; and the bias. Both sides use every core.
+# tools/scripts/reconstruction-error.sh does; and the bias. Both sides use every core. The
+# pixels of the emitters named by EXCLUDE are left out (tools/scripts/fold-masks.py): both
+# methods give their emission exactly, and it would swamp the sums.
 #
 # Usage: tools/scripts/against-path-tracer.sh [SCENE.glb]
 # Environment (defaults in brackets):
 #   SIZE [160x160]  REFERENCE_SAMPLES [8192]  SAMPLES ["4 16 64 256 1024"]
-#   BAKES ["default --bf-epsilon,3e-5 --bf-epsilon,1e-5"]  OUT [target/against-path-tracer]
+#   BAKES ["default --bf-epsilon,3e-5 --bf-epsilon,1e-5"]  EXCLUDE [light]
+#   OUT [target/against-path-tracer]
 #   HCE  the binary [target/release/hce]; build first: cargo build --release -p hce-tools
 set -euo pipefail
 
@@ -28,6 +31,7 @@ size="${SIZE:-160x160}"
 reference_samples="${REFERENCE_SAMPLES:-8192}"
 samples="${SAMPLES:-4 16 64 256 1024}"
 bakes="${BAKES:-default --bf-epsilon,3e-5 --bf-epsilon,1e-5}"
+exclude="${EXCLUDE:-light}"
 out="${OUT:-$root/target/against-path-tracer}"
 hce="${HCE:-$root/target/release/hce}"
 if [[ ! -x "$hce" ]]; then
@@ -47,15 +51,19 @@ elapsed() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", b - a }'; }
 for k in 1 2; do
     echo "reference $k: $reference_samples paths per pixel" >&2
     "$hce" reference "$out/baked-default.glb" --level 0 --size "$size" \
-        --samples "$reference_samples" --seed "$k" -o "$out/reference-$k.exr" -q
+        --samples "$reference_samples" --seed "$k" -o "$out/reference-$k.exr" -q \
+        >"$out/reference-$k.txt"
 done
-noise="$("$hce" compare "$out/reference-1.exr" "$out/reference-2.exr" |
+camera="$(sed -n 's/.*camera \([^)]*\)).*/\1/p' "$out/reference-1.txt")"
+python3 "$root/tools/scripts/fold-masks.py" "$scene" --camera "$camera" --size "$size" \
+    --objects "$exclude" --exclude "$exclude" --near 0 --far 0 "$out/band.png" "$out/mask.png"
+noise="$("$hce" compare "$out/reference-1.exr" "$out/reference-2.exr" --mask "$out/mask.png" |
     awk '/^relative RMS:/ { print $3 }')"
 
 # Error of an image against the two references, their noise taken out: "RMS BIAS".
 error() {
     for k in 1 2; do
-        "$hce" compare "$1" "$out/reference-$k.exr"
+        "$hce" compare "$1" "$out/reference-$k.exr" --mask "$out/mask.png"
     done | awk -v d="$noise" '
         /^relative RMS:/ { s += $3 * $3 }
         /^relative bias:/ { b += $3 }
@@ -82,7 +90,7 @@ for n in $samples; do
     echo "hce reference --samples $n" >&2
     t0="$(now)"
     "$hce" reference "$out/baked-default.glb" --level 0 --size "$size" --samples "$n" \
-        --seed 1000 -o "$out/traced-$n.exr" -q
+        --seed 1000 -o "$out/traced-$n.exr" -q >/dev/null
     t1="$(now)"
     read -r rms bias <<<"$(error "$out/traced-$n.exr")"
     rows+=("hce reference|$n paths per pixel|$(elapsed "$t0" "$t1")|$rms|$bias")
@@ -96,6 +104,6 @@ for row in "${rows[@]}"; do
     echo "| $method | $setting | $secs | $rms | $bias |"
 done
 echo
-echo "($(basename "$scene"), $size, references of $reference_samples paths per pixel whose"
+echo "($(basename "$scene"), $size without the pixels of $exclude, references of $reference_samples paths per pixel whose"
 echo " relative RMS difference is $noise (each carries that over sqrt 2, taken out above);"
 echo " images in $out)"
