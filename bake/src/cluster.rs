@@ -158,6 +158,43 @@ impl ClusterTree {
         p >= cl.first && p < cl.first + cl.count
     }
 
+    /// Whether the triangles `tris` this tree was built over form a convex surface: every
+    /// vertex lies on or behind (within `eps`) the plane of every triangle, degenerate triangles
+    /// aside. A point on one of its triangles sees none of the others.
+    pub fn is_convex(&self, tris: &[[Vec3; 3]], eps: f32) -> bool {
+        tris.iter().all(|t| {
+            let n = (t[1] - t[0]).cross(t[2] - t[0]);
+            let len = n.length();
+            if len <= 0.0 || !len.is_finite() {
+                return true;
+            }
+            let n = n / len;
+            !self.any_vertex_in_front(tris, n, n.dot(t[0]) + eps)
+        })
+    }
+
+    /// Whether a vertex of `tris` has `n·v > d`: a walk that enters the clusters whose boxes
+    /// reach that far.
+    fn any_vertex_in_front(&self, tris: &[[Vec3; 3]], n: Vec3, d: f32) -> bool {
+        let mut stack = vec![self.top];
+        while let Some(at) = stack.pop() {
+            match at {
+                ClusterChild::Root(x) => {
+                    if tris[x as usize].iter().any(|v| n.dot(*v) > d) {
+                        return true;
+                    }
+                }
+                ClusterChild::Cluster(c) => {
+                    let cl = &self.clusters[c as usize];
+                    if n.dot(Vec3::select(n.cmpge(Vec3::ZERO), cl.hi, cl.lo)) > d {
+                        stack.extend(cl.children);
+                    }
+                }
+            }
+        }
+        false
+    }
+
     /// The clusters holding root triangle `root`, from the top of the hierarchy down.
     pub fn ancestors(&self, root: u32) -> Vec<u32> {
         let mut out = Vec::new();
@@ -288,6 +325,53 @@ fn build_range(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The 12 triangles of the box from `lo` to `hi`, wound to face out (or in).
+    fn box_tris(lo: Vec3, hi: Vec3, inward: bool) -> Vec<[Vec3; 3]> {
+        let c = |i: u32| Vec3::select(glam::BVec3::new(i & 1 != 0, i & 2 != 0, i & 4 != 0), hi, lo);
+        // Each face as four corners counter-clockwise seen from outside.
+        let faces = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let mut out = Vec::new();
+        for f in faces {
+            let q = f.map(c);
+            let (a, b) = ([q[0], q[1], q[2]], [q[0], q[2], q[3]]);
+            if inward {
+                out.push([a[0], a[2], a[1]]);
+                out.push([b[0], b[2], b[1]]);
+            } else {
+                out.push(a);
+                out.push(b);
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn a_block_is_convex_and_a_room_or_two_blocks_are_not() {
+        let block = box_tris(Vec3::ZERO, Vec3::new(1.0, 2.0, 0.5), false);
+        let centre = Vec3::new(0.5, 1.0, 0.25);
+        for t in &block {
+            let n = (t[1] - t[0]).cross(t[2] - t[0]);
+            assert!(n.dot(t[0] - centre) > 0.0, "the test block faces out");
+        }
+        let convex = |tris: &[[Vec3; 3]]| ClusterTree::build(tris).is_convex(tris, 1e-6);
+        assert!(convex(&block));
+        assert!(!convex(&box_tris(Vec3::ZERO, Vec3::ONE, true)));
+        let mut two = block.clone();
+        two.extend(box_tris(Vec3::splat(3.0), Vec3::splat(4.0), false));
+        assert!(!convex(&two));
+        // A degenerate triangle (a pole of a UV sphere) changes nothing.
+        let mut with_sliver = block;
+        with_sliver.push([Vec3::ZERO, Vec3::ZERO, Vec3::X]);
+        assert!(convex(&with_sliver));
+    }
 
     #[test]
     fn tree_covers_every_triangle_once_and_picks_by_area() {

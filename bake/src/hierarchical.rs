@@ -326,6 +326,11 @@ struct Ctx<'a> {
     /// side of an object in a room), so that no link it receives needs rays
     /// ([`Occluders::shaft_clear`] over the whole scene, once per root instead of per link).
     unobstructed: Vec<bool>,
+    /// Per cluster: the object all its triangles belong to, if one.
+    cluster_object: Vec<Option<u32>>,
+    /// Per scene object: its triangles form a convex surface ([`ClusterTree::is_convex`]), so
+    /// that a point on one sees none of the others.
+    convex: Vec<bool>,
     min_area: f32,
     /// Distances to a plane below this count as lying in it (rounding of coplanar
     /// geometry), relative to the scene size.
@@ -369,6 +374,15 @@ impl Ctx<'_> {
             .min(self.params.detail_level)
             .min(MAX_TREE_DEPTH);
         k.level < depth && area * 0.25 >= self.min_area
+    }
+
+    /// Whether root `r`, with its geometric normal alone, sees nothing of object `object`: its
+    /// own object, convex (a block, a sphere). Such pairs (half of those the scaling scene's
+    /// sphere met) have no positive form factor, and computing it took a walk of the clusters
+    /// nearest the receiver.
+    fn sees_none_of_own(&self, r: u32, object: usize) -> bool {
+        let own = self.roots[r as usize].object;
+        own == object && self.convex[own]
     }
 
     fn reflectance(&self, k: ElemKey) -> Vec3 {
@@ -659,6 +673,9 @@ impl Ctx<'_> {
                     if sk.root == r {
                         continue; // A planar triangle does not see itself.
                     }
+                    if nn == 1 && self.sees_none_of_own(r, self.roots[sk.root as usize].object) {
+                        continue;
+                    }
                     let sn = self.roots[sk.root as usize].normal;
                     // Receiver entirely behind the source, or source behind every normal.
                     if rt.iter().all(|&v| sn.dot(v - st[0]) <= self.plane_eps) {
@@ -772,6 +789,12 @@ impl Ctx<'_> {
                     }
                 }
                 Source::Cluster(c) => {
+                    if nn == 1
+                        && self.cluster_object[c as usize]
+                            .is_some_and(|o| self.sees_none_of_own(r, o as usize))
+                    {
+                        continue;
+                    }
                     let cluster = &self.clusters.clusters[c as usize];
                     if self.clusters.holds(c, r) || rt.iter().any(|&v| cluster.contains_point(v)) {
                         open(c, &mut stack);
@@ -1698,40 +1721,62 @@ pub fn bake_with_progress(
         })
         .collect();
     let occ = Occluders::new(all_tris.iter().copied());
+    let plane_eps = {
+        let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+        for t in &all_tris {
+            for v in t {
+                lo = lo.min(*v);
+                hi = hi.max(*v);
+            }
+        }
+        (hi - lo).length() * 1e-6
+    };
+    let object_clusters: Vec<(ClusterTree, u32)> = {
+        let mut first = 0usize;
+        scene
+            .objects
+            .iter()
+            .map(|o| {
+                let n = o.triangles.len();
+                let tree = ClusterTree::build(&all_tris[first..first + n]);
+                first += n;
+                (tree, (first - n) as u32)
+            })
+            .collect()
+    };
+    let convex = object_clusters
+        .iter()
+        .map(|(tree, first)| {
+            let tris = &all_tris[*first as usize..*first as usize + tree.order.len()];
+            !tris.is_empty() && tree.is_convex(tris, 10.0 * plane_eps)
+        })
+        .collect();
+    let cluster_object = clusters
+        .clusters
+        .iter()
+        .map(|c| {
+            let ts = &clusters.order[c.first as usize..(c.first + c.count) as usize];
+            let object = roots[ts[0] as usize].object;
+            ts.iter()
+                .all(|&t| roots[t as usize].object == object)
+                .then_some(object as u32)
+        })
+        .collect();
     let ctx = Ctx {
         scene,
         params,
         clusters,
-        object_clusters: {
-            let mut first = 0usize;
-            scene
-                .objects
-                .iter()
-                .map(|o| {
-                    let n = o.triangles.len();
-                    let tree = ClusterTree::build(&all_tris[first..first + n]);
-                    first += n;
-                    (tree, (first - n) as u32)
-                })
-                .collect()
-        },
+        object_clusters,
+        convex,
         mixes_emitters,
+        cluster_object,
         unobstructed: roots
             .par_iter()
             .map(|r| occ.shaft_clear(r.corners, r.normal, Vec3::MIN, Vec3::MAX, None))
             .collect(),
         occ,
         min_area: (total_area * f64::from(params.min_area_fraction)) as f32,
-        plane_eps: {
-            let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
-            for t in &all_tris {
-                for v in t {
-                    lo = lo.min(*v);
-                    hi = hi.max(*v);
-                }
-            }
-            (hi - lo).length() * 1e-6
-        },
+        plane_eps,
         roots,
     };
     stats.coarse_triangles = ctx.roots.len();
