@@ -151,6 +151,11 @@ impl ClusterTree {
         tree
     }
 
+    /// The root triangles of cluster `c`.
+    pub fn roots_of(&self, c: &Cluster) -> &[u32] {
+        &self.order[c.first as usize..(c.first + c.count) as usize]
+    }
+
     /// Whether root triangle `root` lies inside cluster `c`.
     pub fn holds(&self, c: u32, root: u32) -> bool {
         let cl = &self.clusters[c as usize];

@@ -925,8 +925,7 @@ impl Ctx<'_> {
 
     /// Form factor times visibility from receiver `recv` to `src`, per receiver normal. A pair
     /// whose form factor is nowhere positive (a cluster whose box reaches above the receiver's
-    /// plane while its triangles lie below it: half the pairs of the scaling scene's sphere)
-    /// is dropped by the caller, and casts no rays.
+    /// plane while its triangles lie below it) is dropped by the caller, and casts no rays.
     fn link_coefficients(
         &self,
         (recv, rt): (ElemKey, [Vec3; 3]),
@@ -975,11 +974,7 @@ impl Ctx<'_> {
                 }
                 let sn = self.roots[sk.root as usize].normal;
                 let (lo, hi) = (st[0].min(st[1]).min(st[2]), st[0].max(st[1]).max(st[2]));
-                if self.unobstructed[recv.root as usize]
-                    || self
-                        .occ
-                        .shaft_clear(rt, root.normal, lo, hi, Some((sn, st[0])))
-                {
+                if self.certainly_clear(recv, rt, (lo, hi), Some((sn, st[0]))) {
                     return (k, 1.0);
                 }
                 geometric_first(&root.normals, |normals| {
@@ -1009,11 +1004,7 @@ impl Ctx<'_> {
                     return (k, 0.0);
                 }
                 let cluster = &self.clusters.clusters[c as usize];
-                if self.unobstructed[recv.root as usize]
-                    || self
-                        .occ
-                        .shaft_clear(rt, root.normal, cluster.lo, cluster.hi, None)
-                {
+                if self.certainly_clear(recv, rt, (cluster.lo, cluster.hi), None) {
                     return (k, 1.0);
                 }
                 geometric_first(&root.normals, |normals| {
@@ -1062,7 +1053,7 @@ impl Ctx<'_> {
             let w = d / dist;
             let proj = cluster.projected_area(-w);
             for (o, n) in out.iter_mut().zip(normals) {
-                *o += (n.dot(w).max(0.0) * proj / (std::f32::consts::PI * d2 + proj)).min(1.0);
+                *o += disc_factor(*n, w, proj, d2);
             }
             return;
         }
@@ -1077,6 +1068,23 @@ impl Ctx<'_> {
                 }
             }
         }
+    }
+
+    /// Whether nothing can hide any part of a source in the box `src_box` (with its plane, when
+    /// one) from receiver `recv` (corners `rt`): its root is unobstructed, or the shaft between
+    /// them is empty ([`Occluders::shaft_clear`]).
+    fn certainly_clear(
+        &self,
+        recv: ElemKey,
+        rt: [Vec3; 3],
+        (lo, hi): (Vec3, Vec3),
+        src_plane: Option<(Vec3, Vec3)>,
+    ) -> bool {
+        let r = recv.root as usize;
+        self.unobstructed[r]
+            || self
+                .occ
+                .shaft_clear(rt, self.roots[r].normal, lo, hi, src_plane)
     }
 
     /// [`Ctx::cluster_form_factors`] with normal `n` at the centre of receiver triangle `rt` and
@@ -1105,8 +1113,7 @@ impl Ctx<'_> {
             let dist = d2.sqrt();
             if cluster.radius() < dist * CLUSTER_DISC_OPENING {
                 let w = d / dist;
-                let proj = cluster.projected_area(-w);
-                out[i] += (n.dot(w).max(0.0) * proj / (std::f32::consts::PI * d2 + proj)).min(1.0);
+                out[i] += disc_factor(n, w, cluster.projected_area(-w), d2);
             } else {
                 open |= 1 << i;
             }
@@ -1569,6 +1576,12 @@ const CHILD_CORNERS: [[(usize, usize); 3]; 4] = [
 /// dark (the geometric one included: 4-8% against path-traced images, BENCHMARKS.md); counting
 /// them only where the geometric normal has none made it 4.7% on spot and 6.2% on suzanne at
 /// level 3, against 3.8% and 4.5% this way.
+/// Form factor from a point with normal `n` to a disc of projected area `proj` at squared
+/// distance `d2` along unit `w` (how a cluster small against its distance counts).
+fn disc_factor(n: Vec3, w: Vec3, proj: f32, d2: f32) -> f32 {
+    (n.dot(w).max(0.0) * proj / (std::f32::consts::PI * d2 + proj)).min(1.0)
+}
+
 /// A receiver and a source that may exchange light, with the corners of the receiver and of the
 /// source (when an element).
 type Pair = (ElemKey, [Vec3; 3], Source, [Vec3; 3]);
@@ -1715,7 +1728,7 @@ pub fn bake_with_progress(
         .clusters
         .iter()
         .map(|c| {
-            let ts = &clusters.order[c.first as usize..(c.first + c.count) as usize];
+            let ts = clusters.roots_of(c);
             let e = ts.iter().filter(|&&t| emits(t)).count();
             e > 0 && e < ts.len()
         })
@@ -1755,7 +1768,7 @@ pub fn bake_with_progress(
         .clusters
         .iter()
         .map(|c| {
-            let ts = &clusters.order[c.first as usize..(c.first + c.count) as usize];
+            let ts = clusters.roots_of(c);
             let object = roots[ts[0] as usize].object;
             ts.iter()
                 .all(|&t| roots[t as usize].object == object)

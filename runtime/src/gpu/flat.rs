@@ -12,7 +12,7 @@ use hce_format::Object;
 
 use super::job::{Lanes, RefineJob, Step};
 use super::util::{
-    check_size, pack_sections, read_back, storage_init, storage_output, LightingBuffers, PassTimer,
+    check_size, pack_sections, read_back, storage_init, storage_output, LightingBuffers,
 };
 use super::wgsl::flat_source;
 use super::{GpuContext, GpuError};
@@ -248,19 +248,12 @@ impl FlatKernel {
         out: &mut Option<FlatOutput>,
         measure: bool,
     ) -> Result<KernelTiming, GpuError> {
-        let mut job = self.begin(ctx, object, level, out)?;
-        let mut timer = PassTimer::new(ctx, "hce flat timing", 3, measure);
-        let mut encoder = ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        job.encode(ctx, &mut encoder, u64::MAX, Some(&mut timer))?;
-        timer.resolve(ctx, &mut encoder);
-        ctx.queue.submit([encoder.finish()]);
-        let timing = KernelTiming {
-            gpu_seconds: timer.read(ctx)?.map(|(total, _)| total),
+        let job = self.begin(ctx, object, level, out)?;
+        let times = job.submit_whole(ctx, "hce flat timing", measure)?;
+        Ok(KernelTiming {
+            gpu_seconds: times.map(|(total, _)| total),
             step_seconds: None,
-        };
-        Ok(timing)
+        })
     }
 
     /// Prepares the refinement of `object` to `level` into `out` (reallocated only when too

@@ -139,6 +139,25 @@ impl RefineJob {
         self.total_work() - self.step as u64 * self.per_step - done_here
     }
 
+    /// Records the whole refinement in one submission, each step's dispatch timestamped under
+    /// `timer_label` when `measure` (this then waits for the GPU): the total GPU time and each
+    /// step's, when the adapter has timestamp queries.
+    pub(super) fn submit_whole(
+        mut self,
+        ctx: &GpuContext,
+        timer_label: &'static str,
+        measure: bool,
+    ) -> Result<Option<(f64, Vec<f64>)>, GpuError> {
+        let mut timer = PassTimer::new(ctx, timer_label, self.steps.len() as u32, measure);
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        self.encode(ctx, &mut encoder, u64::MAX, Some(&mut timer))?;
+        timer.resolve(ctx, &mut encoder);
+        ctx.queue.submit([encoder.finish()]);
+        timer.read(ctx)
+    }
+
     /// Records about `work` of the refinement (see the module documentation) into `encoder`,
     /// at least one item when any is left, one compute pass per dispatch, each timestamped by
     /// `timer` while it has room. Steps follow one another in the order recorded: wgpu orders

@@ -43,8 +43,7 @@ use hce_format::{Object, ObjectKind};
 use super::flat::KernelTiming;
 use super::job::{Lanes, RefineJob, Step};
 use super::util::{
-    check_size, pack_sections, read_back, storage_init, storage_output, LightingBuffers, PassTimer,
-    WORKGROUP,
+    check_size, pack_sections, read_back, storage_init, storage_output, LightingBuffers, WORKGROUP,
 };
 use super::wgsl::{loop_source, loop_workgroup_source};
 use super::{AdapterKind, GpuContext, GpuError};
@@ -603,17 +602,10 @@ impl LoopKernel {
         out: &mut Option<LoopOutput>,
         measure: bool,
     ) -> Result<KernelTiming, GpuError> {
-        let mut job = self.begin(ctx, object, level, out)?;
+        let job = self.begin(ctx, object, level, out)?;
         // Two timestamps per step (one compute pass each), so the time of each step is known.
-        let mut timer = PassTimer::new(ctx, "hce loop timing", 3, measure);
-        let mut encoder = ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        job.encode(ctx, &mut encoder, u64::MAX, Some(&mut timer))?;
-        timer.resolve(ctx, &mut encoder);
-        ctx.queue.submit([encoder.finish()]);
         let mut timing = KernelTiming::default();
-        if let Some((total, steps)) = timer.read(ctx)? {
+        if let Some((total, steps)) = job.submit_whole(ctx, "hce loop timing", measure)? {
             timing.gpu_seconds = Some(total);
             if let [a, b, c] = steps[..] {
                 timing.step_seconds = Some([a, b, c]);
