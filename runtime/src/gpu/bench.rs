@@ -11,10 +11,11 @@ use super::loop_kernel::{LoopKernel, PatchScheme};
 use super::util::{
     bind_buffers, check_size, dispatch_size, read_back, storage_output, uniform_init, PassTimer,
 };
-use super::{GpuContext, GpuError};
+use super::{GpuContext, GpuError, GpuScene, SceneOptions};
+use crate::asset::Asset;
 use hce_geometry::lighting::Reconstruction;
 
-pub use super::inputs::{grid, octahedron, random_object, RandomTrees, SplitMix};
+pub use super::inputs::{grid, octahedron, random_object, small_flat_scene, RandomTrees, SplitMix};
 
 /// Where a time came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -121,6 +122,58 @@ pub fn bench_loop(
         });
     }
     Ok(rows)
+}
+
+/// What [`bench_scene_refine`] measured (the median frame).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneRefineRow {
+    /// Objects refined per frame (every object of the scene).
+    pub objects: usize,
+    /// Fine triangles written per frame (the mean of the two levels' frames).
+    pub triangles: u64,
+    /// Wall time of the median frame: the level of every object started
+    /// ([`GpuScene::begin_refine`]), all of them recorded in one submission
+    /// ([`GpuScene::refine_batch`]) and waited for.
+    pub seconds: f64,
+}
+
+/// Times a frame in which every object of `asset` changes level, as a viewer flying through a
+/// scene of many small objects sees it: each object alternates between `levels[0]` and
+/// `levels[1]`, `frames` times after two warm-up frames (which allocate both sets of output buffers); the
+/// median frame's wall time, submission to completion.
+pub fn bench_scene_refine(
+    ctx: &GpuContext,
+    asset: &Asset,
+    options: &SceneOptions,
+    levels: [u32; 2],
+    frames: u32,
+) -> Result<SceneRefineRow, GpuError> {
+    let mut scene = GpuScene::new(ctx, asset, options)?;
+    let n = scene.object_count();
+    let work: Vec<(usize, u64)> = (0..n).map(|i| (i, u64::MAX)).collect();
+    let mut samples = Vec::new();
+    let mut triangles = 0u64;
+    for frame in 0..frames.max(1) + 2 {
+        let level = levels[frame as usize % 2];
+        let start = Instant::now();
+        for i in 0..n {
+            scene.begin_refine(ctx, i, level)?;
+        }
+        scene.refine_batch(ctx, &work, false)?;
+        ctx.wait()?;
+        let seconds = start.elapsed().as_secs_f64();
+        if frame >= 2 {
+            samples.push(seconds);
+            triangles += (0..n).map(|i| scene.triangles_at(i, level)).sum::<u64>();
+        }
+    }
+    let count = samples.len();
+    samples.sort_by(f64::total_cmp);
+    Ok(SceneRefineRow {
+        objects: n,
+        triangles: triangles / count as u64,
+        seconds: samples[count / 2],
+    })
 }
 
 /// The device's write bandwidth as a compute kernel sees it: the reference the refinement

@@ -167,3 +167,77 @@ pub fn grid(nx: u32, ny: u32) -> (Vec<f32>, Vec<u32>) {
     }
     (positions, triangles)
 }
+
+/// A scene of `count` small flat objects, as architecture and props give: bumpy grids of 2×2
+/// to 5×5 quads (8 to 50 triangles) side by side, each with random trees of depth 1 to 3 (so
+/// their levels differ), one instance each, in a `.hce` container loaded from memory. The same
+/// `seed` gives the same scene.
+pub fn small_flat_scene(count: usize, seed: u64) -> Result<crate::asset::Asset, super::GpuError> {
+    use crate::asset::{Asset, AssetFormat, OpenOptions};
+    let mut rng = SplitMix(seed);
+    let objects = (0..count)
+        .map(|i| {
+            let (nx, ny) = (2 + rng.below(4), 2 + rng.below(4));
+            let (mut positions, triangles) = grid(nx, ny);
+            // Side by side on a square plot, one unit apart.
+            let side = (count as f32).sqrt().ceil() as usize;
+            let (ox, oy) = ((i % side) as f32 * 6.0, (i / side) as f32 * 6.0);
+            for p in positions.chunks_exact_mut(3) {
+                p[0] += ox;
+                p[1] += oy;
+            }
+            // Flat objects have one normal per triangle (SPEC.md).
+            let shape = RandomTrees {
+                max_depth: 1 + rng.below(3),
+                max_extra_normals: 0,
+                ..RandomTrees::default()
+            };
+            // The container carries the full control mesh (SPEC.md A.5), flat objects too.
+            let mesh = hce_geometry::topology::build_control_mesh(
+                &positions
+                    .chunks_exact(3)
+                    .map(|p| [p[0], p[1], p[2]])
+                    .collect::<Vec<_>>(),
+                &triangles
+                    .chunks_exact(3)
+                    .map(|t| [t[0], t[1], t[2]])
+                    .collect::<Vec<_>>(),
+                None,
+                &Default::default(),
+            )
+            .map_err(|e| super::GpuError::InvalidParams(format!("a generated scene: {e}")))?
+            .mesh;
+            let mut object = random_object(
+                &format!("prop {i}"),
+                mesh.positions.clone(),
+                mesh.triangles.clone(),
+                shape,
+                rng.next_u64(),
+            );
+            object.mesh = mesh;
+            object.geometry_hash = hce_format::geometry_hash(
+                (0..object.mesh.triangle_count())
+                    .flat_map(|t| object.mesh.triangle(t))
+                    .map(|v| object.mesh.position(v)),
+            );
+            Ok(object)
+        })
+        .collect::<Result<Vec<_>, super::GpuError>>()?;
+    let container = hce_format::Container {
+        metadata: hce_format::Metadata {
+            generator: "hce-runtime small_flat_scene".into(),
+            ..Default::default()
+        },
+        objects,
+    };
+    let bytes = hce_format::write(&container)
+        .map_err(|e| super::GpuError::InvalidParams(format!("a generated scene: {e}")))?;
+    Asset::from_bytes(
+        std::path::Path::new("small flat scene.hce"),
+        AssetFormat::Hce,
+        &bytes,
+        |_| Err("a container has no external buffers".into()),
+        &OpenOptions::default(),
+    )
+    .map_err(|e| super::GpuError::InvalidParams(format!("a generated scene: {e}")))
+}

@@ -5,6 +5,10 @@
 //! trees (depth 4, up to 5 normals per triangle) so the colour decoding walks real trees. For
 //! the flat kernel a mesh is previewed as a flat object, as `hce render` does; for the Loop
 //! kernel it is welded and its control mesh built as `hce subdivide` does (no creases).
+//!
+//! `--kernel scene` measures instead a frame of a viewer in which every object of a generated
+//! scene of many small flat objects (`--objects`) changes level: all refined in one submission
+//! by `GpuScene::refine_batch`, as `hce view` refines them.
 
 use std::path::PathBuf;
 
@@ -25,9 +29,14 @@ pub struct BenchGpuArgs {
     /// Use a software adapter even if a GPU is present.
     #[arg(long)]
     pub software: bool,
-    /// Kernels to measure: flat, loop or both.
-    #[arg(long, default_value = "both", value_parser = ["flat", "loop", "both"])]
+    /// Kernels to measure: flat, loop or both; or scene, a frame refining a scene of many small
+    /// flat objects (see --objects).
+    #[arg(long, default_value = "both", value_parser = ["flat", "loop", "both", "scene"])]
     pub kernel: String,
+    /// With --kernel scene: the scenes' object counts, comma-separated (each object 8 to 50
+    /// triangles; the frames alternate between the first two of --levels).
+    #[arg(long, default_value = "200,1000")]
+    pub objects: String,
     /// Step 1 of the Loop kernel: auto (workgroup memory where the patches fit), workgroup,
     /// scratch, or both (scratch then auto, to compare them in one run).
     #[arg(long, default_value = "auto", value_parser = ["auto", "workgroup", "scratch", "both"])]
@@ -59,6 +68,9 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
         force_software: args.software,
     })?;
     println!("adapter: {}", ctx.description);
+    if args.kernel == "scene" {
+        return scene(&ctx, &args, &levels);
+    }
     let label = match &args.mesh {
         Some(path) => path.display().to_string(),
         None => "built-in 32x32 grid, random trees".to_string(),
@@ -215,6 +227,48 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
             }
             ratio(&all);
         }
+    }
+    Ok(())
+}
+
+/// `--kernel scene`: the median frame in which every object of a scene of many small flat
+/// objects changes level.
+#[cfg(feature = "gpu")]
+fn scene(ctx: &hce_runtime::gpu::GpuContext, args: &BenchGpuArgs, levels: &[u32]) -> Result<()> {
+    use anyhow::Context;
+    use hce_runtime::gpu::bench::{bench_scene_refine, small_flat_scene};
+    use hce_runtime::gpu::SceneOptions;
+
+    let counts: Vec<usize> = args
+        .objects
+        .split(',')
+        .map(|s| s.trim().parse::<usize>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("--objects {:?}: expected e.g. 200,1000", args.objects))?;
+    let pair = match levels {
+        [a, b, ..] => [*a, *b],
+        [a] => [*a, *a],
+        [] => anyhow::bail!("--levels: give two levels to alternate between"),
+    };
+    println!(
+        "input: generated scenes of small flat objects (8-50 triangles, random trees), every \
+         object changing level between {} and {} each frame",
+        pair[0], pair[1]
+    );
+    println!(
+        "{:>8} {:>12} {:>10} {:>12}  path",
+        "objects", "tris/frame", "ms/frame", "us/object"
+    );
+    for &count in &counts {
+        let asset = small_flat_scene(count, 18)?;
+        let row = bench_scene_refine(ctx, &asset, &SceneOptions::default(), pair, args.repeats)?;
+        println!(
+            "{:>8} {:>12} {:>10.3} {:>12.1}  per object",
+            row.objects,
+            row.triangles,
+            row.seconds * 1e3,
+            row.seconds * 1e6 / row.objects.max(1) as f64
+        );
     }
     Ok(())
 }
