@@ -55,6 +55,9 @@ pub(super) struct Params {
 
 /// The compiled pipelines of the three steps.
 pub struct FlatKernel {
+    /// The module, whose batched entry points [`FlatPool`](super::flat_batch::FlatPool)
+    /// compiles when a scene has objects to batch.
+    module: wgpu::ShaderModule,
     positions: wgpu::ComputePipeline,
     faces: wgpu::ComputePipeline,
     colours: wgpu::ComputePipeline,
@@ -66,11 +69,11 @@ pub struct FlatObject {
     /// Where the refined vertices split (SPEC.md F.5): its slot lists are the incidence the
     /// kernel gathers over.
     split: SplitTables,
-    coarse_positions: wgpu::Buffer,
-    topo: wgpu::Buffer,
+    pub(super) coarse_positions: wgpu::Buffer,
+    pub(super) topo: wgpu::Buffer,
     section_offsets: [u32; 9],
     /// The baked lighting and how vertex colours are reconstructed from it.
-    lighting: LightingBuffers,
+    pub(super) lighting: LightingBuffers,
 }
 
 /// Output buffers of a refinement: drawable as they are (`positions` and `colours` as vertex
@@ -130,25 +133,17 @@ impl FlatKernel {
                 label: Some("hce flat"),
                 source: wgpu::ShaderSource::Wgsl(source.into()),
             });
-        // Each entry point gets the layout of the bindings it uses (`layout: None`), as the Loop
-        // kernel's do, which keeps every step within WebGPU's default limit of 8 storage
-        // buffers per stage: the three steps bind 3, 8 and 4 of the module's 11.
-        let make = |entry: &str| {
-            ctx.device
-                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(entry),
-                    layout: None,
-                    module: &module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
-        };
         Self {
-            positions: make("positions_main"),
-            faces: make("faces_main"),
-            colours: make("colours_main"),
+            positions: pipeline(ctx, &module, "positions_main"),
+            faces: pipeline(ctx, &module, "faces_main"),
+            colours: pipeline(ctx, &module, "colours_main"),
+            module,
         }
+    }
+
+    /// The pipeline of one of the module's entry points (the batched ones included).
+    pub(super) fn pipeline(&self, ctx: &GpuContext, entry: &str) -> wgpu::ComputePipeline {
+        pipeline(ctx, &self.module, entry)
     }
 
     /// Validates `object` (tables and topology) and uploads it.
@@ -205,7 +200,9 @@ impl FlatKernel {
         level: u32,
     ) -> Result<FlatOutput, GpuError> {
         let (v, f) = counts(object, level)?;
-        let vertex = wgpu::BufferUsages::VERTEX;
+        // Written by the kernel, or copied in from the pooled outputs of a batch.
+        let copied = wgpu::BufferUsages::COPY_DST;
+        let vertex = wgpu::BufferUsages::VERTEX | copied;
         Ok(FlatOutput {
             level,
             vertex_count: v,
@@ -226,13 +223,13 @@ impl FlatKernel {
                 ctx,
                 "refined indices",
                 check_size(ctx, "refined indices", u64::from(f) * 12)?,
-                wgpu::BufferUsages::INDEX,
+                wgpu::BufferUsages::INDEX | copied,
             ),
             faces: storage_output(
                 ctx,
                 "refined faces",
                 check_size(ctx, "refined faces", u64::from(f) * 16)?,
-                wgpu::BufferUsages::empty(),
+                copied,
             ),
         })
     }
@@ -358,6 +355,21 @@ impl FlatKernel {
             steps,
         )
     }
+}
+
+/// Each entry point gets the layout of the bindings it uses (`layout: None`), as the Loop
+/// kernel's do, which keeps every step within WebGPU's default limit of 8 storage buffers per
+/// stage: the three steps bind 3, 8 and 4 of the module's 11 (the batched ones one more uniform).
+fn pipeline(ctx: &GpuContext, module: &wgpu::ShaderModule, entry: &str) -> wgpu::ComputePipeline {
+    ctx.device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: None,
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        })
 }
 
 /// Output vertex and triangle counts at `level`, checked to fit 32-bit indices.

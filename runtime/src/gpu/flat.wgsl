@@ -44,7 +44,10 @@ struct Params {
     range_end: u32,
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+// The parameters every function reads: the uniform's, copied at the start of the per-object
+// entry points; the object's entry of the batch table in the batched ones (below).
+@group(0) @binding(0) var<uniform> params_in: Params;
+var<private> params: Params;
 @group(0) @binding(1) var<storage, read> coarse_positions: array<f32>;
 @group(0) @binding(2) var<storage, read> topo: array<u32>;
 @group(0) @binding(3) var<storage, read> hce_records: array<TriRecord>;
@@ -108,10 +111,15 @@ fn lattice_interior_base(t: u32) -> u32 {
 @compute @workgroup_size(64)
 fn positions_main(@builtin(global_invocation_id) gid: vec3<u32>,
                   @builtin(num_workgroups) groups: vec3<u32>) {
+    params = params_in;
     let v = params.range_first + linear_id(gid, groups);
     if (v >= min(params.vertex_total, params.range_end)) {
         return;
     }
+    flat_position(v);
+}
+
+fn flat_position(v: u32) {
     var i = v;
     if (v >= params.split_base) {
         i = slot_source(vertex_slot(v));
@@ -134,9 +142,10 @@ fn positions_main(@builtin(global_invocation_id) gid: vec3<u32>,
         p = lattice_position(coarse_position(corner(t, 0u)), coarse_position(corner(t, 1u)),
                              coarse_position(corner(t, 2u)), bc.x, bc.y);
     }
-    out_positions[3u * v] = p.x;
-    out_positions[3u * v + 1u] = p.y;
-    out_positions[3u * v + 2u] = p.z;
+    let o = 3u * (lattice_out_base + v);
+    out_positions[o] = p.x;
+    out_positions[o + 1u] = p.y;
+    out_positions[o + 2u] = p.z;
 }
 
 // Step 2 (one invocation per fine triangle): its three vertex indices, its normal and area from
@@ -145,10 +154,15 @@ fn positions_main(@builtin(global_invocation_id) gid: vec3<u32>,
 @compute @workgroup_size(64)
 fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
               @builtin(num_workgroups) groups: vec3<u32>) {
+    params = params_in;
     let g = params.range_first + linear_id(gid, groups);
     if (g >= min(params.fine_total, params.range_end)) {
         return;
     }
+    flat_face(g);
+}
+
+fn flat_face(g: u32) {
     let per = 1u << (2u * params.level);
     let t = g / per;
     let path = g % per;
@@ -158,9 +172,10 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
     let i2 = vertex_index(t, cs[2].x, cs[2].y);
     // Drawn with the split vertices (hce_gather.wgsl `split_index`); measured with the F.5
     // ones, whose positions the copies repeat.
-    out_indices[3u * g] = split_index(t, cs[0].x, cs[0].y, i0);
-    out_indices[3u * g + 1u] = split_index(t, cs[1].x, cs[1].y, i1);
-    out_indices[3u * g + 2u] = split_index(t, cs[2].x, cs[2].y, i2);
+    let o = 3u * (gather_face_base + g);
+    out_indices[o] = split_index(t, cs[0].x, cs[0].y, i0);
+    out_indices[o + 1u] = split_index(t, cs[1].x, cs[1].y, i1);
+    out_indices[o + 2u] = split_index(t, cs[2].x, cs[2].y, i2);
 
     let p0 = out_position(i0);
     let u = out_position(i1) - p0;
@@ -176,7 +191,7 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
     if (params.smooth_light == 0u) {
         rgb = hce_nearest_colour(t, params.level, path, normal);
     }
-    out_faces[g] = vec4<f32>(rgb, 0.5 * len);
+    out_faces[gather_face_base + g] = vec4<f32>(rgb, 0.5 * len);
 }
 
 // Step 3 (one invocation per output vertex, copies included): gather every incident fine
@@ -186,10 +201,108 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
 @compute @workgroup_size(64)
 fn colours_main(@builtin(global_invocation_id) gid: vec3<u32>,
                 @builtin(num_workgroups) groups: vec3<u32>) {
+    params = params_in;
     let i = params.range_first + linear_id(gid, groups);
     if (i >= min(params.vertex_total, params.range_end)) {
         return;
     }
+    flat_colour(i);
+}
+
+fn flat_colour(i: u32) {
     // A flat object has one normal per triangle, so the smooth field does not depend on it.
-    out_colours[i] = vec4<f32>(vertex_colour(i, vec3<f32>(0.0)), 1.0);
+    out_colours[lattice_out_base + i] = vec4<f32>(vertex_colour(i, vec3<f32>(0.0)), 1.0);
+}
+
+// Batched refinement (runtime/src/gpu/flat_batch.rs): the three steps of many objects in one
+// dispatch each, over buffers that pool the objects' tables (bindings 1 to 6 and 11: each
+// object's tables copied whole, one after another) and their outputs (bindings 7 to 10: each
+// object's range, one after another, copied out to its own buffers afterwards). Per object of
+// the batch, `topo` holds, from the offsets in `batch`:
+//   first_vertices[k], first_faces[k]   its first output vertex and first fine triangle in the
+//                                       pooled outputs (ascending: the objects' ranges in order)
+//   entries[k]: FLAT_ENTRY_WORDS words  its first coarse vertex, first record, first bit,
+//                                       first colour, first normal and first word of the
+//                                       lighting table in the pooled buffers, then its Params
+//                                       (the section offsets already counted in the pool).
+// An invocation finds its object by binary search over its step's first items, sets the bases
+// of hce_lattice.wgsl, hce_gather.wgsl, hce_tree.wgsl and hce_light.wgsl to the object's, and
+// runs the step on its item within the object: the same operations on the same values as the
+// object's own dispatch, so the same bits.
+struct Batch {
+    count: u32,
+    first_vertices: u32,
+    first_faces: u32,
+    entries: u32,
+    vertex_total: u32,
+    fine_total: u32,
+}
+
+@group(0) @binding(12) var<uniform> batch: Batch;
+
+// The words before an entry's Params, and in all (flat_batch.rs ENTRY_BASES, ENTRY_WORDS).
+const FLAT_ENTRY_BASES: u32 = 6u;
+const FLAT_ENTRY_WORDS: u32 = 28u;
+
+// The object k (of batch.count) whose items first[k] .. first[k + 1] hold item g (< the total).
+fn batch_object(first: u32, g: u32) -> u32 {
+    var lo = 0u;
+    var hi = batch.count;
+    while (hi - lo > 1u) {
+        let mid = (lo + hi) / 2u;
+        if (topo[first + mid] <= g) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+fn batch_enter(k: u32) {
+    let e = batch.entries + FLAT_ENTRY_WORDS * k;
+    lattice_coarse_base = topo[e];
+    hce_tree_base = vec4<u32>(topo[e + 1u], topo[e + 2u], topo[e + 3u], topo[e + 4u]);
+    hce_light_base = topo[e + 5u];
+    lattice_out_base = topo[batch.first_vertices + k];
+    gather_face_base = topo[batch.first_faces + k];
+    let p = e + FLAT_ENTRY_BASES;
+    params = Params(topo[p], topo[p + 1u], topo[p + 2u], topo[p + 3u], topo[p + 4u],
+                    topo[p + 5u], topo[p + 6u], topo[p + 7u], topo[p + 8u], topo[p + 9u],
+                    topo[p + 10u], topo[p + 11u], topo[p + 12u], topo[p + 13u], topo[p + 14u],
+                    topo[p + 15u], topo[p + 16u], topo[p + 17u], topo[p + 18u], topo[p + 19u],
+                    topo[p + 20u], topo[p + 21u]);
+}
+
+@compute @workgroup_size(64)
+fn positions_batch_main(@builtin(global_invocation_id) gid: vec3<u32>,
+                        @builtin(num_workgroups) groups: vec3<u32>) {
+    let g = linear_id(gid, groups);
+    if (g >= batch.vertex_total) {
+        return;
+    }
+    batch_enter(batch_object(batch.first_vertices, g));
+    flat_position(g - lattice_out_base);
+}
+
+@compute @workgroup_size(64)
+fn faces_batch_main(@builtin(global_invocation_id) gid: vec3<u32>,
+                    @builtin(num_workgroups) groups: vec3<u32>) {
+    let g = linear_id(gid, groups);
+    if (g >= batch.fine_total) {
+        return;
+    }
+    batch_enter(batch_object(batch.first_faces, g));
+    flat_face(g - gather_face_base);
+}
+
+@compute @workgroup_size(64)
+fn colours_batch_main(@builtin(global_invocation_id) gid: vec3<u32>,
+                      @builtin(num_workgroups) groups: vec3<u32>) {
+    let g = linear_id(gid, groups);
+    if (g >= batch.vertex_total) {
+        return;
+    }
+    batch_enter(batch_object(batch.first_vertices, g));
+    flat_colour(g - lattice_out_base);
 }

@@ -14,6 +14,10 @@
 //   topo:       array<u32>
 //   out_faces:  array<vec4<f32>>   per fine triangle: its colour and, in w, its area
 
+// Where `out_faces` pools many objects' fine triangles (the batched entry points of flat.wgsl),
+// the object's first; zero (a private variable's initial value) in every other kernel.
+var<private> gather_face_base: u32;
+
 // Step 1: area-weighted sums, with a plain mean as the fallback for zero-area neighbourhoods.
 struct Acc {
     weighted: vec3<f32>,
@@ -26,7 +30,7 @@ struct Acc {
 }
 
 fn acc_add(acc: ptr<function, Acc>, g: u32) {
-    let f = out_faces[g];
+    let f = out_faces[gather_face_base + g];
     (*acc).weighted = (*acc).weighted + f.xyz * f.w;
     (*acc).plain += f.xyz;
     (*acc).area += f.w;

@@ -26,8 +26,14 @@ fn linear_id(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
     return gid.x + gid.y * groups.x * 64u;
 }
 
-// Step 2: the buffers every refinement kernel reads.
-fn coarse_position(v: u32) -> vec3<f32> {
+// Step 2: the buffers every refinement kernel reads. Where buffers pool many objects (the
+// batched entry points of flat.wgsl), the object's first coarse and first output vertex in
+// them; zero (a private variable's initial value) in every other kernel.
+var<private> lattice_coarse_base: u32;
+var<private> lattice_out_base: u32;
+
+fn coarse_position(i: u32) -> vec3<f32> {
+    let v = lattice_coarse_base + i;
     return vec3<f32>(coarse_positions[3u * v], coarse_positions[3u * v + 1u], coarse_positions[3u * v + 2u]);
 }
 
@@ -35,7 +41,8 @@ fn corner(t: u32, c: u32) -> u32 {
     return topo[params.tri_off + 3u * t + c];
 }
 
-fn out_position(v: u32) -> vec3<f32> {
+fn out_position(i: u32) -> vec3<f32> {
+    let v = lattice_out_base + i;
     return vec3<f32>(out_positions[3u * v], out_positions[3u * v + 1u], out_positions[3u * v + 2u]);
 }
 

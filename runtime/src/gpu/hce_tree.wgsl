@@ -80,11 +80,19 @@ fn hce_rgb9e5(v: u32) -> vec3<f32> {
     return m * ldexp(1.0, e);
 }
 
+// Where the object's tables start when the arrays pool many objects' (the batched entry points
+// of flat.wgsl): its first record, and the first bit, colour and normal its records count from.
+// Zero (a private variable's initial value) for arrays of one object, in every other kernel.
+var<private> hce_tree_base: vec4<u32>;
+
 // Step 6: the paper's colour of a fine triangle (SPEC.md G.5): the node along its path (at most
 // `depth` levels) and, of that node's colours, the one of the representative normal closest to
 // `n` (the kernel passes the fine triangle's normal, unit or not: the choice is the same).
 fn hce_nearest_colour(t: u32, depth: u32, path: u32, n: vec3<f32>) -> vec3<f32> {
-    let rec = hce_records[t];
+    var rec = hce_records[hce_tree_base.x + t];
+    rec.bits_start += hce_tree_base.y;
+    rec.colour_start += hce_tree_base.z;
+    rec.normal_start += hce_tree_base.w;
     let node = hce_tree_node(rec, depth, path);
     let j = hce_choose_normal(rec, n);
     return hce_rgb9e5(hce_colours[rec.colour_start + node * rec.normal_count + j]);

@@ -169,7 +169,7 @@ pub fn grid(nx: u32, ny: u32) -> (Vec<f32>, Vec<u32>) {
 }
 
 /// A scene of `count` small flat objects, as architecture and props give: bumpy grids of 2×2
-/// to 5×5 quads (8 to 50 triangles) side by side, each with random trees of depth 1 to 3 (so
+/// to 5×5 quads (8 to 50 triangles) and octahedra (every third object) side by side, each with random trees of depth 1 to 3 (so
 /// their levels differ), one instance each, in a `.hce` container loaded from memory. The same
 /// `seed` gives the same scene.
 pub fn small_flat_scene(count: usize, seed: u64) -> Result<crate::asset::Asset, super::GpuError> {
@@ -177,8 +177,14 @@ pub fn small_flat_scene(count: usize, seed: u64) -> Result<crate::asset::Asset, 
     let mut rng = SplitMix(seed);
     let objects = (0..count)
         .map(|i| {
+            // Every third a closed octahedron, whose every edge folds (its vertices split,
+            // SPEC.md F.5); the others open bumpy grids.
             let (nx, ny) = (2 + rng.below(4), 2 + rng.below(4));
-            let (mut positions, triangles) = grid(nx, ny);
+            let (mut positions, triangles) = if i % 3 == 2 {
+                octahedron()
+            } else {
+                grid(nx, ny)
+            };
             // Side by side on a square plot, one unit apart.
             let side = (count as f32).sqrt().ceil() as usize;
             let (ox, oy) = ((i % side) as f32 * 6.0, (i / side) as f32 * 6.0);

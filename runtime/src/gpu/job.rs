@@ -118,6 +118,25 @@ impl RefineJob {
         }
     }
 
+    /// Whether nothing has been recorded yet.
+    pub(super) fn is_untouched(&self) -> bool {
+        self.step == 0 && self.next == 0 && !self.is_done()
+    }
+
+    /// The kernel's `Params` as words (its range at `range_at` left as given to [`RefineJob::new`]).
+    pub(super) fn params(&self) -> &[u32] {
+        &self.params
+    }
+
+    /// Marks the whole refinement as recorded by someone else, who wrote the same outputs (the
+    /// batched flat path, `flat_batch.rs`); returns its work.
+    pub(super) fn recorded_elsewhere(&mut self) -> u64 {
+        let work = self.work_left();
+        self.step = self.steps.len();
+        self.next = 0;
+        work
+    }
+
     /// Whether every piece has been recorded.
     pub fn is_done(&self) -> bool {
         self.step >= self.steps.len()

@@ -31,6 +31,7 @@ mod context;
 #[cfg(feature = "testing")]
 mod decode;
 mod flat;
+mod flat_batch;
 mod framing;
 #[cfg(any(feature = "testing", feature = "bench"))]
 mod inputs;

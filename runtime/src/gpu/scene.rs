@@ -16,7 +16,9 @@
 //!   from their HCE trees, no smoothing. They are refined to their tree depth (the level at
 //!   which every radiosity element has its own triangles), capped by
 //!   [`SceneOptions::flat_max_level`], whatever level the view asks for: a coarser level would
-//!   blur the baked lighting and a finer one adds nothing.
+//!   blur the baked lighting and a finer one adds nothing. The small ones that
+//!   [`GpuScene::refine_batch`] refines whole in one call are refined together, one dispatch
+//!   per step of the kernel for all of them ([`SceneOptions::flat_batch`]), into the same bytes.
 //! * **Multiresolution** objects by the [`LoopKernel`] ([`MultiresPath::Gpu`], the default):
 //!   Loop subdivision of every coarse triangle's patch, subtriangle colours decoded from the HCE
 //!   tree by normal, area-weighted vertex colours, all in compute shaders.
@@ -61,6 +63,7 @@
 use glam::{Mat4, Vec3};
 use hce_format::{Object, ObjectKind};
 
+use super::flat_batch::{BatchObject, FlatPool, OBJECT_MAX_FINE};
 use super::framing::{auto_scene_camera, Placement};
 use super::lod::{choose_level, Camera, LodParams};
 use super::render::{render_draws, MeshDraw, RenderParams, RenderedImage};
@@ -93,6 +96,11 @@ pub struct SceneOptions {
     pub flat_max_level: u32,
     /// How baked colours become vertex colours (SPEC.md, Appendix G). Default: smooth.
     pub reconstruction: Reconstruction,
+    /// Refine the small flat objects that [`GpuScene::refine_batch`] refines whole in one call
+    /// together, one dispatch per step of the kernel for all of them, instead of three
+    /// dispatches per object (their tables are copied once into pooled buffers). The output is
+    /// the same bytes. Default `true`; `false` is the per-object path it is checked against.
+    pub flat_batch: bool,
 }
 
 impl Default for SceneOptions {
@@ -101,6 +109,7 @@ impl Default for SceneOptions {
             multires: MultiresPath::default(),
             flat_max_level: 7,
             reconstruction: Reconstruction::default(),
+            flat_batch: true,
         }
     }
 }
@@ -219,6 +228,8 @@ pub struct ObjectMesh {
 pub struct GpuScene {
     objects: Vec<GpuObject>,
     flat: Option<FlatKernel>,
+    /// The small flat objects' tables, pooled for batched refinement.
+    flat_pool: Option<FlatPool>,
     loop_kernel: Option<LoopKernel>,
     flat_max_level: u32,
     bounds: Option<Bounds>,
@@ -315,9 +326,23 @@ impl GpuScene {
                 refiner,
             });
         }
+        let flat_pool = match &flat {
+            Some(kernel) if options.flat_batch => {
+                let flats: Vec<Option<&FlatObject>> = objects
+                    .iter()
+                    .map(|o| match &o.refiner {
+                        Refiner::Flat { object, .. } => Some(&**object),
+                        _ => None,
+                    })
+                    .collect();
+                FlatPool::new(ctx, kernel, &flats)?
+            }
+            _ => None,
+        };
         Ok(Self {
             objects,
             flat,
+            flat_pool,
             loop_kernel,
             flat_max_level: options.flat_max_level,
             bounds: asset.bounds(),
@@ -595,22 +620,47 @@ impl GpuScene {
     /// recorded: their new level is drawn from the next draw submitted, never a partial one.
     /// Objects with no refinement under way are skipped. With `measure`, each object's GPU
     /// time of the pieces of this batch where the adapter has timestamp queries (waiting for
-    /// the GPU).
+    /// the GPU); flat objects refined together share their dispatches' time in proportion to
+    /// their fine triangles.
+    ///
+    /// Small flat objects refined whole here (work at least [`RefineJob::total_work`], nothing
+    /// recorded before) are refined together, one dispatch per step for all of them, when there
+    /// are two or more ([`SceneOptions::flat_batch`]); the others with their own dispatches.
     pub fn refine_batch(
         &mut self,
         ctx: &GpuContext,
         work: &[(usize, u64)],
         measure: bool,
     ) -> Result<Vec<BatchReport>, GpuError> {
-        let mut timer = PassTimer::new(ctx, "hce refine timing", 3 * work.len() as u32, measure);
+        let mut timer =
+            PassTimer::new(ctx, "hce refine timing", 3 * work.len() as u32 + 1, measure);
         let mut encoder = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("hce refine"),
             });
         let mut reports = Vec::with_capacity(work.len());
+        // Per report, its timer passes and its share of their time.
         let mut passes = Vec::with_capacity(work.len());
+        let (batched, pass) = self.batch_flat(ctx, &mut encoder, work, &mut timer)?;
+        let mut in_batch = vec![false; self.objects.len()];
+        let batch_work: u64 = batched.iter().map(|&(_, w)| w).sum();
+        for &(i, w) in &batched {
+            in_batch[i] = true;
+            reports.push(BatchReport {
+                object: i,
+                work: w,
+                finished: true,
+                batched: true,
+                gpu_seconds: None,
+            });
+            let share = w as f64 / batch_work.max(1) as f64;
+            passes.push((pass.map_or(0..0, |p| p..p + 1), share));
+        }
         for &(i, amount) in work {
+            if in_batch.get(i) == Some(&true) {
+                continue;
+            }
             let Some(o) = self.objects.get_mut(i) else {
                 continue;
             };
@@ -624,9 +674,10 @@ impl GpuScene {
                 object: i,
                 work: encoded.work,
                 finished: job.is_done(),
+                batched: false,
                 gpu_seconds: None,
             });
-            passes.push(encoded.passes);
+            passes.push((encoded.passes, 1.0));
         }
         if reports.is_empty() {
             return Ok(reports);
@@ -635,9 +686,9 @@ impl GpuScene {
         ctx.queue.submit([encoder.finish()]);
         if let Some(stamps) = timer.read_stamps(ctx)? {
             // From an object's first piece's start to its last piece's end ([`span`]).
-            for (r, p) in reports.iter_mut().zip(&passes) {
+            for (r, (p, share)) in reports.iter_mut().zip(&passes) {
                 if !p.is_empty() {
-                    r.gpu_seconds = Some(span(&stamps, p.clone()));
+                    r.gpu_seconds = Some(span(&stamps, p.clone()) * share);
                 }
             }
         }
@@ -655,6 +706,60 @@ impl GpuScene {
             }
         }
         Ok(reports)
+    }
+
+    /// Records, as one batch ([`FlatPool::encode`]), the flat objects of `work` that are pooled,
+    /// refined whole by this call (nothing recorded before) to at most [`OBJECT_MAX_FINE`] fine
+    /// triangles, as many as one batch takes, when there are two or more; marks their jobs
+    /// recorded. Returns them with their work, and the timer pass of the batch.
+    fn batch_flat(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        work: &[(usize, u64)],
+        timer: &mut PassTimer,
+    ) -> Result<(Vec<(usize, u64)>, Option<u32>), GpuError> {
+        let Some(pool) = self.flat_pool.as_mut() else {
+            return Ok((Vec::new(), None));
+        };
+        let mut seen = vec![false; self.objects.len()];
+        let mut chosen = Vec::new();
+        for &(i, amount) in work {
+            let Some(o) = self.objects.get(i) else {
+                continue;
+            };
+            let Refiner::Flat { next: Some(n), .. } = &o.refiner else {
+                continue;
+            };
+            if !seen[i]
+                && pool.holds(i)
+                && n.job.is_untouched()
+                && amount >= n.job.total_work()
+                && u64::from(n.out.triangle_count) <= OBJECT_MAX_FINE
+            {
+                seen[i] = true;
+                chosen.push(BatchObject {
+                    object: i,
+                    params: n.job.params(),
+                    out: &n.out,
+                });
+            }
+        }
+        chosen.truncate(FlatPool::fitting(
+            chosen.iter().map(|b| b.out.triangle_count),
+        ));
+        if chosen.len() < 2 {
+            return Ok((Vec::new(), None));
+        }
+        let pass = pool.encode(ctx, encoder, &chosen, Some(timer))?;
+        let chosen: Vec<usize> = chosen.iter().map(|b| b.object).collect();
+        let mut batched = Vec::with_capacity(chosen.len());
+        for i in chosen {
+            if let Refiner::Flat { next: Some(n), .. } = &mut self.objects[i].refiner {
+                batched.push((i, n.job.recorded_elsewhere()));
+            }
+        }
+        Ok((batched, pass))
     }
 
     /// The current buffers of `object`, `None` before its first refinement.
@@ -774,6 +879,9 @@ pub struct BatchReport {
     pub work: u64,
     /// Whether the refinement is complete and drawn from now on.
     pub finished: bool,
+    /// Whether it was refined together with other flat objects, one dispatch per step for all
+    /// of them ([`SceneOptions::flat_batch`]).
+    pub batched: bool,
     /// GPU time of the pieces recorded, when measured with timestamp queries.
     pub gpu_seconds: Option<f64>,
 }

@@ -8,7 +8,8 @@
 //!
 //! `--kernel scene` measures instead a frame of a viewer in which every object of a generated
 //! scene of many small flat objects (`--objects`) changes level: all refined in one submission
-//! by `GpuScene::refine_batch`, as `hce view` refines them.
+//! by `GpuScene::refine_batch`, as `hce view` refines them, each object with its own dispatches
+//! and then batched (`SceneOptions::flat_batch`), with the ratio.
 
 use std::path::PathBuf;
 
@@ -261,13 +262,25 @@ fn scene(ctx: &hce_runtime::gpu::GpuContext, args: &BenchGpuArgs, levels: &[u32]
     );
     for &count in &counts {
         let asset = small_flat_scene(count, 18)?;
-        let row = bench_scene_refine(ctx, &asset, &SceneOptions::default(), pair, args.repeats)?;
+        let mut times = Vec::new();
+        for (name, flat_batch) in [("per object", false), ("batched", true)] {
+            let options = SceneOptions {
+                flat_batch,
+                ..SceneOptions::default()
+            };
+            let row = bench_scene_refine(ctx, &asset, &options, pair, args.repeats)?;
+            println!(
+                "{:>8} {:>12} {:>10.3} {:>12.1}  {name}",
+                row.objects,
+                row.triangles,
+                row.seconds * 1e3,
+                row.seconds * 1e6 / row.objects.max(1) as f64
+            );
+            times.push(row.seconds);
+        }
         println!(
-            "{:>8} {:>12} {:>10.3} {:>12.1}  per object",
-            row.objects,
-            row.triangles,
-            row.seconds * 1e3,
-            row.seconds * 1e6 / row.objects.max(1) as f64
+            "{count} objects: per object / batched frame time {:.1}x",
+            times[0] / times[1].max(1e-12)
         );
     }
     Ok(())

@@ -1,0 +1,452 @@
+//! Batched flat refinement: the flat objects of a scene that change level in a frame refined
+//! together, one dispatch per step of the kernel for all of them (the batched entry points of
+//! `flat.wgsl`), instead of three dispatches per object.
+//!
+//! A scene of many small flat objects (architecture, props) spends a frame's refinement on the
+//! fixed cost of its dispatches, not on their work: on lavapipe, 14 ms an object of a few
+//! hundred fine triangles (BENCHMARKS.md). So [`FlatPool`] copies the tables of every small flat
+//! object of a scene, once, into pooled buffers (each object's tables whole, one after another),
+//! and a batch writes its objects' outputs into pooled outputs (each object's range, one after
+//! another), copied out to each object's own buffers in the same submission: the objects keep
+//! their buffers, drawn and read back as before. Per batch, a table in the pooled `topo` gives
+//! each object's first output vertex and fine triangle (the search keys of the invocations),
+//! where its tables start in the pools and its kernel parameters.
+//!
+//! The outputs are the bytes the object's own dispatches write (the same functions on the same
+//! values, `tests/gpu_scene_batch.rs` checks it), so whether an object was refined in a batch
+//! or alone is invisible to the caller. The pooled inputs duplicate the small objects' tables on
+//! the GPU, and the pooled outputs stay allocated at the size of the largest batch
+//! ([`BATCH_MAX_FINE`] fine triangles at most).
+
+use super::flat::{FlatKernel, FlatObject, FlatOutput, Params};
+use super::util::{check_size, dispatch_size, PassTimer};
+use super::{GpuContext, GpuError};
+
+/// Objects refined to at most this many fine triangles are batched; larger ones keep their own
+/// dispatches, whose fixed cost is small beside their work. Objects of more coarse triangles
+/// than this are not pooled at all.
+pub(super) const OBJECT_MAX_FINE: u64 = 1 << 14;
+/// The most fine triangles of one batch: the pooled outputs never grow past it. Objects that do
+/// not fit are refined with their own dispatches.
+pub(super) const BATCH_MAX_FINE: u64 = 1 << 20;
+
+/// Words of a table entry before the object's `Params` (`FLAT_ENTRY_BASES` in `flat.wgsl`) and
+/// in all (`FLAT_ENTRY_WORDS`).
+const ENTRY_BASES: usize = 6;
+const ENTRY_WORDS: usize = ENTRY_BASES + std::mem::size_of::<Params>() / 4;
+
+/// Where one object's tables start in the pools.
+#[derive(Clone, Copy, Debug)]
+struct Bases {
+    /// First coarse vertex, record, bit, colour word, normal and lighting-table word: the
+    /// entry's first words ([`ENTRY_BASES`]).
+    entry: [u32; ENTRY_BASES],
+    /// First word of its `topo` (added to its section offsets).
+    topo: u32,
+}
+
+/// The pooled outputs of a batch, grown as batches need, with the bind groups of the three
+/// steps over them.
+struct Arena {
+    vertices: u64,
+    faces: u64,
+    positions: wgpu::Buffer,
+    colours: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    face_colours: wgpu::Buffer,
+    groups: [wgpu::BindGroup; 3],
+}
+
+/// The pooled tables of a scene's small flat objects and the batched pipelines. See the module
+/// documentation.
+pub(super) struct FlatPool {
+    pipelines: [wgpu::ComputePipeline; 3],
+    coarse_positions: wgpu::Buffer,
+    /// The objects' tables, then room for one batch's table ([`FlatPool::table_at`]).
+    topo: wgpu::Buffer,
+    records: wgpu::Buffer,
+    bits: wgpu::Buffer,
+    normals: wgpu::Buffer,
+    colours: wgpu::Buffer,
+    light: wgpu::Buffer,
+    /// Word of `topo` where a batch's table starts.
+    table_at: u32,
+    /// Per object of the scene, where its tables start (`None`: not pooled).
+    bases: Vec<Option<Bases>>,
+    /// The batch's `Batch` uniform.
+    uniform: wgpu::Buffer,
+    arena: Option<Arena>,
+}
+
+/// One object of a batch: its index in the scene, its kernel parameters as [`FlatKernel::begin`]
+/// set them, and the output buffers it was begun into.
+pub(super) struct BatchObject<'a> {
+    pub(super) object: usize,
+    pub(super) params: &'a [u32],
+    pub(super) out: &'a FlatOutput,
+}
+
+/// A pool being laid out: its words so far, each region's start.
+#[derive(Default)]
+struct Layout {
+    words: u64,
+}
+
+impl Layout {
+    /// Places a region of `bytes` aligned to `align` words; its first word.
+    fn place(&mut self, bytes: u64, align: u64) -> u64 {
+        let at = self.words.next_multiple_of(align);
+        self.words = at + bytes.div_ceil(4);
+        at
+    }
+}
+
+fn too_large(what: &'static str, words: u64) -> GpuError {
+    GpuError::TooLarge {
+        what,
+        needed: words * 4,
+        limit: u64::from(u32::MAX),
+    }
+}
+
+fn word(what: &'static str, w: u64) -> Result<u32, GpuError> {
+    u32::try_from(w).map_err(|_| too_large(what, w))
+}
+
+impl FlatPool {
+    /// Pools the tables of `objects` (one per scene object; `None` for those not flat) whose
+    /// coarse triangles do not exceed [`OBJECT_MAX_FINE`], with one submission of copies.
+    /// `None` when fewer than two objects qualify (nothing to batch).
+    pub(super) fn new(
+        ctx: &GpuContext,
+        kernel: &FlatKernel,
+        objects: &[Option<&FlatObject>],
+    ) -> Result<Option<Self>, GpuError> {
+        fn pooled<'a>(o: &Option<&'a FlatObject>) -> Option<&'a FlatObject> {
+            o.filter(|o| u64::from(o.topology.triangle_count) <= OBJECT_MAX_FINE)
+        }
+        let count = objects.iter().filter_map(pooled).count();
+        if count < 2 {
+            return Ok(None);
+        }
+        // Regions aligned to their elements: x y z per vertex and normal, 4 words per record.
+        let (mut positions, mut topo, mut records) =
+            (Layout::default(), Layout::default(), Layout::default());
+        let (mut bits, mut normals, mut colours, mut light) = (
+            Layout::default(),
+            Layout::default(),
+            Layout::default(),
+            Layout::default(),
+        );
+        let mut placed = Vec::with_capacity(objects.len());
+        for o in objects {
+            let Some(o) = pooled(o) else {
+                placed.push(None);
+                continue;
+            };
+            let l = &o.lighting;
+            let at = [
+                positions.place(o.coarse_positions.size(), 3),
+                topo.place(o.topo.size(), 1),
+                records.place(l.records.size(), 4),
+                bits.place(l.bits.size(), 1),
+                normals.place(l.normals.size(), 3),
+                colours.place(l.colours.size(), 1),
+                light.place(l.light.size(), 1),
+            ];
+            placed.push(Some(at));
+        }
+        // The batch table: two keys and an entry per object at most.
+        let table_at = topo.words;
+        topo.words += (2 + ENTRY_WORDS as u64) * count as u64;
+        let pool = |label: &'static str, l: &Layout| -> Result<wgpu::Buffer, GpuError> {
+            let bytes = check_size(ctx, label, l.words.max(1) * 4)?;
+            Ok(ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }))
+        };
+        let buffers = [
+            pool("pooled coarse positions", &positions)?,
+            pool("pooled topology", &topo)?,
+            pool("pooled records", &records)?,
+            pool("pooled bits", &bits)?,
+            pool("pooled normals", &normals)?,
+            pool("pooled colours", &colours)?,
+            pool("pooled lighting", &light)?,
+        ];
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("hce flat pool"),
+            });
+        let mut bases = Vec::with_capacity(objects.len());
+        for (o, at) in objects.iter().zip(&placed) {
+            let (Some(o), Some(at)) = (o, at) else {
+                bases.push(None);
+                continue;
+            };
+            let l = &o.lighting;
+            let sources = [
+                &o.coarse_positions,
+                &o.topo,
+                &l.records,
+                &l.bits,
+                &l.normals,
+                &l.colours,
+                &l.light,
+            ];
+            for ((src, dst), &w) in sources.iter().zip(&buffers).zip(at) {
+                encoder.copy_buffer_to_buffer(src, 0, dst, w * 4, src.size());
+            }
+            bases.push(Some(Bases {
+                entry: [
+                    word("pooled coarse positions", at[0] / 3)?,
+                    word("pooled records", at[2] / 4)?,
+                    word("pooled bits", at[3] * 32)?,
+                    word("pooled colours", at[5])?,
+                    word("pooled normals", at[4] / 3)?,
+                    word("pooled lighting", at[6])?,
+                ],
+                topo: word("pooled topology", at[1])?,
+            }));
+        }
+        word("pooled topology", topo.words)?;
+        ctx.queue.submit([encoder.finish()]);
+        let [coarse_positions, topo, records, bits, normals, colours, light] = buffers;
+        Ok(Some(Self {
+            pipelines: [
+                kernel.pipeline(ctx, "positions_batch_main"),
+                kernel.pipeline(ctx, "faces_batch_main"),
+                kernel.pipeline(ctx, "colours_batch_main"),
+            ],
+            coarse_positions,
+            topo,
+            records,
+            bits,
+            normals,
+            colours,
+            light,
+            table_at: word("pooled topology", table_at)?,
+            bases,
+            uniform: ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("hce flat batch"),
+                size: 32,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            arena: None,
+        }))
+    }
+
+    /// Whether scene object `object` is pooled, so that it can be batched.
+    pub(super) fn holds(&self, object: usize) -> bool {
+        self.bases.get(object).is_some_and(Option::is_some)
+    }
+
+    /// Pooled outputs for `vertices` and `faces`, grown (to the next power of two, at most
+    /// [`BATCH_MAX_FINE`] fine triangles' worth) when too small.
+    fn arena(&mut self, ctx: &GpuContext, vertices: u64, faces: u64) -> Result<&Arena, GpuError> {
+        let fits = self
+            .arena
+            .as_ref()
+            .is_some_and(|a| a.vertices >= vertices && a.faces >= faces);
+        if !fits {
+            let vertices = vertices.next_power_of_two().max(64);
+            let faces = faces.next_power_of_two().max(64);
+            let make = |label: &'static str, bytes: u64| -> Result<wgpu::Buffer, GpuError> {
+                Ok(ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: check_size(ctx, label, bytes)?,
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                }))
+            };
+            let positions = make("pooled refined positions", vertices * 12)?;
+            let colours = make("pooled refined colours", vertices * 16)?;
+            let indices = make("pooled refined indices", faces * 12)?;
+            let face_colours = make("pooled refined faces", faces * 16)?;
+            // The bindings of `flat.wgsl` each batched step reads or writes, by number.
+            let bindings: [Vec<(u32, &wgpu::Buffer)>; 3] = [
+                vec![
+                    (1, &self.coarse_positions),
+                    (2, &self.topo),
+                    (7, &positions),
+                    (12, &self.uniform),
+                ],
+                vec![
+                    (2, &self.topo),
+                    (3, &self.records),
+                    (4, &self.bits),
+                    (5, &self.normals),
+                    (6, &self.colours),
+                    (7, &positions),
+                    (8, &indices),
+                    (9, &face_colours),
+                    (12, &self.uniform),
+                ],
+                vec![
+                    (2, &self.topo),
+                    (9, &face_colours),
+                    (10, &colours),
+                    (11, &self.light),
+                    (12, &self.uniform),
+                ],
+            ];
+            let groups = std::array::from_fn(|k| {
+                super::util::bind_buffers_at(
+                    ctx,
+                    "hce flat batch",
+                    &self.pipelines[k].get_bind_group_layout(0),
+                    &bindings[k],
+                )
+            });
+            self.arena = Some(Arena {
+                vertices,
+                faces,
+                positions,
+                colours,
+                indices,
+                face_colours,
+                groups,
+            });
+        }
+        Ok(self.arena.as_ref().expect("allocated above"))
+    }
+
+    /// How many of `objects` (in order) one batch takes: while their fine triangles stay
+    /// within [`BATCH_MAX_FINE`].
+    pub(super) fn fitting(outs: impl IntoIterator<Item = u32>) -> usize {
+        let mut faces = 0u64;
+        outs.into_iter()
+            .take_while(|&f| {
+                faces += u64::from(f);
+                faces <= BATCH_MAX_FINE
+            })
+            .count()
+    }
+
+    /// Records the refinement of `objects` (pooled, begun, at most [`BATCH_MAX_FINE`] fine
+    /// triangles together) into `encoder`, which must be submitted before the next batch is
+    /// recorded (the table is written once per batch): the batch's table written to the
+    /// queue, one compute
+    /// pass of three dispatches (timestamped by `timer` when it has room), then the copies of
+    /// each object's range of the pooled outputs into its own buffers. Returns the timer pass
+    /// used, if any.
+    pub(super) fn encode(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        objects: &[BatchObject<'_>],
+        timer: Option<&mut PassTimer>,
+    ) -> Result<Option<u32>, GpuError> {
+        let count = objects.len();
+        let mut first_vertices = Vec::with_capacity(count);
+        let mut first_faces = Vec::with_capacity(count);
+        let mut entries = Vec::with_capacity(count * ENTRY_WORDS);
+        let (mut vertices, mut faces) = (0u64, 0u64);
+        for b in objects {
+            let bases = self.bases.get(b.object).copied().flatten().ok_or_else(|| {
+                GpuError::InvalidParams(format!("object {} is not pooled", b.object))
+            })?;
+            let mut p: Params = bytemuck::pod_read_unaligned(bytemuck::cast_slice(b.params));
+            for off in [
+                &mut p.tri_off,
+                &mut p.edges_off,
+                &mut p.edge_verts_off,
+                &mut p.edge_side_offsets_off,
+                &mut p.edge_sides_off,
+                &mut p.vertex_corner_offsets_off,
+                &mut p.vertex_corners_off,
+                &mut p.corner_copy_off,
+                &mut p.edge_copy_off,
+            ] {
+                *off += bases.topo;
+            }
+            first_vertices.push(word("pooled refined vertices", vertices)?);
+            first_faces.push(word("pooled refined faces", faces)?);
+            entries.extend_from_slice(&bases.entry);
+            entries.extend_from_slice(bytemuck::cast_slice::<Params, u32>(&[p]));
+            vertices += u64::from(b.out.vertex_count);
+            faces += u64::from(b.out.triangle_count);
+        }
+        if count == 0 {
+            return Ok(None);
+        }
+        if faces > BATCH_MAX_FINE {
+            return Err(GpuError::TooLarge {
+                what: "flat batch",
+                needed: faces,
+                limit: BATCH_MAX_FINE,
+            });
+        }
+        let keys = self.table_at;
+        let mut table = first_vertices;
+        table.extend_from_slice(&first_faces);
+        table.extend_from_slice(&entries);
+        ctx.queue.write_buffer(
+            &self.topo,
+            u64::from(keys) * 4,
+            bytemuck::cast_slice(&table),
+        );
+        let n = count as u32;
+        let batch = [
+            n,
+            keys,
+            keys + n,
+            keys + 2 * n,
+            word("pooled refined vertices", vertices)?,
+            word("pooled refined faces", faces)?,
+            0,
+            0,
+        ];
+        ctx.queue
+            .write_buffer(&self.uniform, 0, bytemuck::cast_slice(&batch));
+        let sizes = [
+            dispatch_size(ctx, vertices)?,
+            dispatch_size(ctx, faces)?,
+            dispatch_size(ctx, vertices)?,
+        ];
+        let pipelines = self.pipelines.clone();
+        let arena = self.arena(ctx, vertices, faces)?;
+        let mut timer = timer;
+        let pass_index = timer.as_mut().and_then(|t| t.next_pass());
+        {
+            let writes = match (&timer, pass_index) {
+                (Some(t), Some(i)) => t.writes(i),
+                _ => None,
+            };
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("hce flat batch"),
+                timestamp_writes: writes,
+            });
+            for k in 0..3 {
+                pass.set_pipeline(&pipelines[k]);
+                pass.set_bind_group(0, &arena.groups[k], &[]);
+                pass.dispatch_workgroups(sizes[k].0, sizes[k].1, 1);
+            }
+        }
+        let (mut v, mut f) = (0u64, 0u64);
+        for b in objects {
+            let (ov, of) = (
+                u64::from(b.out.vertex_count),
+                u64::from(b.out.triangle_count),
+            );
+            for (src, dst, at, len) in [
+                (&arena.positions, &b.out.positions, 12 * v, 12 * ov),
+                (&arena.colours, &b.out.colours, 16 * v, 16 * ov),
+                (&arena.indices, &b.out.indices, 12 * f, 12 * of),
+                (&arena.face_colours, &b.out.faces, 16 * f, 16 * of),
+            ] {
+                if len > 0 {
+                    encoder.copy_buffer_to_buffer(src, at, dst, 0, len);
+                }
+            }
+            v += ov;
+            f += of;
+        }
+        Ok(pass_index)
+    }
+}

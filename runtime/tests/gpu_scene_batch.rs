@@ -1,0 +1,131 @@
+//! Batched flat refinement (`SceneOptions::flat_batch`, runtime/src/gpu/flat_batch.rs): the
+//! small flat objects that `GpuScene::refine_batch` refines whole are refined together, one
+//! dispatch per step for all of them, and must write exactly the bytes of each object refined
+//! alone with its own dispatches, at any mix of levels, with either colour reconstruction, as
+//! the levels change (the pooled outputs reused and grown) and beside objects refined in pieces.
+//!
+//! Runs on any adapter, Mesa lavapipe included. Without one the tests skip with a message,
+//! unless `HCE_REQUIRE_GPU=1`, which makes them fail.
+#![cfg(feature = "gpu")]
+
+use hce_geometry::lighting::Reconstruction;
+use hce_runtime::asset::Asset;
+use hce_runtime::gpu::testing::{context_or_skip, small_flat_scene};
+use hce_runtime::gpu::{GpuContext, GpuScene, ObjectMesh, SceneOptions};
+
+/// A mesh's bytes, so that equal means bit-identical (and a NaN equals itself).
+fn bytes(m: &ObjectMesh) -> Vec<u8> {
+    let mut out = Vec::new();
+    out.extend_from_slice(&m.level.to_le_bytes());
+    out.extend_from_slice(bytemuck::cast_slice(&m.positions));
+    out.extend_from_slice(bytemuck::cast_slice(&m.colours));
+    out.extend_from_slice(bytemuck::cast_slice(&m.indices));
+    assert!(m.normals.is_none(), "flat objects have no vertex normals");
+    out
+}
+
+fn scene(ctx: &GpuContext, asset: &Asset, reconstruction: Reconstruction, batch: bool) -> GpuScene {
+    GpuScene::new(
+        ctx,
+        asset,
+        &SceneOptions {
+            reconstruction,
+            flat_batch: batch,
+            ..SceneOptions::default()
+        },
+    )
+    .unwrap()
+}
+
+/// Every object of `reference` refined alone to `levels[i]` (one object per call: its own
+/// dispatches), read back.
+fn alone(ctx: &GpuContext, reference: &mut GpuScene, levels: &[u32]) -> Vec<Vec<u8>> {
+    (0..levels.len())
+        .map(|i| {
+            reference.refine(ctx, i, levels[i]).unwrap();
+            bytes(&reference.read_back(ctx, i).unwrap())
+        })
+        .collect()
+}
+
+#[test]
+fn a_batch_writes_the_bytes_of_each_object_refined_alone() {
+    let Some(ctx) = context_or_skip("a_batch_writes_the_bytes_of_each_object_refined_alone") else {
+        return;
+    };
+    let asset = small_flat_scene(14, 5).unwrap();
+    let n = asset.objects.len();
+    for reconstruction in [Reconstruction::Smooth, Reconstruction::NearestNormal] {
+        let mut batched = scene(&ctx, &asset, reconstruction, true);
+        let mut reference = scene(&ctx, &asset, reconstruction, false);
+        // Levels 0 to 3 mixed, then each object to another (reusing the pooled outputs), then
+        // each one level up (growing them), with object 0 refined in pieces beside the batch.
+        // Every object changes level in every round.
+        let rounds: [Vec<u32>; 3] = [
+            (0..n).map(|i| (i % 4) as u32).collect(),
+            (0..n).map(|i| ((i + 1) % 4) as u32).collect(),
+            (0..n).map(|i| ((i + 1) % 4) as u32 + 1).collect(),
+        ];
+        for (round, levels) in rounds.iter().enumerate() {
+            let mut work = Vec::new();
+            for (i, &level) in levels.iter().enumerate() {
+                assert!(batched.begin_refine(&ctx, i, level).unwrap());
+                work.push((i, u64::MAX));
+            }
+            let pieces = round == 2;
+            if pieces {
+                let (_, _, total) = batched.refine_progress(0).unwrap();
+                work[0].1 = total / 3;
+            }
+            let mut reports = batched.refine_batch(&ctx, &work, false).unwrap();
+            let together: Vec<usize> = reports
+                .iter()
+                .filter(|r| r.batched)
+                .map(|r| r.object)
+                .collect();
+            // Every object given all its work went in the batch.
+            let expected: Vec<usize> = (0..n).filter(|&i| !(pieces && i == 0)).collect();
+            assert_eq!(together, expected, "{reconstruction:?}, round {round}");
+            assert_eq!(reports.len(), n);
+            assert!(reports
+                .iter()
+                .all(|r| r.finished || (pieces && r.object == 0)));
+            while batched.refine_progress(0).is_some() {
+                reports = batched.refine_batch(&ctx, &[(0, 1 << 20)], false).unwrap();
+                assert!(
+                    reports.iter().all(|r| !r.batched),
+                    "one object is not a batch"
+                );
+            }
+            let want = alone(&ctx, &mut reference, levels);
+            for (i, want) in want.iter().enumerate() {
+                let got = bytes(&batched.read_back(&ctx, i).unwrap());
+                assert_eq!(batched.level(i), Some(levels[i]));
+                assert!(
+                    got == *want,
+                    "{reconstruction:?}, round {round}: object {i} at level {} differs from its \
+                     refinement alone",
+                    levels[i]
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_scene_without_batching_refines_each_object_alone() {
+    let Some(ctx) = context_or_skip("a_scene_without_batching_refines_each_object_alone") else {
+        return;
+    };
+    let asset = small_flat_scene(4, 9).unwrap();
+    let mut s = scene(&ctx, &asset, Reconstruction::Smooth, false);
+    let work: Vec<(usize, u64)> = (0..4)
+        .map(|i| {
+            assert!(s.begin_refine(&ctx, i, 2).unwrap());
+            (i, u64::MAX)
+        })
+        .collect();
+    let reports = s.refine_batch(&ctx, &work, false).unwrap();
+    assert_eq!(reports.len(), 4);
+    assert!(reports.iter().all(|r| r.finished && !r.batched));
+}
