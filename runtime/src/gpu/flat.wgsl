@@ -223,8 +223,9 @@ fn flat_colour(i: u32) {
 //                                       pooled outputs (ascending: the objects' ranges in order)
 //   entries[k]: FLAT_ENTRY_WORDS words  its first coarse vertex, first record, first bit,
 //                                       first colour, first normal and first word of the
-//                                       lighting table in the pooled buffers, then its Params
-//                                       (the section offsets already counted in the pool).
+//                                       lighting table in the pooled buffers (the first
+//                                       FLAT_ENTRY_BASES words), then its Params (the section
+//                                       offsets already counted in the pool).
 // An invocation finds its object by binary search over its step's first items, sets the bases
 // of hce_lattice.wgsl, hce_gather.wgsl, hce_tree.wgsl and hce_light.wgsl to the object's, and
 // runs the step on its item within the object: the same operations on the same values as the
@@ -239,10 +240,6 @@ struct Batch {
 }
 
 @group(0) @binding(12) var<uniform> batch: Batch;
-
-// The words before an entry's Params, and in all (flat_batch.rs ENTRY_BASES, ENTRY_WORDS).
-const FLAT_ENTRY_BASES: u32 = 6u;
-const FLAT_ENTRY_WORDS: u32 = 28u;
 
 // The object k (of batch.count) whose items first[k] .. first[k + 1] hold item g (< the total).
 fn batch_object(first: u32, g: u32) -> u32 {

@@ -30,10 +30,10 @@ pub(super) const OBJECT_MAX_FINE: u64 = 1 << 14;
 /// not fit are refined with their own dispatches.
 pub(super) const BATCH_MAX_FINE: u64 = 1 << 20;
 
-/// Words of a table entry before the object's `Params` (`FLAT_ENTRY_BASES` in `flat.wgsl`) and
-/// in all (`FLAT_ENTRY_WORDS`).
-const ENTRY_BASES: usize = 6;
-const ENTRY_WORDS: usize = ENTRY_BASES + std::mem::size_of::<Params>() / 4;
+/// Words of a table entry before the object's `Params` and in all (`FLAT_ENTRY_BASES` and
+/// `FLAT_ENTRY_WORDS` of `hce_constants.wgsl`, generated from these).
+pub(super) const ENTRY_BASES: usize = 6;
+pub(super) const ENTRY_WORDS: usize = ENTRY_BASES + std::mem::size_of::<Params>() / 4;
 
 /// Where one object's tables start in the pools.
 #[derive(Clone, Copy, Debug)]

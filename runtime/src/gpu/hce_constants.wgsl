@@ -23,3 +23,7 @@ const VERTEX_BOUNDARY: u32 = 0x1u;
 const HCE_EVAL_BITS: u32 = 0x10u;
 // a leaf's node word; lighting.rs LEAF
 const HCE_LEAF: u32 = 0x80000000u;
+// words of a batch entry before the object's Params; flat_batch.rs ENTRY_BASES
+const FLAT_ENTRY_BASES: u32 = 0x6u;
+// words of a batch entry; flat_batch.rs ENTRY_WORDS
+const FLAT_ENTRY_WORDS: u32 = 0x1cu;

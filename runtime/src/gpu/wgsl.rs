@@ -86,6 +86,16 @@ const CONSTANTS: &[(&str, u32, &str)] = &[
         hce_geometry::lighting::LEAF,
         "a leaf's node word; lighting.rs LEAF",
     ),
+    (
+        "FLAT_ENTRY_BASES",
+        super::flat_batch::ENTRY_BASES as u32,
+        "words of a batch entry before the object's Params; flat_batch.rs ENTRY_BASES",
+    ),
+    (
+        "FLAT_ENTRY_WORDS",
+        super::flat_batch::ENTRY_WORDS as u32,
+        "words of a batch entry; flat_batch.rs ENTRY_WORDS",
+    ),
 ];
 
 /// The text of `hce_constants.wgsl`, generated from [`CONSTANTS`].
@@ -306,6 +316,21 @@ mod tests {
             offset_of!(FlatParams, range_first)
         );
         assert_eq!(at(&members, "range_end"), offset_of!(FlatParams, range_end));
+        // The batched entry points' uniform, as flat_batch.rs `FlatPool::encode` writes it
+        // into its 32 bytes.
+        let (size, members) = wgsl_struct(&flat, "Batch");
+        assert!(size <= 32, "{size}");
+        let order = [
+            "count",
+            "first_vertices",
+            "first_faces",
+            "entries",
+            "vertex_total",
+            "fine_total",
+        ];
+        for (i, name) in order.iter().enumerate() {
+            assert_eq!(at(&members, name), 4 * i, "{name}");
+        }
 
         let lp = parse("loop", &loop_source());
         let (size, members) = wgsl_struct(&lp, "Params");
