@@ -642,7 +642,10 @@ impl GpuScene {
         let mut reports = Vec::with_capacity(work.len());
         // Per report, its timer passes and its share of their time.
         let mut passes = Vec::with_capacity(work.len());
-        let (batched, pass) = self.batch_flat(ctx, &mut encoder, work, &mut timer)?;
+        let Batched {
+            objects: batched,
+            pass,
+        } = self.batch_flat(ctx, &mut encoder, work, &mut timer)?;
         let mut in_batch = vec![false; self.objects.len()];
         let batch_work: u64 = batched.iter().map(|&(_, w)| w).sum();
         for &(i, w) in &batched {
@@ -718,9 +721,13 @@ impl GpuScene {
         encoder: &mut wgpu::CommandEncoder,
         work: &[(usize, u64)],
         timer: &mut PassTimer,
-    ) -> Result<(Vec<(usize, u64)>, Option<u32>), GpuError> {
+    ) -> Result<Batched, GpuError> {
+        let none = Batched {
+            objects: Vec::new(),
+            pass: None,
+        };
         let Some(pool) = self.flat_pool.as_mut() else {
-            return Ok((Vec::new(), None));
+            return Ok(none);
         };
         let mut seen = vec![false; self.objects.len()];
         let mut chosen = Vec::new();
@@ -749,7 +756,7 @@ impl GpuScene {
             chosen.iter().map(|b| b.out.triangle_count),
         ));
         if chosen.len() < 2 {
-            return Ok((Vec::new(), None));
+            return Ok(none);
         }
         let pass = pool.encode(ctx, encoder, &chosen, Some(timer))?;
         let chosen: Vec<usize> = chosen.iter().map(|b| b.object).collect();
@@ -759,7 +766,10 @@ impl GpuScene {
                 batched.push((i, n.job.recorded_elsewhere()));
             }
         }
-        Ok((batched, pass))
+        Ok(Batched {
+            objects: batched,
+            pass,
+        })
     }
 
     /// The current buffers of `object`, `None` before its first refinement.
@@ -884,6 +894,13 @@ pub struct BatchReport {
     pub batched: bool,
     /// GPU time of the pieces recorded, when measured with timestamp queries.
     pub gpu_seconds: Option<f64>,
+}
+
+/// The flat objects [`GpuScene::batch_flat`] recorded as one batch, with their work, and the
+/// timer pass of the batch.
+struct Batched {
+    objects: Vec<(usize, u64)>,
+    pass: Option<u32>,
 }
 
 /// Kernel output buffers that report their level.
