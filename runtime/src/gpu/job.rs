@@ -1,6 +1,9 @@
 //! A refinement as a list of steps whose items can be dispatched in pieces: the one way the Loop
 //! and flat kernels record their work, whether all of it at once ([`LoopKernel::refine_into`],
-//! [`FlatKernel::refine_into`]) or a piece per frame ([`GpuScene::refine_batch`]).
+//! [`FlatKernel::refine_into`]) or a piece per frame ([`GpuScene::refine_batch`]). The one
+//! exception: [`GpuScene::refine_batch`] records the whole refinements of many small flat
+//! objects together (`flat_batch.rs`), with the parameters their jobs hold, and marks the jobs
+//! recorded.
 //!
 //! Each step of a kernel is a pure gather or an owned write over its items (coarse triangles,
 //! fine triangles or output vertices), and reads only what earlier steps wrote. Dispatching a
