@@ -129,3 +129,39 @@ fn a_scene_without_batching_refines_each_object_alone() {
     assert_eq!(reports.len(), 4);
     assert!(reports.iter().all(|r| r.finished && !r.batched));
 }
+
+#[test]
+fn objects_too_large_for_a_batch_keep_their_own_dispatches() {
+    let Some(ctx) = context_or_skip("objects_too_large_for_a_batch_keep_their_own_dispatches")
+    else {
+        return;
+    };
+    // At level 5 an octahedron is 8,192 fine triangles (batched), a grid of 8 to 50 triangles
+    // 8,192 to 51,200: the larger ones exceed 16,384 and are refined alone.
+    let asset = small_flat_scene(9, 3).unwrap();
+    let n = asset.objects.len();
+    let levels = vec![5; n];
+    let mut batched = scene(&ctx, &asset, Reconstruction::Smooth, true);
+    let mut reference = scene(&ctx, &asset, Reconstruction::Smooth, false);
+    let work: Vec<(usize, u64)> = (0..n)
+        .map(|i| {
+            assert!(batched.begin_refine(&ctx, i, 5).unwrap());
+            (i, u64::MAX)
+        })
+        .collect();
+    let reports = batched.refine_batch(&ctx, &work, false).unwrap();
+    assert_eq!(reports.len(), n);
+    let small = |i: usize| batched.triangles_at(i, 5) <= 16_384;
+    for r in &reports {
+        assert!(r.finished);
+        assert_eq!(r.batched, small(r.object), "object {}", r.object);
+    }
+    let together = (0..n).filter(|&i| small(i)).count();
+    assert!(together >= 2 && together < n, "{together} of {n} batched");
+    for (i, want) in alone(&ctx, &mut reference, &levels).iter().enumerate() {
+        assert!(
+            bytes(&batched.read_back(&ctx, i).unwrap()) == *want,
+            "object {i}"
+        );
+    }
+}

@@ -450,3 +450,17 @@ impl FlatPool {
         Ok(pass_index)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_batch_takes_objects_in_order_while_they_fit() {
+        assert_eq!(FlatPool::fitting([]), 0);
+        assert_eq!(FlatPool::fitting([10, 20, 30]), 3);
+        let half = (BATCH_MAX_FINE / 2) as u32;
+        assert_eq!(FlatPool::fitting([half, half, 1, 1]), 2);
+        assert_eq!(FlatPool::fitting([half, half + 1, 1]), 1);
+    }
+}
