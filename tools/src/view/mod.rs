@@ -79,7 +79,8 @@ struct FrameStats {
     /// Objects whose level should change and is not drawn yet.
     pending: usize,
     triangles: u64,
-    /// This frame's refinement work (one submission), GPU work waited for.
+    /// This frame's refinement work (new output buffers made, one submission), GPU work
+    /// waited for.
     refine_ms: f64,
     /// The GPU time of their dispatches, where the adapter has timestamp queries.
     refine_gpu_ms: Option<f64>,
