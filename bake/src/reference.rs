@@ -215,7 +215,7 @@ fn intersect(t: &Tri, o: DVec3, d: DVec3) -> Option<(f64, f64, f64)> {
 /// The f32 ray `obvhs` traverses with; `None` when the ray cannot be represented.
 fn bvh_ray(o: DVec3, d: DVec3) -> Option<Ray> {
     let (o, d) = (o.as_vec3a(), d.as_vec3a());
-    (o.is_finite() && d.is_finite()).then(|| Ray::new(o, d, 0.0, f32::INFINITY))
+    (o.is_finite() && d.is_finite()).then(|| crate::visibility::bvh_ray(o, d, 0.0, f32::INFINITY))
 }
 
 /// A distance the BVH may prune beyond without losing a hit at `dist` (rounded up).
@@ -730,6 +730,62 @@ mod tests {
             .unwrap()
             .install(|| pt.surface_radiance(0, &[0, 1], 20000, 1));
         assert_eq!(one, e);
+    }
+
+    /// Rays with a zero direction component meet what brute force meets, whatever the zero's
+    /// sign: a direction negated from one with a `+0.0` component has `-0.0` there, and the
+    /// BVH's slab test missed every box for it (a ray along a block's face from the floor
+    /// found nothing).
+    #[test]
+    fn rays_with_signed_zero_components_hit_as_brute_force_does() {
+        // Two boxes, one standing on a floor quad.
+        let (mut pos, mut tris) = (Vec::new(), Vec::new());
+        let mut add = |o: [f32; 3], u: [f32; 3], v: [f32; 3]| {
+            let (p, t) = quad(o, u, v);
+            let b = pos.len() as u32;
+            pos.extend(p);
+            tris.extend(t.map(|t| t.map(|i| i + b)));
+        };
+        add([-1.0, 0.0, -1.0], [0.0, 0.0, 2.0], [2.0, 0.0, 0.0]);
+        for (x, z) in [(0.1f32, 0.05f32), (-0.6, -0.4)] {
+            let (w, h) = (0.3f32, 0.2f32);
+            add([x, 0.0, z], [w, 0.0, 0.0], [0.0, h, 0.0]);
+            add([x + w, 0.0, z], [0.0, 0.0, w], [0.0, h, 0.0]);
+            add([x + w, 0.0, z + w], [-w, 0.0, 0.0], [0.0, h, 0.0]);
+            add([x, 0.0, z + w], [0.0, 0.0, -w], [0.0, h, 0.0]);
+            add([x, h, z], [0.0, 0.0, w], [w, 0.0, 0.0]);
+        }
+        let scene = Scene {
+            objects: vec![SolverObject::new("boxes", pos, tris, [0.5; 3])],
+            lights: Vec::new(),
+        };
+        let bvh = PathTracer::new(&scene);
+        let brute = PathTracer::with_accel(&scene, Accel::BruteForce);
+        let mut hits = 0;
+        for ox in [-0.9, -0.3, 0.25, 0.8] {
+            for oy in [0.0025, 0.1, 0.5] {
+                for oz in [-0.9, -0.2, 0.02, 0.7] {
+                    for d in [
+                        [1.0, 0.0, 0.0],
+                        [1.0, -0.0, 0.0],
+                        [-1.0, -0.0, -0.0],
+                        [0.0, -1.0, 0.0],
+                        [-0.0, -1.0, -0.0],
+                        [0.0, 0.0, 1.0],
+                        [-0.0, -0.0, 1.0],
+                        [0.6, -0.0, 0.8],
+                        [-0.6, -0.0, -0.8],
+                        [-0.6, 0.0, 0.8],
+                    ] {
+                        let o = [ox, oy, oz];
+                        let want = brute.first_hit(o, d);
+                        assert_eq!(bvh.first_hit(o, d), want, "ray {o:?} along {d:?}");
+                        hits += usize::from(want.is_some());
+                    }
+                }
+            }
+        }
+        assert!(hits > 100, "only {hits} rays met something");
     }
 
     #[test]

@@ -148,7 +148,7 @@ impl Occluders {
         if t0 >= t1 {
             return true;
         }
-        let ray = Ray::new(a.into(), dir.into(), t0, t1);
+        let ray = bvh_ray(a.into(), dir.into(), t0, t1);
         bvh.ray_traverse_miss(ray, |r, id| {
             let t = bvh.primitive_indices[id] as usize;
             if ignore(t) {
@@ -177,7 +177,7 @@ impl Occluders {
         if t0 >= max_t {
             return None;
         }
-        let ray = Ray::new(a.into(), dir.into(), t0, max_t);
+        let ray = bvh_ray(a.into(), dir.into(), t0, max_t);
         let mut hit = RayHit::none();
         bvh.ray_traverse(ray, &mut hit, |r, id| {
             let t = bvh.primitive_indices[id] as usize;
@@ -194,7 +194,7 @@ impl Occluders {
     /// side its counter-clockwise winding does not face); false when it meets nothing.
     pub fn first_hit_is_back(&self, origin: Vec3, dir: Vec3) -> bool {
         let Some(bvh) = &self.bvh else { return false };
-        let ray = Ray::new(origin.into(), dir.into(), self.eps, f32::INFINITY);
+        let ray = bvh_ray(origin.into(), dir.into(), self.eps, f32::INFINITY);
         let mut hit = RayHit::none();
         if !bvh.ray_traverse(ray, &mut hit, |r, id| {
             self.tris[bvh.primitive_indices[id] as usize].intersect(r)
@@ -209,11 +209,18 @@ impl Occluders {
     /// Whether the ray from `origin` along unit `dir` meets no triangle before `max_t`.
     pub fn ray_clear(&self, origin: Vec3, dir: Vec3, max_t: f32) -> bool {
         let Some(bvh) = &self.bvh else { return true };
-        let ray = Ray::new(origin.into(), dir.into(), self.eps, max_t);
+        let ray = bvh_ray(origin.into(), dir.into(), self.eps, max_t);
         bvh.ray_traverse_miss(ray, |r, id| {
             self.tris[bvh.primitive_indices[id] as usize].intersect(r)
         })
     }
+}
+
+/// A ray for the BVH from `origin` along `dir`, between `t0` and `t1`. A negative zero in
+/// `dir` is made positive (`-0.0 + 0.0` is `+0.0`): its reciprocal is `-inf`, for which the
+/// BVH's slab test misses every box, so a ray along a negated axis-aligned normal met nothing.
+pub(crate) fn bvh_ray(origin: Vec3A, dir: Vec3A, t0: f32, t1: f32) -> Ray {
+    Ray::new(origin, dir + Vec3A::ZERO, t0, t1)
 }
 
 /// The triangles of a scene that lie off its outer boundary, in a bounding volume hierarchy of
@@ -485,6 +492,33 @@ mod tests {
             refused_blocked > 20,
             "only {refused_blocked} blocked pairs met"
         );
+    }
+
+    /// A direction with a negative zero (a negated axis-aligned normal) meets what the same
+    /// direction with positive zeros meets: the open-fraction probe along a ceiling's normal
+    /// computed `(-0.0, -1.0, -0.0)` and found nothing.
+    #[test]
+    fn rays_with_negative_zeros_meet_the_panel() {
+        let panel = [[
+            Vec3::new(-1.0, -1.0, 1.0),
+            Vec3::new(0.0, 2.0, 1.0),
+            Vec3::new(2.0, -1.0, 1.0),
+        ]];
+        let occ = Occluders::new(panel);
+        let up = Vec3::new(-0.0, -0.0, 1.0);
+        let down = Vec3::new(-0.0, -0.0, -1.0);
+        assert!(!occ.ray_clear(Vec3::ZERO, up, 2.0));
+        assert!(occ.first_hit_is_back(Vec3::new(0.0, 0.0, 2.0), down));
+        assert_eq!(
+            occ.first_hit_from(Vec3::ZERO, Vec3::Z, up, 5.0, |_| false),
+            Some(1.0)
+        );
+        assert!(!occ.segment_clear_between(
+            Vec3::ZERO,
+            Vec3::Z,
+            Vec3::new(-0.0, -0.0, 2.0),
+            Vec3::NEG_Z
+        ));
     }
 
     #[test]

@@ -392,6 +392,62 @@ fn a_level_change_is_spread_over_frames_and_never_drawn_in_part() {
     );
 }
 
+/// `--offscreen` draws the same frames without a window or a display: along a camera path
+/// that changes levels, every frame's levels and refined objects are those of the windowed run,
+/// and its last frame is the very pixels of the window's (both on lavapipe, no panel).
+#[test]
+fn offscreen_runs_draw_what_the_window_draws() {
+    let Some(window) = xvfb("offscreen_runs_draw_what_the_window_draws") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let path = "1.2,1.6,2.6:-0.6,0.7,-1.2:40;-0.24,0.88,-0.44:-0.6,0.7,-1.2:40";
+    let run = |mut cmd: Command, name: &str, extra: &[&str]| {
+        let shot = dir.path().join(format!("{name}.png"));
+        let stats = dir.path().join(format!("{name}.json"));
+        let out = cmd
+            .arg("view")
+            .arg(baked())
+            .args(["--frames", "8", "--no-panel", "--size", &format!("{W}x{H}")])
+            .args(["--camera-path", path, "--refine-budget", "0"])
+            .args(extra)
+            .arg("--stats")
+            .arg(&stats)
+            .arg("--screenshot")
+            .arg(&shot)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", text(&out));
+        let s: Stats = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+        (s, read_png(&shot), text(&out))
+    };
+    let (windowed, windowed_png, _) = run(window, "window", &[]);
+    let mut offscreen = hce();
+    // No display at all.
+    offscreen
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY");
+    let (off, off_png, log) = run(offscreen, "offscreen", &["--offscreen"]);
+    assert_eq!(off.frames.len(), 8, "{log}");
+    let levels = |s: &Stats| -> Vec<(Vec<u32>, Vec<String>)> {
+        s.frames
+            .iter()
+            .map(|f| (f.levels.clone(), f.refined.clone()))
+            .collect()
+    };
+    assert_eq!(levels(&off), levels(&windowed), "{log}");
+    assert!(
+        off.frames.windows(2).any(|w| w[0].levels != w[1].levels),
+        "the path changed no level:\n{log}"
+    );
+    assert_eq!((off_png.0, off_png.1), (W, H));
+    assert!(
+        off_png.2 == windowed_png.2,
+        "the offscreen frame differs from the window's: {:?}",
+        difference(&off_png.2, &windowed_png.2, 0)
+    );
+}
+
 /// A missing file and a bad file are reported with their exit statuses (4, 3) before any
 /// window opens; no display is status 1 with what to do. None of them panics.
 #[test]

@@ -70,6 +70,11 @@ pub struct ViewArgs {
     /// draw times) as JSON.
     #[arg(long, requires = "frames")]
     pub stats: Option<PathBuf>,
+    /// Scripted run without a window: draw the frames into an image of --size on the adapter
+    /// (no display, no panel, nothing presented), for benchmarks and machines without X. The
+    /// screenshot is the one a window of that size without its panel writes.
+    #[arg(long, requires = "frames")]
+    pub offscreen: bool,
 }
 
 #[cfg(feature = "gpu")]
@@ -119,6 +124,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
         camera_path,
         screenshot: args.screenshot,
         stats: args.stats,
+        offscreen: args.offscreen,
         settings: Settings {
             levels: Levels {
                 forced: args.level,

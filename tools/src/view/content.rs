@@ -66,8 +66,8 @@ pub struct Refined {
     pub objects: Vec<usize>,
     /// Indices of the objects refined in part this frame, still drawn at their old level.
     pub working: Vec<usize>,
-    /// The wall time of this frame's refinement work (one submission), GPU work waited for,
-    /// in milliseconds.
+    /// The wall time of this frame's refinement work (the output buffers of refinements begun,
+    /// one submission), GPU work waited for, in milliseconds.
     pub ms: f64,
     /// The GPU time of their dispatches (timestamp queries), where the adapter has them.
     pub gpu_ms: Option<f64>,
@@ -342,6 +342,8 @@ impl Content {
                 // A refinement under way for every object whose level changes (kept while the
                 // level asked for stays the same, dropped when the object's own level is asked
                 // for again).
+                // Timed from here: a refinement's output buffers are made as it begins.
+                let t = Instant::now();
                 for (i, level) in wanted.iter().enumerate() {
                     if let Some(level) = *level {
                         scene.begin_refine(ctx, i, level)?;
@@ -392,7 +394,6 @@ impl Content {
                         s.refine_frames = 0;
                     }
                 }
-                let t = Instant::now();
                 let reports = scene.refine_batch(ctx, &plan, measure)?;
                 ctx.wait()?;
                 refined.ms = if reports.is_empty() {

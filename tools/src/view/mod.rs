@@ -5,7 +5,8 @@
 //! a winit window, with an egui side panel.
 //!
 //! Scripted runs (`--frames N`, with `--camera-path`, `--screenshot`, `--stats`) draw N frames
-//! and exit, for tests and benchmarks; they run under Xvfb with a software adapter.
+//! and exit, for tests and benchmarks; they run under Xvfb with a software adapter, or with
+//! `--offscreen` without a window at all (the same frames drawn into a texture, no panel).
 //!
 //! Modules: [`camera`] (orbit and fly camera, camera paths), [`content`] (the file and its
 //! levels), [`frame`] (drawing and screenshots), [`panel`] (the side panel).
@@ -48,6 +49,8 @@ pub struct Options {
     /// Scripted run: the last frame's image; interactive: where the screenshot key writes.
     pub screenshot: Option<PathBuf>,
     pub stats: Option<PathBuf>,
+    /// Scripted run without a window: frames drawn into a texture, no panel, no display needed.
+    pub offscreen: bool,
     pub settings: Settings,
 }
 
@@ -76,7 +79,8 @@ struct FrameStats {
     /// Objects whose level should change and is not drawn yet.
     pending: usize,
     triangles: u64,
-    /// This frame's refinement work (one submission), GPU work waited for.
+    /// This frame's refinement work (new output buffers made, one submission), GPU work
+    /// waited for.
     refine_ms: f64,
     /// The GPU time of their dispatches, where the adapter has timestamp queries.
     refine_gpu_ms: Option<f64>,
@@ -96,15 +100,50 @@ struct RunStats<'a> {
     objects: &'a [ObjectStats],
 }
 
-/// The window and everything drawn into it; made when the event loop starts.
+/// The adapter and what frames are drawn into: made when the event loop starts, or at once for
+/// an offscreen run.
 struct Gpu {
-    window: Arc<Window>,
-    surface: wgpu::Surface<'static>,
-    config: wgpu::SurfaceConfiguration,
     ctx: GpuContext,
     frame: FrameRenderer,
     egui: egui::Context,
-    egui_state: egui_winit::State,
+    out: Output,
+}
+
+/// Where frames go.
+enum Output {
+    Window {
+        window: Arc<Window>,
+        surface: wgpu::Surface<'static>,
+        config: wgpu::SurfaceConfiguration,
+        egui_state: Box<egui_winit::State>,
+    },
+    /// A scripted run without a window (`--offscreen`): frames drawn into a texture of the
+    /// window's format, no panel.
+    Offscreen {
+        texture: wgpu::Texture,
+        size: (u32, u32),
+    },
+}
+
+/// The format offscreen frames are drawn in: the one [`choose_format`] prefers for windows, so
+/// that an offscreen screenshot is the window's.
+const OFFSCREEN_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+impl Gpu {
+    /// The size frames are drawn at.
+    fn size(&self) -> (u32, u32) {
+        match &self.out {
+            Output::Window { config, .. } => (config.width, config.height),
+            Output::Offscreen { size, .. } => *size,
+        }
+    }
+
+    fn window(&self) -> Option<&Arc<Window>> {
+        match &self.out {
+            Output::Window { window, .. } => Some(window),
+            Output::Offscreen { .. } => None,
+        }
+    }
 }
 
 #[derive(Default)]
@@ -141,38 +180,21 @@ struct App {
 /// Runs the viewer until its window is closed or, in a scripted run, its frames are drawn.
 pub fn run(options: Options) -> Result<()> {
     let first = options.file.as_deref().map(FileData::read).transpose()?;
+    let offscreen = options.offscreen;
+    let mut app = App::new(options, first);
+    if offscreen {
+        app.init_offscreen()?;
+        while !app.redraw()? {}
+        return app.finish();
+    }
     let event_loop = EventLoop::new().map_err(|e| {
         anyhow!(
             "cannot open a window: {e}; `hce view` needs a display (set DISPLAY, or on a \
-             machine without one run it under a virtual X server: `xvfb-run -a hce view FILE`)"
+             machine without one run it under a virtual X server: `xvfb-run -a hce view FILE`; a \
+             scripted run with --frames can draw without a window: --offscreen)"
         )
     })?;
     event_loop.set_control_flow(ControlFlow::Wait);
-    let placeholder = Camera {
-        eye: [0.0, 0.0, 1.0],
-        target: [0.0; 3],
-        fov_y_degrees: 40.0,
-    };
-    let mut app = App {
-        camera: ViewCamera::from_camera(&placeholder),
-        start: placeholder,
-        camera_source: "none".to_owned(),
-        settings: options.settings,
-        panel: options.panel,
-        options,
-        first,
-        gpu: None,
-        content: None,
-        input: Input::default(),
-        last_frame: None,
-        frame_ms: 0.0,
-        refine_ms: 0.0,
-        frame_index: 0,
-        stats: Vec::new(),
-        message: None,
-        screenshot_requested: false,
-        error: None,
-    };
     event_loop
         .run_app(&mut app)
         .map_err(|e| anyhow!("the window's event loop failed: {e}"))?;
@@ -187,8 +209,7 @@ pub fn run(options: Options) -> Result<()> {
             );
         }
     }
-    app.summarise();
-    app.write_stats()
+    app.finish()
 }
 
 /// The surface format the window is drawn in: 8-bit UNORM (the tone-map pass encodes sRGB, as
@@ -202,6 +223,40 @@ fn choose_format(formats: &[wgpu::TextureFormat]) -> Option<wgpu::TextureFormat>
 }
 
 impl App {
+    fn new(options: Options, first: Option<FileData>) -> Self {
+        let placeholder = Camera {
+            eye: [0.0, 0.0, 1.0],
+            target: [0.0; 3],
+            fov_y_degrees: 40.0,
+        };
+        Self {
+            camera: ViewCamera::from_camera(&placeholder),
+            start: placeholder,
+            camera_source: "none".to_owned(),
+            settings: options.settings,
+            panel: options.panel && !options.offscreen,
+            options,
+            first,
+            gpu: None,
+            content: None,
+            input: Input::default(),
+            last_frame: None,
+            frame_ms: 0.0,
+            refine_ms: 0.0,
+            frame_index: 0,
+            stats: Vec::new(),
+            message: None,
+            screenshot_requested: false,
+            error: None,
+        }
+    }
+
+    /// After a scripted run: the summary line and the statistics file.
+    fn finish(&self) -> Result<()> {
+        self.summarise();
+        self.write_stats()
+    }
+
     fn scripted(&self) -> bool {
         self.options.frames.is_some()
     }
@@ -209,6 +264,53 @@ impl App {
     fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
         self.error.get_or_insert(e);
         event_loop.exit();
+    }
+
+    /// An offscreen run: the adapter without a surface, frames drawn into a texture.
+    fn init_offscreen(&mut self) -> Result<()> {
+        let ctx = GpuContext::new(&ContextOptions {
+            force_software: self.options.software,
+        })?;
+        crate::cmd::render::report_adapter(&ctx.description);
+        let size = self.options.size;
+        let limit = ctx.device.limits().max_texture_dimension_2d;
+        if size.0 > limit || size.1 > limit {
+            bail!(
+                "--size {}x{}: {} draws at most {limit} pixels a side",
+                size.0,
+                size.1,
+                ctx.description
+            );
+        }
+        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("hce view offscreen frame"),
+            size: wgpu::Extent3d {
+                width: size.0,
+                height: size.1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: OFFSCREEN_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        let frame = FrameRenderer::new(&ctx, OFFSCREEN_FORMAT);
+        self.gpu = Some(Gpu {
+            ctx,
+            frame,
+            egui: egui::Context::default(),
+            out: Output::Offscreen { texture, size },
+        });
+        self.open_first()
+    }
+
+    fn open_first(&mut self) -> Result<()> {
+        if let (Some(file), Some(data)) = (self.options.file.clone(), self.first.take()) {
+            self.open(&file, data, self.options.camera)?;
+        }
+        Ok(())
     }
 
     fn init(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
@@ -267,30 +369,30 @@ impl App {
         );
         let frame = FrameRenderer::new(&ctx, format);
         self.gpu = Some(Gpu {
-            window,
-            surface,
-            config,
             ctx,
             frame,
             egui,
-            egui_state,
+            out: Output::Window {
+                window,
+                surface,
+                config,
+                egui_state: Box::new(egui_state),
+            },
         });
-        if let (Some(file), Some(data)) = (self.options.file.clone(), self.first.take()) {
-            self.open(&file, data, self.options.camera)?;
-        }
-        Ok(())
+        self.open_first()
     }
 
     /// Opens `path`, replacing what is shown, and places the camera.
     fn open(&mut self, path: &Path, data: FileData, choice: CameraChoice) -> Result<()> {
         let gpu = self.gpu.as_ref().context("no window yet")?;
         let content = Content::upload(&gpu.ctx, path, data, self.settings.reconstruction)?;
-        let size = gpu.window.inner_size();
-        let aspect = size.width.max(1) as f32 / size.height.max(1) as f32;
+        let (width, height) = gpu.size();
+        let aspect = width.max(1) as f32 / height.max(1) as f32;
         let (camera, source) = content.start_camera(choice, aspect)?;
         println!("{}: camera {source}", path.display());
-        gpu.window
-            .set_title(&format!("hce view: {}", path.display()));
+        if let Some(window) = gpu.window() {
+            window.set_title(&format!("hce view: {}", path.display()));
+        }
         // Orbit about the point straight ahead nearest the scene's centre, not the file's
         // target (a direction only, placed at the scene's radius).
         let mut view = ViewCamera::from_camera(&camera);
@@ -389,7 +491,7 @@ impl App {
             return;
         };
         let (dx, dy) = ((x - px) as f32, (y - py) as f32);
-        let height = self.gpu.as_ref().map_or(1, |g| g.config.height.max(1)) as f32;
+        let height = self.gpu.as_ref().map_or(1, |g| g.size().1.max(1)) as f32;
         let pan = self.input.drag == Some(MouseButton::Middle)
             || (self.input.drag == Some(MouseButton::Left) && self.input.shift);
         match self.input.drag {
@@ -405,8 +507,9 @@ impl App {
         }
     }
 
-    /// Draws one frame: camera, levels, panel, scene; a screenshot when asked.
-    fn redraw(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+    /// Draws one frame: camera, levels, panel, scene; a screenshot when asked. True when it
+    /// was the last frame of a scripted run.
+    fn redraw(&mut self) -> Result<bool> {
         let scripted = self.scripted();
         let now = Instant::now();
         let dt = self
@@ -429,7 +532,7 @@ impl App {
             };
             self.content = Some(c);
         }
-        let (width, height) = (gpu.config.width, gpu.config.height);
+        let (width, height) = gpu.size();
 
         let t0 = Instant::now();
         let refined = match self.content.as_mut() {
@@ -475,39 +578,49 @@ impl App {
             pending: refined.pending,
             message: self.message.as_deref(),
         };
-        let raw = gpu.egui_state.take_egui_input(&gpu.window);
         let mut actions = panel::Actions::default();
         let show_panel = self.panel;
-        let settings = &mut self.settings;
-        let output = gpu.egui.run_ui(raw, |ui| {
-            if show_panel {
-                actions = panel::show(ui, &facts, settings);
-            }
-        });
-        gpu.egui_state
-            .handle_platform_output(&gpu.window, output.platform_output);
-        // The panel animates (a header opening, a slider dragged): draw again at once.
-        if output
-            .viewport_output
-            .get(&egui::ViewportId::ROOT)
-            .is_some_and(|v| v.repaint_delay.is_zero())
+        let mut primitives = Vec::new();
+        let mut pixels_per_point = 1.0;
+        let mut to_free: Vec<egui::TextureId> = Vec::new();
+        // The panel is drawn in windows only.
+        if let Output::Window {
+            window, egui_state, ..
+        } = &mut gpu.out
         {
-            gpu.window.request_redraw();
-        }
-        let primitives = gpu.egui.tessellate(output.shapes, output.pixels_per_point);
-        // Applied now, freed after painting; drained so that nothing is left to drop unapplied.
-        let mut textures = output.textures_delta;
-        let to_free: Vec<egui::TextureId> = textures.free.drain().collect();
-        for (id, deltas) in textures.set.drain() {
-            for delta in &deltas {
-                gpu.frame
-                    .egui
-                    .update_texture(&gpu.ctx.device, &gpu.ctx.queue, id, delta);
+            let raw = egui_state.take_egui_input(window);
+            let settings = &mut self.settings;
+            let output = gpu.egui.run_ui(raw, |ui| {
+                if show_panel {
+                    actions = panel::show(ui, &facts, settings);
+                }
+            });
+            egui_state.handle_platform_output(window, output.platform_output);
+            // The panel animates (a header opening, a slider dragged): draw again at once.
+            if output
+                .viewport_output
+                .get(&egui::ViewportId::ROOT)
+                .is_some_and(|v| v.repaint_delay.is_zero())
+            {
+                window.request_redraw();
+            }
+            primitives = gpu.egui.tessellate(output.shapes, output.pixels_per_point);
+            pixels_per_point = output.pixels_per_point;
+            // Applied now, freed after painting; drained so that nothing is left to drop
+            // unapplied.
+            let mut textures = output.textures_delta;
+            to_free = textures.free.drain().collect();
+            for (id, deltas) in textures.set.drain() {
+                for delta in &deltas {
+                    gpu.frame
+                        .egui
+                        .update_texture(&gpu.ctx.device, &gpu.ctx.queue, id, delta);
+                }
             }
         }
         let overlay = Overlay {
             primitives: &primitives,
-            pixels_per_point: output.pixels_per_point,
+            pixels_per_point,
         };
         if actions.reset_camera {
             self.camera = ViewCamera::from_camera(&self.start);
@@ -521,35 +634,21 @@ impl App {
             .map_or(([-1.0; 3], [1.0; 3]), |c| c.bounds);
         // The scene fills the window right of the panel.
         let scene_x = if show_panel {
-            ((actions.width * output.pixels_per_point).round() as u32).min(width.saturating_sub(1))
+            ((actions.width * pixels_per_point).round() as u32).min(width.saturating_sub(1))
         } else {
             0
         };
         let aspect = (width - scene_x) as f32 / height.max(1) as f32;
         let view_proj = view_projection(&camera, lo, hi, aspect);
-        let surface_texture = match gpu.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t)
-            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => Some(t),
-            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => None,
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                gpu.surface.configure(&gpu.ctx.device, &gpu.config);
-                None
-            }
-            wgpu::CurrentSurfaceTexture::Validation => {
-                bail!("the window's surface rejected the frame (a wgpu validation error)")
-            }
-        };
-        let drawn = surface_texture.is_some();
-        if let Some(texture) = surface_texture {
-            let view = texture.texture.create_view(&Default::default());
-            let mut encoder = gpu
-                .ctx
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-            gpu.frame.record(
+        let mut encoder = gpu
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        let mut record = |frame: &mut FrameRenderer, view: &wgpu::TextureView| {
+            frame.record(
                 &gpu.ctx,
                 &mut encoder,
-                &view,
+                view,
                 (width, height),
                 scene_x,
                 view_proj,
@@ -557,10 +656,47 @@ impl App {
                 self.settings.exposure,
                 show_panel.then_some(&overlay),
             );
-            gpu.ctx.queue.submit([encoder.finish()]);
-            gpu.window.pre_present_notify();
-            gpu.ctx.queue.present(texture);
-        }
+        };
+        let drawn = match &mut gpu.out {
+            Output::Window {
+                window,
+                surface,
+                config,
+                ..
+            } => {
+                let surface_texture = match surface.get_current_texture() {
+                    wgpu::CurrentSurfaceTexture::Success(t)
+                    | wgpu::CurrentSurfaceTexture::Suboptimal(t) => Some(t),
+                    wgpu::CurrentSurfaceTexture::Timeout
+                    | wgpu::CurrentSurfaceTexture::Occluded => None,
+                    wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                        surface.configure(&gpu.ctx.device, config);
+                        None
+                    }
+                    wgpu::CurrentSurfaceTexture::Validation => {
+                        bail!("the window's surface rejected the frame (a wgpu validation error)")
+                    }
+                };
+                match surface_texture {
+                    Some(texture) => {
+                        record(
+                            &mut gpu.frame,
+                            &texture.texture.create_view(&Default::default()),
+                        );
+                        gpu.ctx.queue.submit([encoder.finish()]);
+                        window.pre_present_notify();
+                        gpu.ctx.queue.present(texture);
+                        true
+                    }
+                    None => false,
+                }
+            }
+            Output::Offscreen { texture, .. } => {
+                record(&mut gpu.frame, &texture.create_view(&Default::default()));
+                gpu.ctx.queue.submit([encoder.finish()]);
+                true
+            }
+        };
         // Waiting makes the frame time the GPU's too, not only the time to record it.
         gpu.ctx.wait()?;
         let frame_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -658,10 +794,7 @@ impl App {
         if drawn {
             self.frame_index += 1;
         }
-        if last && drawn {
-            event_loop.exit();
-        }
-        Ok(())
+        Ok(last && drawn)
     }
 
     /// After a scripted run: the mean frame, draw and refine times, the first frame (uploads
@@ -698,6 +831,7 @@ impl App {
             return Ok(());
         };
         let gpu = self.gpu.as_ref().context("no window was opened")?;
+        let (width, height) = gpu.size();
         let stats = RunStats {
             file: self
                 .content
@@ -706,8 +840,8 @@ impl App {
                 .unwrap_or_default(),
             adapter: gpu.ctx.description.to_string(),
             software: gpu.ctx.description.kind == AdapterKind::Software,
-            width: gpu.config.width,
-            height: gpu.config.height,
+            width,
+            height,
             frames: &self.stats,
             objects: self.content.as_ref().map_or(&[], |c| &c.objects),
         };
@@ -736,25 +870,34 @@ impl ApplicationHandler for App {
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
         let Some(gpu) = self.gpu.as_mut() else { return };
-        let response = gpu.egui_state.on_window_event(&gpu.window, &event);
+        let Output::Window {
+            window,
+            surface,
+            config,
+            egui_state,
+        } = &mut gpu.out
+        else {
+            return;
+        };
+        let response = egui_state.on_window_event(window, &event);
         // egui asks for a repaint after a redraw too; following that would redraw forever.
         if response.repaint && !matches!(event, WindowEvent::RedrawRequested) {
-            gpu.window.request_redraw();
+            window.request_redraw();
         }
-        let window = gpu.window.clone();
+        let window = window.clone();
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(size) if size.width > 0 && size.height > 0 => {
-                gpu.config.width = size.width;
-                gpu.config.height = size.height;
-                gpu.surface.configure(&gpu.ctx.device, &gpu.config);
+                config.width = size.width;
+                config.height = size.height;
+                surface.configure(&gpu.ctx.device, config);
                 window.request_redraw();
             }
-            WindowEvent::RedrawRequested => {
-                if let Err(e) = self.redraw(event_loop) {
-                    self.fail(event_loop, e);
-                }
-            }
+            WindowEvent::RedrawRequested => match self.redraw() {
+                Ok(true) => event_loop.exit(),
+                Ok(false) => {}
+                Err(e) => self.fail(event_loop, e),
+            },
             WindowEvent::DroppedFile(path) => {
                 self.open_dropped(&path);
                 window.request_redraw();
@@ -817,9 +960,9 @@ impl ApplicationHandler for App {
     }
 
     fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
-        if let Some(gpu) = &self.gpu {
+        if let Some(window) = self.gpu.as_ref().and_then(Gpu::window) {
             if self.scripted() || self.flying() {
-                gpu.window.request_redraw();
+                window.request_redraw();
             }
         }
     }
