@@ -112,6 +112,58 @@ fn a_batch_writes_the_bytes_of_each_object_refined_alone() {
     }
 }
 
+/// A call refining more fine triangles than one batch holds refines them in several batches
+/// (all but the last submitted at once, each with its own table) and still writes the bytes of
+/// each object refined alone.
+#[test]
+fn several_batches_in_one_call_write_the_bytes_of_each_object_alone() {
+    let Some(ctx) =
+        context_or_skip("several_batches_in_one_call_write_the_bytes_of_each_object_alone")
+    else {
+        return;
+    };
+    let asset = small_flat_scene(12, 3).unwrap();
+    let n = asset.objects.len();
+    let options = SceneOptions {
+        flat_batch_fine: 3000,
+        ..SceneOptions::default()
+    };
+    let mut batched = GpuScene::new(&ctx, &asset, &options).unwrap();
+    let mut reference = scene(&ctx, &asset, Reconstruction::Smooth, false);
+    let levels: Vec<u32> = (0..n).map(|i| 2 + (i % 2) as u32).collect();
+    let work: Vec<(usize, u64)> = levels
+        .iter()
+        .enumerate()
+        .map(|(i, &level)| {
+            assert!(batched.begin_refine(&ctx, i, level).unwrap());
+            (i, u64::MAX)
+        })
+        .collect();
+    let fine: Vec<u64> = (0..n).map(|i| batched.triangles_at(i, levels[i])).collect();
+    let total: u64 = fine.iter().sum();
+    assert!(
+        total > 2 * 3000,
+        "the scene ({total} fine triangles) must take three batches or more"
+    );
+    let reports = batched.refine_batch(&ctx, &work, false).unwrap();
+    assert_eq!(reports.len(), n);
+    assert!(reports.iter().all(|r| r.finished));
+    let together = reports.iter().filter(|r| r.batched).count();
+    assert!(
+        together >= n - 1,
+        "only {together} of {n} objects went in batches"
+    );
+    let want = alone(&ctx, &mut reference, &levels);
+    for (i, want) in want.iter().enumerate() {
+        let got = bytes(&batched.read_back(&ctx, i).unwrap());
+        assert!(
+            got == *want,
+            "object {i} at level {} differs from its refinement alone",
+            levels[i]
+        );
+    }
+}
+
 #[test]
 fn a_scene_without_batching_refines_each_object_alone() {
     let Some(ctx) = context_or_skip("a_scene_without_batching_refines_each_object_alone") else {

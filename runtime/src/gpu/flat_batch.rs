@@ -26,9 +26,12 @@ use super::{GpuContext, GpuError};
 /// dispatches, whose fixed cost is small beside their work. Objects of more coarse triangles
 /// than this are not pooled at all.
 pub(super) const OBJECT_MAX_FINE: u64 = 1 << 14;
-/// The most fine triangles of one batch: the pooled outputs never grow past it. Objects that do
-/// not fit are refined with their own dispatches.
-pub(super) const BATCH_MAX_FINE: u64 = 1 << 20;
+/// The most fine triangles of one batch by default ([`SceneOptions::flat_batch_fine`]): the
+/// pooled outputs never grow past it, and a frame that refines more refines them in several
+/// batches.
+///
+/// [`SceneOptions::flat_batch_fine`]: super::SceneOptions::flat_batch_fine
+pub const BATCH_MAX_FINE: u64 = 1 << 20;
 
 /// Words of a table entry before the object's `Params` and in all (`FLAT_ENTRY_BASES` and
 /// `FLAT_ENTRY_WORDS` of `hce_constants.wgsl`, generated from these).
@@ -71,6 +74,8 @@ pub(super) struct FlatPool {
     light: wgpu::Buffer,
     /// Word of `topo` where a batch's table starts.
     table_at: u32,
+    /// The most fine triangles of one batch.
+    max_fine: u64,
     /// Per object of the scene, where its tables start (`None`: not pooled).
     bases: Vec<Option<Bases>>,
     /// The batch's `Batch` uniform.
@@ -121,6 +126,7 @@ impl FlatPool {
         ctx: &GpuContext,
         kernel: &FlatKernel,
         objects: &[Option<&FlatObject>],
+        max_fine: u64,
     ) -> Result<Option<Self>, GpuError> {
         fn pooled<'a>(o: &Option<&'a FlatObject>) -> Option<&'a FlatObject> {
             o.filter(|o| u64::from(o.topology.triangle_count) <= OBJECT_MAX_FINE)
@@ -230,6 +236,7 @@ impl FlatPool {
             colours,
             light,
             table_at: word("pooled topology", table_at)?,
+            max_fine: max_fine.max(1),
             bases,
             uniform: ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("hce flat batch"),
@@ -246,8 +253,8 @@ impl FlatPool {
         self.bases.get(object).is_some_and(Option::is_some)
     }
 
-    /// Pooled outputs for `vertices` and `faces`, grown (to the next power of two, at most
-    /// [`BATCH_MAX_FINE`] fine triangles' worth) when too small.
+    /// Pooled outputs for `vertices` and `faces`, grown (to the next power of two) when too
+    /// small; a batch holds at most [`FlatPool::max_fine`] fine triangles.
     fn arena(&mut self, ctx: &GpuContext, vertices: u64, faces: u64) -> Result<&Arena, GpuError> {
         let fits = self
             .arena
@@ -317,18 +324,12 @@ impl FlatPool {
     }
 
     /// How many of `objects` (in order) one batch takes: while their fine triangles stay
-    /// within [`BATCH_MAX_FINE`].
-    pub(super) fn fitting(outs: impl IntoIterator<Item = u32>) -> usize {
-        let mut faces = 0u64;
-        outs.into_iter()
-            .take_while(|&f| {
-                faces += u64::from(f);
-                faces <= BATCH_MAX_FINE
-            })
-            .count()
+    /// within [`FlatPool::max_fine`].
+    pub(super) fn fitting(&self, outs: impl IntoIterator<Item = u32>) -> usize {
+        fitting(outs, self.max_fine)
     }
 
-    /// Records the refinement of `objects` (pooled, begun, at most [`BATCH_MAX_FINE`] fine
+    /// Records the refinement of `objects` (pooled, begun, at most [`FlatPool::max_fine`] fine
     /// triangles together) into `encoder`, which must be submitted before the next batch is
     /// recorded (the table is written once per batch): the batch's table written to the
     /// queue, one compute
@@ -375,11 +376,11 @@ impl FlatPool {
         if count == 0 {
             return Ok(None);
         }
-        if faces > BATCH_MAX_FINE {
+        if faces > self.max_fine {
             return Err(GpuError::TooLarge {
                 what: "flat batch",
                 needed: faces,
-                limit: BATCH_MAX_FINE,
+                limit: self.max_fine,
             });
         }
         let keys = self.table_at;
@@ -451,16 +452,30 @@ impl FlatPool {
     }
 }
 
+/// How many of `outs` (fine triangles per object, in order) one batch of at most `max_fine`
+/// fine triangles takes.
+fn fitting(outs: impl IntoIterator<Item = u32>, max_fine: u64) -> usize {
+    let mut faces = 0u64;
+    outs.into_iter()
+        .take_while(|&f| {
+            faces += u64::from(f);
+            faces <= max_fine
+        })
+        .count()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn a_batch_takes_objects_in_order_while_they_fit() {
-        assert_eq!(FlatPool::fitting([]), 0);
-        assert_eq!(FlatPool::fitting([10, 20, 30]), 3);
-        let half = (BATCH_MAX_FINE / 2) as u32;
-        assert_eq!(FlatPool::fitting([half, half, 1, 1]), 2);
-        assert_eq!(FlatPool::fitting([half, half + 1, 1]), 1);
+        let max = BATCH_MAX_FINE;
+        assert_eq!(fitting([], max), 0);
+        assert_eq!(fitting([10, 20, 30], max), 3);
+        let half = (max / 2) as u32;
+        assert_eq!(fitting([half, half, 1, 1], max), 2);
+        assert_eq!(fitting([half, half + 1, 1], max), 1);
+        assert_eq!(fitting([10, 20, 30], 30), 2);
     }
 }

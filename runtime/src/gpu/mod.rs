@@ -47,6 +47,7 @@ mod wgsl;
 
 pub use context::{AdapterDescription, AdapterKind, ContextOptions, GpuContext};
 pub use flat::{refine_flat, refine_flat_with, FlatKernel, FlatObject, FlatOutput, KernelTiming};
+pub use flat_batch::BATCH_MAX_FINE;
 pub use framing::{auto_scene_camera, Placement};
 pub use hce_geometry::flat::RefinedMesh;
 pub use job::{Encoded, RefineJob};

@@ -63,7 +63,7 @@
 use glam::{Mat4, Vec3};
 use hce_format::{Object, ObjectKind};
 
-use super::flat_batch::{BatchObject, FlatPool, OBJECT_MAX_FINE};
+use super::flat_batch::{BatchObject, FlatPool, BATCH_MAX_FINE, OBJECT_MAX_FINE};
 use super::framing::{auto_scene_camera, Placement};
 use super::lod::{choose_level, Camera, LodParams};
 use super::render::{render_draws, MeshDraw, RenderParams, RenderedImage};
@@ -101,6 +101,9 @@ pub struct SceneOptions {
     /// dispatches per object (their tables are copied once into pooled buffers). The output is
     /// the same bytes. Default `true`; `false` is the per-object path it is checked against.
     pub flat_batch: bool,
+    /// The most fine triangles one batch refines, the size of the pooled outputs: a call that
+    /// refines more refines them in several batches. Default [`BATCH_MAX_FINE`] (2^20).
+    pub flat_batch_fine: u64,
 }
 
 impl Default for SceneOptions {
@@ -110,6 +113,7 @@ impl Default for SceneOptions {
             flat_max_level: 7,
             reconstruction: Reconstruction::default(),
             flat_batch: true,
+            flat_batch_fine: BATCH_MAX_FINE,
         }
     }
 }
@@ -335,7 +339,7 @@ impl GpuScene {
                         _ => None,
                     })
                     .collect();
-                FlatPool::new(ctx, kernel, &flats)?
+                FlatPool::new(ctx, kernel, &flats, options.flat_batch_fine)?
             }
             _ => None,
         };
@@ -642,23 +646,18 @@ impl GpuScene {
         let mut reports = Vec::with_capacity(work.len());
         // Per report, its timer passes and its share of their time.
         let mut passes = Vec::with_capacity(work.len());
-        let Batched {
-            objects: batched,
-            pass,
-        } = self.batch_flat(ctx, &mut encoder, work, &mut timer)?;
+        let batched = self.batch_flat(ctx, &mut encoder, work, &mut timer)?;
         let mut in_batch = vec![false; self.objects.len()];
-        let batch_work: u64 = batched.iter().map(|&(_, w)| w).sum();
-        for &(i, w) in &batched {
-            in_batch[i] = true;
+        for b in &batched {
+            in_batch[b.object] = true;
             reports.push(BatchReport {
-                object: i,
-                work: w,
+                object: b.object,
+                work: b.work,
                 finished: true,
                 batched: true,
                 gpu_seconds: None,
             });
-            let share = w as f64 / batch_work.max(1) as f64;
-            passes.push((pass.map_or(0..0, |p| p..p + 1), share));
+            passes.push((b.pass.map_or(0..0, |p| p..p + 1), b.share));
         }
         for &(i, amount) in work {
             if in_batch.get(i) == Some(&true) {
@@ -711,23 +710,23 @@ impl GpuScene {
         Ok(reports)
     }
 
-    /// Records, as one batch ([`FlatPool::encode`]), the flat objects of `work` that are pooled,
+    /// Records in batches ([`FlatPool::encode`]) the flat objects of `work` that are pooled,
     /// refined whole by this call (nothing recorded before) to at most [`OBJECT_MAX_FINE`] fine
-    /// triangles, as many as one batch takes, when there are two or more; marks their jobs
-    /// recorded. Returns them with their work, and the timer pass of the batch.
+    /// triangles, when there are two or more; marks their jobs recorded. Each batch takes as
+    /// many as fit [`SceneOptions::flat_batch_fine`]; all but the last are submitted at once
+    /// in encoders of their own (a batch's table is written to the queue, so the next batch
+    /// may be recorded only once it is submitted), the last goes into `encoder` (empty when
+    /// this is called). Returns each object with its work, its batch's timer pass and its share
+    /// of the batch's work.
     fn batch_flat(
         &mut self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         work: &[(usize, u64)],
         timer: &mut PassTimer,
-    ) -> Result<Batched, GpuError> {
-        let none = Batched {
-            objects: Vec::new(),
-            pass: None,
-        };
+    ) -> Result<Vec<Batched>, GpuError> {
         let Some(pool) = self.flat_pool.as_mut() else {
-            return Ok(none);
+            return Ok(Vec::new());
         };
         let mut seen = vec![false; self.objects.len()];
         let mut chosen = Vec::new();
@@ -752,24 +751,49 @@ impl GpuScene {
                 });
             }
         }
-        chosen.truncate(FlatPool::fitting(
-            chosen.iter().map(|b| b.out.triangle_count),
-        ));
-        if chosen.len() < 2 {
-            return Ok(none);
+        // The batches: (first object, end, timer pass).
+        let mut batches = Vec::new();
+        let mut first = 0;
+        while chosen.len() - first >= 2 {
+            let rest = &chosen[first..];
+            let n = pool.fitting(rest.iter().map(|b| b.out.triangle_count));
+            if n < 2 {
+                break;
+            }
+            let pass = if n == rest.len() {
+                pool.encode(ctx, encoder, &rest[..n], Some(&mut *timer))?
+            } else {
+                let mut own = ctx
+                    .device
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                        label: Some("hce flat batch"),
+                    });
+                let pass = pool.encode(ctx, &mut own, &rest[..n], Some(&mut *timer))?;
+                ctx.queue.submit([own.finish()]);
+                pass
+            };
+            batches.push((first, first + n, pass));
+            first += n;
         }
-        let pass = pool.encode(ctx, encoder, &chosen, Some(timer))?;
-        let chosen: Vec<usize> = chosen.iter().map(|b| b.object).collect();
-        let mut batched = Vec::with_capacity(chosen.len());
-        for i in chosen {
-            if let Refiner::Flat { next: Some(n), .. } = &mut self.objects[i].refiner {
-                batched.push((i, n.job.recorded_elsewhere()));
+        let faces: Vec<(usize, u64)> = chosen
+            .iter()
+            .map(|b| (b.object, u64::from(b.out.triangle_count)))
+            .collect();
+        let mut batched = Vec::with_capacity(faces.len());
+        for (start, end, pass) in batches {
+            let total: u64 = faces[start..end].iter().map(|&(_, f)| f).sum();
+            for &(i, f) in &faces[start..end] {
+                if let Refiner::Flat { next: Some(n), .. } = &mut self.objects[i].refiner {
+                    batched.push(Batched {
+                        object: i,
+                        work: n.job.recorded_elsewhere(),
+                        pass,
+                        share: f as f64 / total.max(1) as f64,
+                    });
+                }
             }
         }
-        Ok(Batched {
-            objects: batched,
-            pass,
-        })
+        Ok(batched)
     }
 
     /// The current buffers of `object`, `None` before its first refinement.
@@ -896,11 +920,15 @@ pub struct BatchReport {
     pub gpu_seconds: Option<f64>,
 }
 
-/// The flat objects [`GpuScene::batch_flat`] recorded as one batch, with their work, and the
-/// timer pass of the batch.
+/// A flat object [`GpuScene::batch_flat`] recorded in a batch.
 struct Batched {
-    objects: Vec<(usize, u64)>,
+    object: usize,
+    /// Its work (see [`RefineJob`]).
+    work: u64,
+    /// The timer pass of its batch.
     pass: Option<u32>,
+    /// Its share of the batch's fine triangles, and so of the batch's GPU time.
+    share: f64,
 }
 
 /// Kernel output buffers that report their level.
