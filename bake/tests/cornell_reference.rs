@@ -152,7 +152,10 @@ fn cornell_box_agrees_with_a_path_traced_reference() {
                 .map(|&t| {
                     let [a, b, c] = scene.objects[s.object].corners(t);
                     let area = f64::from((b - a).cross(c - a).length() * 0.5);
-                    area * o.triangles[t].colours[0].iter().map(|&v| f64::from(v)).sum::<f64>()
+                    area * o.triangles[t].colours[0]
+                        .iter()
+                        .map(|&v| f64::from(v))
+                        .sum::<f64>()
                 })
                 .sum();
             (s, sum / s.area)
@@ -169,8 +172,17 @@ fn cornell_box_agrees_with_a_path_traced_reference() {
         100.0 * err,
         100.0 * sigma
     );
-    assert!(sigma < 0.005, "{}: reference too noisy ({sigma})", dimmest.name);
-    assert!(err.abs() < 0.04, "{}: {:+.2}% off", dimmest.name, 100.0 * err);
+    assert!(
+        sigma < 0.005,
+        "{}: reference too noisy ({sigma})",
+        dimmest.name
+    );
+    assert!(
+        err.abs() < 0.04,
+        "{}: {:+.2}% off",
+        dimmest.name,
+        100.0 * err
+    );
     assert!(worst[0] < 0.02, "directly lit surfaces: {}", worst[0]);
     assert!(worst[1] < 0.035, "walls and ceiling: {}", worst[1]);
     assert!(worst[2] < 0.12, "vertical block faces: {}", worst[2]);
