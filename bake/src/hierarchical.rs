@@ -317,6 +317,12 @@ struct Ctx<'a> {
     /// hold only a sliver of the object; these give the receivers around one (`refine_root`).
     object_clusters: Vec<(ClusterTree, u32)>,
     occ: Occluders,
+    /// The root each occluder triangle belongs to.
+    occ_owner: Vec<u32>,
+    /// Per root: its object's occluder triangles over it, by path at their level (empty where
+    /// the object casts shadows with its own triangles): rays leave from and arrive at the
+    /// points of this surface that correspond to the root's ([`Ctx::on_surface`]).
+    surface: Vec<Vec<[Vec3; 3]>>,
     /// Per cluster: whether it holds emitting triangles beside others. Such a cluster is
     /// always opened: as one source it spread the emitters' light as if it left the whole
     /// cluster, and a room lit by a panel under its ceiling came out 2-6% darker than a path
@@ -337,6 +343,52 @@ struct Ctx<'a> {
     plane_eps: f32,
 }
 
+/// The point of the refined triangles `surface` over the coarse triangle `corners` (by path at
+/// their level, as `hce_geometry::lattice` numbers them) with the lattice coordinates of `p`, a
+/// point of the coarse triangle, and the refined triangle's normal there; `(p, normal)` when
+/// `surface` is empty or `p` lies in none of them.
+fn surface_point(corners: [Vec3; 3], normal: Vec3, surface: &[[Vec3; 3]], p: Vec3) -> (Vec3, Vec3) {
+    if surface.is_empty() {
+        return (p, normal);
+    }
+    let level = (surface.len().trailing_zeros() / 2).min(hce_format::MAX_TREE_DEPTH);
+    let n = (1u32 << level) as f32;
+    // Lattice coordinates (b, c) of p: p = v0 + (b (v1 - v0) + c (v2 - v0)) / n.
+    let [v0, v1, v2] = corners;
+    let (e1, e2, d) = (v1 - v0, v2 - v0, p - v0);
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let den = d11 * d22 - d12 * d12;
+    if den <= 0.0 {
+        return (p, normal);
+    }
+    let (d1, d2) = (d.dot(e1), d.dot(e2));
+    let q = [
+        n * (d22 * d1 - d12 * d2) / den,
+        n * (d11 * d2 - d12 * d1) / den,
+    ];
+    for (path, tri) in surface.iter().enumerate() {
+        let c = hce_geometry::lattice::fine_corners(level, path as u32)
+            .map(|x| [x[0] as f32, x[1] as f32]);
+        // Barycentric weights of q in the lattice triangle c.
+        let a = [c[1][0] - c[0][0], c[1][1] - c[0][1]];
+        let b = [c[2][0] - c[0][0], c[2][1] - c[0][1]];
+        let det = a[0] * b[1] - a[1] * b[0];
+        let (x, y) = (q[0] - c[0][0], q[1] - c[0][1]);
+        let w1 = (x * b[1] - y * b[0]) / det;
+        let w2 = (a[0] * y - a[1] * x) / det;
+        let w0 = 1.0 - w1 - w2;
+        if w0 >= -1e-4 && w1 >= -1e-4 && w2 >= -1e-4 {
+            let at = tri[0] * w0 + tri[1] * w1 + tri[2] * w2;
+            let refined = (tri[1] - tri[0])
+                .cross(tri[2] - tri[0])
+                .try_normalize()
+                .unwrap_or(normal);
+            return (at, refined);
+        }
+    }
+    (p, normal)
+}
+
 fn lum(v: Vec3) -> f32 {
     v.max_element()
 }
@@ -344,6 +396,22 @@ fn lum(v: Vec3) -> f32 {
 impl Ctx<'_> {
     fn nn(&self, r: u32) -> usize {
         self.roots[r as usize].normals.len()
+    }
+
+    /// The object occluder triangle `t` belongs to.
+    fn owner_object(&self, t: usize) -> usize {
+        self.roots[self.occ_owner[t] as usize].object
+    }
+
+    /// The point of root `r`'s occluding surface ([`SolverObject::occluder`]) that corresponds
+    /// to point `p` of the root, and that surface's normal there: the same lattice coordinates
+    /// on the refined triangle as on the flat subtriangle. `(p, the root's normal)` where the
+    /// root casts shadows with its own triangle.
+    ///
+    /// [`SolverObject::occluder`]: crate::scene::SolverObject::occluder
+    fn on_surface(&self, r: u32, p: Vec3) -> (Vec3, Vec3) {
+        let root = &self.roots[r as usize];
+        surface_point(root.corners, root.normal, &self.surface[r as usize], p)
     }
 
     fn elem_corners(&self, k: ElemKey) -> [Vec3; 3] {
@@ -449,7 +517,10 @@ impl Ctx<'_> {
                 if scale <= 0.0 || root.normals.iter().all(|n| n.dot(w) <= 0.0) {
                     continue;
                 }
-                if nv > 0 && !self.occ.ray_clear(p, w, dist * (1.0 - 1e-5)) {
+                if nv > 0 && {
+                    let (a, _) = self.on_surface(k.root, p);
+                    !self.occ.ray_clear(a, w, dist * (1.0 - 1e-5))
+                } {
                     continue;
                 }
                 for (a, n) in acc.iter_mut().zip(&root.normals) {
@@ -1011,7 +1082,11 @@ impl Ctx<'_> {
                         let q = jittered_point(st, i, nv, &mut rng);
                         self.exchanges(p, normals, q, sn).then(|| {
                             (
-                                self.occ.segment_clear_between(p, root.normal, q, sn),
+                                {
+                                    let (a, na) = self.on_surface(recv.root, p);
+                                    let (b, nb) = self.on_surface(sk.root, q);
+                                    self.occ.segment_clear_between(a, na, b, nb)
+                                },
                                 kernel(p, root.normal, q, sn, r_size + s_size),
                             )
                         })
@@ -1047,7 +1122,11 @@ impl Ctx<'_> {
                         let qn = self.roots[t as usize].normal;
                         self.exchanges(p, normals, q, qn).then(|| {
                             (
-                                self.occ.segment_clear_between(p, root.normal, q, qn),
+                                {
+                                    let (a, na) = self.on_surface(recv.root, p);
+                                    let (b, nb) = self.on_surface(t, q);
+                                    self.occ.segment_clear_between(a, na, b, nb)
+                                },
                                 kernel(p, root.normal, q, qn, r_size + c_size),
                             )
                         })
@@ -1197,7 +1276,7 @@ impl Ctx<'_> {
         // sockets of suzanne darker than a path tracer of the refined surface shows them.
         let object = self.roots[k.root as usize].object;
         let own = self.scene.objects[object].multires;
-        let ignore = |t: usize| own && self.roots[t].object == object;
+        let ignore = |t: usize| own && self.owner_object(t) == object;
         for ring in 0..3 {
             // Cosine-weighted strata: sin² of the angle from the normal at 1/6, 3/6, 5/6.
             let s2 = (2 * ring + 1) as f32 / 6.0;
@@ -1249,7 +1328,10 @@ impl Ctx<'_> {
         let pts = stratified_points(tri, 1);
         let shut = pts
             .iter()
-            .filter(|&&p| dirs.iter().all(|&d| self.occ.first_hit_is_back(p, d)))
+            .filter(|&&p| {
+                let (a, _) = self.on_surface(k.root, p);
+                dirs.iter().all(|&d| self.occ.first_hit_is_back(a, d))
+            })
             .count();
         1.0 - shut as f32 / pts.len() as f32
     }
@@ -1768,7 +1850,31 @@ pub fn bake_with_progress(
             e > 0 && e < ts.len()
         })
         .collect();
-    let occ = Occluders::new(all_tris.iter().copied());
+    // What casts shadows: every root, but a multiresolution object with an occluder of its
+    // own ([`SolverObject::occluder`]) by that; each occluder triangle with its root.
+    let (occ_tris, occ_owner, surface) = {
+        let (mut tris, mut owner) = (Vec::new(), Vec::new());
+        let mut surface: Vec<Vec<[Vec3; 3]>> = vec![Vec::new(); roots.len()];
+        let mut first = 0u32;
+        for o in &scene.objects {
+            if o.occluder.is_empty() {
+                for t in 0..o.triangles.len() as u32 {
+                    tris.push(roots[(first + t) as usize].corners);
+                    owner.push(first + t);
+                }
+            } else {
+                for (tri, t) in &o.occluder {
+                    let tri = tri.map(Vec3::from);
+                    surface[(first + *t) as usize].push(tri);
+                    tris.push(tri);
+                    owner.push(first + *t);
+                }
+            }
+            first += o.triangles.len() as u32;
+        }
+        (tris, owner, surface)
+    };
+    let occ = Occluders::new(occ_tris.iter().copied());
     let plane_eps = {
         let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         for t in &all_tris {
@@ -1823,6 +1929,8 @@ pub fn bake_with_progress(
             .map(|r| occ.shaft_clear(r.corners, r.normal, Vec3::MIN, Vec3::MAX, None))
             .collect(),
         occ,
+        occ_owner,
+        surface,
         min_area: (total_area * f64::from(params.min_area_fraction)) as f32,
         plane_eps,
         roots,
@@ -1971,4 +2079,162 @@ pub fn bake_with_progress(
         });
     }
     Ok(BakeResult { objects, stats })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The level-`level` surface over `corners` whose lattice point `(b, c)` is at
+    /// `at(b, c)`, by path as `hce_geometry::lattice` numbers the fine triangles.
+    fn surface(level: u32, at: impl Fn(f32, f32) -> Vec3) -> Vec<[Vec3; 3]> {
+        (0..1u32 << (2 * level))
+            .map(|path| {
+                hce_geometry::lattice::fine_corners(level, path)
+                    .map(|[b, c]| at(b as f32, c as f32))
+            })
+            .collect()
+    }
+
+    #[test]
+    fn points_map_to_the_occluding_surface_at_their_lattice_coordinates() {
+        let corners = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(2.0, 0.0, 0.1),
+            Vec3::new(0.3, 1.5, -0.2),
+        ];
+        let normal = (corners[1] - corners[0])
+            .cross(corners[2] - corners[0])
+            .normalize();
+        let n = 4.0;
+        let flat = |b: f32, c: f32| {
+            corners[0] + (corners[1] - corners[0]) * (b / n) + (corners[2] - corners[0]) * (c / n)
+        };
+        // A bump that differs on every lattice point, so that a point mapped through the wrong
+        // fine triangle or the wrong corner lands elsewhere.
+        let bump = |b: f32, c: f32| flat(b, c) + normal * (0.05 * b + 0.11 * c + 0.02 * b * c);
+        let mut rng = crate::element::Rng::new(1, 2, 3);
+        for _ in 0..200 {
+            let (mut u, mut v) = (rng.next_f32(), rng.next_f32());
+            if u + v > 1.0 {
+                (u, v) = (1.0 - u, 1.0 - v);
+            }
+            let p = flat(n * u, n * v);
+            // In its own plane, a point is where it is, with the triangle's normal.
+            let (q, m) = surface_point(corners, normal, &surface(2, flat), p);
+            assert!((q - p).length() < 1e-5, "{p} went to {q}");
+            assert!(m.dot(normal) > 0.9999);
+            // Lifted, it follows the surface: linear within each fine triangle.
+            let (q, _) = surface_point(corners, normal, &surface(2, bump), p);
+            let (b, c) = (n * u, n * v);
+            let lift = (q - p).dot(normal);
+            let (lo, hi) = {
+                // The bump at the corners of the lattice cell around (b, c) bounds it.
+                let (b0, c0) = (b.floor(), c.floor());
+                let h = |b: f32, c: f32| 0.05 * b + 0.11 * c + 0.02 * b * c;
+                let hs = [
+                    h(b0, c0),
+                    h(b0 + 1.0, c0),
+                    h(b0, c0 + 1.0),
+                    h(b0 + 1.0, c0 + 1.0),
+                ];
+                (
+                    hs.iter().copied().fold(f32::MAX, f32::min),
+                    hs.iter().copied().fold(f32::MIN, f32::max),
+                )
+            };
+            assert!(
+                lift >= lo - 1e-4 && lift <= hi + 1e-4,
+                "({b}, {c}) lifted by {lift}, outside [{lo}, {hi}]"
+            );
+            assert!(
+                (q - p - normal * lift).length() < 1e-4,
+                "moved off the normal"
+            );
+        }
+        // The lattice points themselves land exactly on the surface's.
+        for (b, c) in [
+            (0.0, 0.0),
+            (4.0, 0.0),
+            (0.0, 4.0),
+            (1.0, 2.0),
+            (3.0, 1.0),
+            (2.0, 2.0),
+        ] {
+            let (q, _) = surface_point(corners, normal, &surface(2, bump), flat(b, c));
+            assert!(
+                (q - bump(b, c)).length() < 1e-4,
+                "({b}, {c}): {q} against {}",
+                bump(b, c)
+            );
+        }
+        // Without a surface of its own a root is its own.
+        let p = flat(1.0, 1.0);
+        assert_eq!(surface_point(corners, normal, &[], p), (p, normal));
+    }
+
+    /// The occluder the pipeline hands the solver lists each coarse triangle's Loop triangles
+    /// by path with their corners in `fine_corners` order, as `surface_point` reads them: on a
+    /// planar grid, which Loop subdivision leaves where it is away from its boundary (whose
+    /// rules move the boundary's points along it), every refined corner of a triangle two rings
+    /// in is the flat lattice point.
+    #[test]
+    fn loop_triangles_follow_the_lattice_order() {
+        let (w, h) = (8u32, 7u32);
+        let positions: Vec<[f32; 3]> = (0..=h)
+            .flat_map(|y| (0..=w).map(move |x| [x as f32, y as f32 * 0.7, 0.0]))
+            .collect();
+        let at = |x: u32, y: u32| y * (w + 1) + x;
+        let mut triangles = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                triangles.push([at(x, y), at(x + 1, y), at(x + 1, y + 1)]);
+                triangles.push([at(x, y), at(x + 1, y + 1), at(x, y + 1)]);
+            }
+        }
+        let top = hce_geometry::build_control_mesh(
+            &positions,
+            &triangles,
+            None,
+            &hce_geometry::TopologyConfig::default(),
+        )
+        .unwrap();
+        let level = 2;
+        let refined = hce_geometry::subdivide(&top.mesh, level).unwrap();
+        let per = 1usize << (2 * level);
+        let n = (1u32 << level) as f32;
+        let mut checked = 0;
+        for t in 0..top.mesh.triangle_count() {
+            let [v0, v1, v2] = top
+                .mesh
+                .triangle(t)
+                .map(|v| Vec3::from(top.mesh.position(v)));
+            let inside = |v: Vec3| {
+                let (x, y) = (v.x, v.y / 0.7);
+                x >= 2.0 && x <= (w - 2) as f32 && y >= 2.0 && y <= (h - 2) as f32
+            };
+            if ![v0, v1, v2].into_iter().all(inside) {
+                continue;
+            }
+            checked += 1;
+            for path in 0..per {
+                let want = hce_geometry::lattice::fine_corners(level, path as u32)
+                    .map(|[b, c]| v0 + (v1 - v0) * (b as f32 / n) + (v2 - v0) * (c as f32 / n));
+                let got = refined.indices[t * per + path]
+                    .map(|v| Vec3::from(refined.positions[v as usize]));
+                for k in 0..3 {
+                    assert!(
+                        (got[k] - want[k]).length() < 1e-4,
+                        "triangle {t} path {path} corner {k}: {} against {}",
+                        got[k],
+                        want[k]
+                    );
+                }
+            }
+        }
+        assert!(
+            checked >= 10,
+            "only {checked} triangles away from the boundary"
+        );
+    }
 }

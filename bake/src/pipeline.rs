@@ -149,7 +149,16 @@ struct Prepared {
     normals: Vec<Vec<[f32; 3]>>,
     histogram: Vec<usize>,
     worst_angle_deg: f32,
+    /// Multiresolution: the Loop refinement at [`OCCLUDER_LEVEL`] (object space), each
+    /// triangle with its coarse triangle ([`SolverObject::occluder`]).
+    ///
+    /// [`SolverObject::occluder`]: crate::scene::SolverObject::occluder
+    occluder: Vec<([[f32; 3]; 3], u32)>,
 }
+
+/// The Loop level of the surface that casts a multiresolution object's shadows in the bake:
+/// 16 triangles per coarse one, close to the limit surface a renderer draws.
+const OCCLUDER_LEVEL: u32 = 2;
 
 /// Bakes `input` and writes `options.output`. `progress` gets `(phase, done, total)`.
 pub fn bake_file(
@@ -194,6 +203,19 @@ pub fn bake_file(
     let mut solver = scene.solver_scene();
     for (i, (so, p)) in solver.objects.iter_mut().zip(&prepared).enumerate() {
         so.multires = p.kind == ObjectKind::Multiresolution;
+        if so.multires {
+            let m = scene.objects[i].transform;
+            so.occluder = p
+                .occluder
+                .iter()
+                .map(|(tri, t)| {
+                    (
+                        tri.map(|v| m.transform_point3(Vec3::from(v)).to_array()),
+                        *t,
+                    )
+                })
+                .collect();
+        }
         if so.multires {
             let inv_t = Mat3::from_mat4(scene.objects[i].transform)
                 .inverse()
@@ -436,6 +458,7 @@ fn prepare_object(
             normals: geometric.into_iter().map(|n| vec![n]).collect(),
             histogram: Vec::new(),
             worst_angle_deg: 0.0,
+            occluder: Vec::new(),
         });
     }
     let refined = match subdivide(&mesh, options.levels) {
@@ -451,6 +474,7 @@ fn prepare_object(
                 normals: geometric.into_iter().map(|n| vec![n]).collect(),
                 histogram: Vec::new(),
                 worst_angle_deg: 0.0,
+                occluder: Vec::new(),
             });
         }
     };
@@ -471,12 +495,24 @@ fn prepare_object(
             .map(|(t, &n0)| (n0, &subs[t * per..(t + 1) * per])),
         &options.normal_sets,
     );
+    let occluder = match subdivide(&mesh, OCCLUDER_LEVEL.min(options.levels)) {
+        Ok(r) => {
+            let per = 1usize << (2 * OCCLUDER_LEVEL.min(options.levels));
+            r.indices
+                .iter()
+                .enumerate()
+                .map(|(k, f)| (f.map(|v| r.positions[v as usize]), (k / per) as u32))
+                .collect()
+        }
+        Err(_) => Vec::new(),
+    };
     Ok(Prepared {
         mesh,
         kind,
         normals: sets.into_iter().map(|s| s.normals).collect(),
         histogram: report.histogram,
         worst_angle_deg: report.worst_angle_deg,
+        occluder,
     })
 }
 

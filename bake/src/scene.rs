@@ -42,6 +42,12 @@ pub struct SolverObject {
     /// geometric normal first (see [`crate::normal_sets`]). Empty means "geometric normal only"
     /// for every triangle.
     pub normal_sets: Vec<Vec<[f32; 3]>>,
+    /// The surface that casts this object's shadows, when it is not its own triangles: for a
+    /// multiresolution object, its Loop refinement (world space), each triangle with the
+    /// coarse triangle it refines. The refined surface is what a renderer draws, and the
+    /// control mesh's folds are deeper (a teapot's spout shades the body beside it more than
+    /// the refined spout does). Empty: its own triangles.
+    pub occluder: Vec<([[f32; 3]; 3], u32)>,
 }
 
 impl std::fmt::Debug for SolverObject {
@@ -74,6 +80,7 @@ impl SolverObject {
             reflectance_fn: None,
             emission: Vec::new(),
             normal_sets: Vec::new(),
+            occluder: Vec::new(),
         }
     }
 

@@ -150,13 +150,18 @@ impl Occluders {
         }
         let ray = bvh_ray(a.into(), dir.into(), t0, t1);
         bvh.ray_traverse_miss(ray, |r, id| {
-            let t = bvh.primitive_indices[id] as usize;
-            if ignore(t) {
-                f32::INFINITY
-            } else {
-                self.tris[t].intersect(r)
-            }
+            self.hit_but(r, bvh.primitive_indices[id], &ignore)
         })
+    }
+
+    /// The distance at which `ray` meets triangle `t`, infinite where it misses or where
+    /// `ignore(t)`.
+    fn hit_but(&self, ray: &Ray, t: u32, ignore: &impl Fn(usize) -> bool) -> f32 {
+        if ignore(t as usize) {
+            f32::INFINITY
+        } else {
+            self.tris[t as usize].intersect(ray)
+        }
     }
 
     /// Distance to the first triangle met by the ray that leaves `a`, on a surface of unit
@@ -180,12 +185,7 @@ impl Occluders {
         let ray = bvh_ray(a.into(), dir.into(), t0, max_t);
         let mut hit = RayHit::none();
         bvh.ray_traverse(ray, &mut hit, |r, id| {
-            let t = bvh.primitive_indices[id] as usize;
-            if ignore(t) {
-                f32::INFINITY
-            } else {
-                self.tris[t].intersect(r)
-            }
+            self.hit_but(r, bvh.primitive_indices[id], &ignore)
         })
         .then_some(hit.t)
     }

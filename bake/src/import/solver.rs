@@ -82,6 +82,7 @@ impl ToSolver for ImportedScene {
             reflectance_fn,
             emission,
             normal_sets: Vec::new(),
+            occluder: Vec::new(),
         }
     }
 

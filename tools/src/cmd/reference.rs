@@ -422,6 +422,7 @@ fn build_scene(
                 reflectance_fn: None,
                 emission,
                 normal_sets: Vec::new(),
+                occluder: Vec::new(),
             });
         }
     }
