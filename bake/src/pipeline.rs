@@ -157,8 +157,22 @@ struct Prepared {
 }
 
 /// The Loop level of the surface that casts a multiresolution object's shadows in the bake:
-/// 16 triangles per coarse one, close to the limit surface a renderer draws.
+/// 16 triangles per coarse one, close to the limit surface a renderer draws (level 3 gave the
+/// same images).
 const OCCLUDER_LEVEL: u32 = 2;
+
+/// Most triangles of a multiresolution object's occluder: a finer control mesh casts its
+/// shadows at a lower level (a fine mesh barely changes when refined, and each level costs the
+/// visibility rays four times the triangles), and one finer than this with its own triangles.
+const OCCLUDER_TRIANGLES: usize = 1 << 20;
+
+/// The level of the occluder of a control mesh of `triangles` triangles refined to `levels`
+/// at most, `None` for none (its own triangles).
+fn occluder_level(triangles: usize, levels: u32) -> Option<u32> {
+    (1..=OCCLUDER_LEVEL.min(levels))
+        .rev()
+        .find(|&l| triangles << (2 * l) <= OCCLUDER_TRIANGLES)
+}
 
 /// Bakes `input` and writes `options.output`. `progress` gets `(phase, done, total)`.
 pub fn bake_file(
@@ -495,16 +509,17 @@ fn prepare_object(
             .map(|(t, &n0)| (n0, &subs[t * per..(t + 1) * per])),
         &options.normal_sets,
     );
-    let occluder = match subdivide(&mesh, OCCLUDER_LEVEL.min(options.levels)) {
-        Ok(r) => {
-            let per = 1usize << (2 * OCCLUDER_LEVEL.min(options.levels));
+    let level = occluder_level(mesh.triangle_count(), options.levels);
+    let occluder = match level.map(|l| (l, subdivide(&mesh, l))) {
+        Some((level, Ok(r))) => {
+            let per = 1usize << (2 * level);
             r.indices
                 .iter()
                 .enumerate()
                 .map(|(k, f)| (f.map(|v| r.positions[v as usize]), (k / per) as u32))
                 .collect()
         }
-        Err(_) => Vec::new(),
+        _ => Vec::new(),
     };
     Ok(Prepared {
         mesh,
@@ -641,6 +656,16 @@ fn fallback_colours(scene: &ImportedScene, light: &[Vec<[f32; 3]>]) -> (Vec<Vec<
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fine_control_meshes_cast_shadows_at_lower_levels() {
+        assert_eq!(occluder_level(1000, 3), Some(2));
+        assert_eq!(occluder_level(1000, 1), Some(1));
+        assert_eq!(occluder_level(1000, 0), None);
+        assert_eq!(occluder_level(OCCLUDER_TRIANGLES / 16, 3), Some(2));
+        assert_eq!(occluder_level(OCCLUDER_TRIANGLES / 16 + 1, 3), Some(1));
+        assert_eq!(occluder_level(OCCLUDER_TRIANGLES / 4 + 1, 3), None);
+    }
 
     #[test]
     fn mirror_tree_swaps_left_and_right_at_every_level() {
