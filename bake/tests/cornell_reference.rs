@@ -62,6 +62,21 @@ fn surfaces(scene: &hce_bake::Scene) -> Vec<Surface> {
     out.into_iter().map(|(s, _)| s).collect()
 }
 
+/// The baked radiance of surface `s`: its triangles' root colours, area-weighted.
+fn baked_average(scene: &hce_bake::Scene, baked: &hce_bake::BakeResult, s: &Surface) -> [f64; 3] {
+    let o = &baked.objects[s.object];
+    let mut sum = [0.0f64; 3];
+    for &t in &s.triangles {
+        let [a, b, c] = scene.objects[s.object].corners(t);
+        let area = f64::from((b - a).cross(c - a).length() * 0.5);
+        let root = o.triangles[t].colours[0];
+        for k in 0..3 {
+            sum[k] += area * f64::from(root[k]);
+        }
+    }
+    sum.map(|x| x / s.area)
+}
+
 #[test]
 fn cornell_box_agrees_with_a_path_traced_reference() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../samples/cornell-box.glb");
@@ -85,17 +100,7 @@ fn cornell_box_agrees_with_a_path_traced_reference() {
         "surface", "area m2", "baked radiance (RGB)", "path-traced (RGB)", "err %", "sigma %"
     );
     for (si, s) in surfaces.iter().enumerate() {
-        let o = &baked.objects[s.object];
-        let mut sum = [0.0f64; 3];
-        for &t in &s.triangles {
-            let [a, b, c] = scene.objects[s.object].corners(t);
-            let area = f64::from((b - a).cross(c - a).length() * 0.5);
-            let root = o.triangles[t].colours[0];
-            for k in 0..3 {
-                sum[k] += area * f64::from(root[k]);
-            }
-        }
-        let got = sum.map(|x| x / s.area);
+        let got = baked_average(&scene, &baked, s);
         let want = tracer.surface_radiance(s.object, &s.triangles, paths, 0x5eed + si as u64);
         // Relative error of the channel sum (a luminance-like figure that no dark channel
         // dominates), and the reference's own standard error on the same scale.
@@ -144,22 +149,7 @@ fn cornell_box_agrees_with_a_path_traced_reference() {
     let (dimmest, got) = surfaces
         .iter()
         .filter(|s| scene.objects[s.object].name.contains("block"))
-        .map(|s| {
-            let o = &baked.objects[s.object];
-            let sum: f64 = s
-                .triangles
-                .iter()
-                .map(|&t| {
-                    let [a, b, c] = scene.objects[s.object].corners(t);
-                    let area = f64::from((b - a).cross(c - a).length() * 0.5);
-                    area * o.triangles[t].colours[0]
-                        .iter()
-                        .map(|&v| f64::from(v))
-                        .sum::<f64>()
-                })
-                .sum();
-            (s, sum / s.area)
-        })
+        .map(|s| (s, baked_average(&scene, &baked, s).iter().sum::<f64>()))
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .unwrap();
     let want = tracer.surface_radiance(dimmest.object, &dimmest.triangles, 1 << 20, 0xd1);
