@@ -414,34 +414,6 @@ impl Ctx<'_> {
         surface_point(root.corners, root.normal, &self.surface[r as usize], p)
     }
 
-    /// The triangles that stand for source element `k` (corners `st`) in the form factors of
-    /// receivers on its own object (their points carried onto it too): where the
-    /// object casts shadows with a refined surface ([`Ctx::on_surface`]), that surface's
-    /// triangles over the element (every refined triangle under an element above their level;
-    /// below it, the element's corners carried onto its refined triangle); else the element.
-    /// Between two parts of one curved object the control mesh's folds are deeper than the
-    /// surface drawn: at a fold each coarse triangle saw the other over a wide angle where the
-    /// refined surface is smooth, and the light they exchanged brightened the creases of every
-    /// curved object (the bunny's bias +1.6%, issue 20).
-    fn self_source<'s>(
-        &'s self,
-        k: ElemKey,
-        st: [Vec3; 3],
-        one: &'s mut [[Vec3; 3]; 1],
-    ) -> &'s [[Vec3; 3]] {
-        let surf = &self.surface[k.root as usize];
-        let level = surf.len().trailing_zeros() / 2;
-        if surf.is_empty() || k.level >= level {
-            one[0] = st.map(|q| self.on_surface(k.root, q).0);
-            return &one[..];
-        }
-        // Paths number the refined triangles as they number elements (first choice most
-        // significant), so those under `k` are one run.
-        let shift = 2 * (level - k.level);
-        let first = (k.path as usize) << shift;
-        &surf[first..first + (1usize << shift)]
-    }
-
     fn elem_corners(&self, k: ElemKey) -> [Vec3; 3] {
         k.corners(self.roots[k.root as usize].corners)
     }
@@ -1116,26 +1088,9 @@ impl Ctx<'_> {
                 } else {
                     stratified_points(rt, 2)
                 };
-                // Between parts of one refined object, points and source on its refined surface
-                // ([`Ctx::self_source`]).
-                let own = self.roots[sk.root as usize].object == root.object;
-                let mut one = [st];
-                let polys: &[[Vec3; 3]] = if own {
-                    self.self_source(sk, st, &mut one)
-                } else {
-                    &one
-                };
                 for p in &pts {
-                    let p = if own {
-                        self.on_surface(recv.root, *p).0
-                    } else {
-                        *p
-                    };
                     for (kj, n) in k.iter_mut().zip(&root.normals) {
-                        *kj += polys
-                            .iter()
-                            .map(|t| point_to_polygon(p, *n, t))
-                            .sum::<f32>();
+                        *kj += point_to_polygon(*p, *n, &st);
                     }
                 }
                 let inv = 1.0 / pts.len() as f32;
