@@ -62,7 +62,10 @@ pub struct BakeParams {
     /// this fraction of the scene's reference power (emitted plus directly received). Default
     /// 1e-4.
     pub bf_epsilon: f32,
-    /// Elements are not split below this fraction of the total scene area. Default 1e-5.
+    /// Elements are not split below this fraction of their object's area. Default 1e-5. (It
+    /// was a fraction of the whole scene's area, which in a room kept every triangle of a
+    /// 1000-triangle object whole: the objects' leaves were their coarse triangles, whatever
+    /// `max_level` said.)
     pub min_area_fraction: f32,
     /// Deepest element level below a coarse triangle that the power-based refinement reaches,
     /// at most [`hce_format::MAX_TREE_DEPTH`] (the element tree is the HCE tree). Default 4.
@@ -337,7 +340,9 @@ struct Ctx<'a> {
     /// Per scene object: its triangles form a convex surface ([`ClusterTree::is_convex`]), so
     /// that a point on one sees none of the others.
     convex: Vec<bool>,
-    min_area: f32,
+    /// Per scene object: the smallest element area it is split to
+    /// ([`BakeParams::min_area_fraction`] of the object's area).
+    min_area: Vec<f32>,
     /// Distances to a plane below this count as lying in it (rounding of coplanar
     /// geometry), relative to the scene size.
     plane_eps: f32,
@@ -414,18 +419,23 @@ impl Ctx<'_> {
         surface_point(root.corners, root.normal, &self.surface[r as usize], p)
     }
 
+    /// The smallest area an element of `k`'s object is split to.
+    fn min_area_of(&self, k: ElemKey) -> f32 {
+        self.min_area[self.roots[k.root as usize].object]
+    }
+
     fn elem_corners(&self, k: ElemKey) -> [Vec3; 3] {
         k.corners(self.roots[k.root as usize].corners)
     }
 
     fn splittable(&self, k: ElemKey, area: f32) -> bool {
-        k.level < self.params.max_level.min(MAX_TREE_DEPTH) && area * 0.25 >= self.min_area
+        k.level < self.params.max_level.min(MAX_TREE_DEPTH) && area * 0.25 >= self.min_area_of(k)
     }
 
     /// Whether a rule judged against the receiver's own radiance may split `k`
     /// ([`BakeParams::detail_level`]).
     fn detail_splittable(&self, k: ElemKey, area: f32) -> bool {
-        k.level < self.params.detail_level.min(MAX_TREE_DEPTH) && area * 0.25 >= self.min_area
+        k.level < self.params.detail_level.min(MAX_TREE_DEPTH) && area * 0.25 >= self.min_area_of(k)
     }
 
     /// Whether the bend rule may split receiver `k` for source element `sk`: one level below
@@ -441,7 +451,7 @@ impl Ctx<'_> {
         let depth = (self.params.max_level + 1)
             .min(self.params.detail_level)
             .min(MAX_TREE_DEPTH);
-        k.level < depth && area * 0.25 >= self.min_area
+        k.level < depth && area * 0.25 >= self.min_area_of(k)
     }
 
     /// Whether root `r`, with its geometric normal alone, sees nothing of object `object`: its
@@ -960,8 +970,17 @@ impl Ctx<'_> {
                     let l = lum(self.src_radiance(trees, cl, src, rc));
                     est = f * l * r_area * std::f32::consts::PI;
                     // As for near elements below: split a receiver over which the cluster's
-                    // form factor bends more than a linear link follows.
-                    if self.splittable(recv, r_area) {
+                    // form factor bends more than a linear link follows. The bend is at most
+                    // the largest form factor from the receiver to the cluster, at most its
+                    // area over π times the squared distance between the two (a convex
+                    // receiver's ball to the cluster's box): where even that is too faint,
+                    // the walk of the cluster's tree is spared, and the decision is the same.
+                    let rr = rt.iter().map(|v| (*v - rc).length()).fold(0.0, f32::max);
+                    let gap = ((rc.clamp(cluster.lo, cluster.hi) - rc).length() - rr).max(0.0);
+                    let bend_max = cluster.area / (std::f32::consts::PI * gap * gap);
+                    let faint = bend_max * l * lum(self.reflectance(recv))
+                        <= BEND_TOLERANCE * receiver_radiance(recv);
+                    if !faint && self.splittable(recv, r_area) {
                         // With the geometric normal: the bend is the geometry's.
                         let (centre, at) = self.cluster_factors_over(c, rt, root.normal);
                         known = KnownFactors {
@@ -1293,6 +1312,11 @@ impl Ctx<'_> {
     /// shadow evenly and the errors of all of them add up with one sign (in a closed furnace,
     /// floor leaves next to a resting object summed form factors to 1.12).
     fn near_shadow(&self, k: ElemKey) -> bool {
+        // Nothing but the scene's outer boundary in front: nothing there hides one source
+        // from part of the receiver (the convex side of an object in a room).
+        if self.unobstructed[k.root as usize] {
+            return false;
+        }
         let rt = self.elem_corners(k);
         let rc = (rt[0] + rt[1] + rt[2]) / 3.0;
         let radius = rt.iter().map(|v| (*v - rc).length()).fold(0.0, f32::max);
@@ -1882,7 +1906,6 @@ pub fn bake_with_progress(
         return Err(BakeError::InvalidParameter("too many triangles".into()));
     }
     let all_tris: Vec<[Vec3; 3]> = roots.iter().map(|r| r.corners).collect();
-    let total_area: f64 = roots.iter().map(|r| f64::from(r.area)).sum();
     let clusters = ClusterTree::build(&all_tris);
     let emits = |t: u32| roots[t as usize].emission.max_element() > 0.0;
     let mixes_emitters = clusters
@@ -1975,7 +1998,15 @@ pub fn bake_with_progress(
         occ,
         occ_owner,
         surface,
-        min_area: (total_area * f64::from(params.min_area_fraction)) as f32,
+        min_area: {
+            let mut area = vec![0.0f64; scene.objects.len()];
+            for r in &roots {
+                area[r.object] += f64::from(r.area);
+            }
+            area.iter()
+                .map(|a| (a * f64::from(params.min_area_fraction)) as f32)
+                .collect()
+        },
         plane_eps,
         roots,
     };
