@@ -720,8 +720,12 @@ impl Ctx<'_> {
         cl: &[ClusterLight],
         spreads: &[Vec<f32>],
         eps_power: f32,
-        mean_radiance: f32,
+        judge: Judge,
     ) -> (Vec<RawLink>, Vec<f32>) {
+        let Judge {
+            mean_radiance,
+            dark_floor,
+        } = judge;
         let mut links = Vec::new();
         let mut ks = Vec::new();
         let nn = self.nn(r);
@@ -778,6 +782,11 @@ impl Ctx<'_> {
             let t = &trees[r as usize];
             lum(t.l[t.deepest_toward(recv) as usize * nn])
         };
+        // What the bend rules judge a receiver's error against: its radiance, but in a first
+        // pass of several at least `dark_floor`. Before any light has bounced, a receiver
+        // in the dark of the direct light has none, and every bend split it (the scaling
+        // scene's ball, pass 1: 97,000 elements, of which the second pass kept 54,000).
+        let bend_radiance = |recv: ElemKey| receiver_radiance(recv).max(dark_floor);
         while let Some((recv, rt, src, st)) = stack.pop() {
             let r_area = root.area / 4f32.powi(recv.level as i32);
             if self.detail_splittable(recv, r_area)
@@ -871,7 +880,7 @@ impl Ctx<'_> {
                         // radiance it puts wrong into the receiver against the radiance the
                         // receiver has: every leaf is drawn, so a small one next to an edge
                         // matters as much as a large one.
-                        let recv_l = receiver_radiance(recv);
+                        let recv_l = bend_radiance(recv);
                         if bend * l * lum(self.reflectance(recv)) > BEND_TOLERANCE * recv_l
                             && self.bend_splittable(recv, r_area, sk)
                         {
@@ -982,7 +991,7 @@ impl Ctx<'_> {
                     let gap = ((rc.clamp(cluster.lo, cluster.hi) - rc).length() - rr).max(0.0);
                     let bend_max = cluster.area / (std::f32::consts::PI * gap * gap);
                     let faint = bend_max * l * lum(self.reflectance(recv))
-                        <= BEND_TOLERANCE * receiver_radiance(recv);
+                        <= BEND_TOLERANCE * bend_radiance(recv);
                     if !faint && self.splittable(recv, r_area) {
                         // With the geometric normal: the bend is the geometry's.
                         let (centre, at) = self.cluster_factors_over(c, rt, root.normal);
@@ -991,7 +1000,7 @@ impl Ctx<'_> {
                             corners: Some(at),
                         };
                         let bend = (centre - (at[0] + at[1] + at[2]) / 3.0).abs();
-                        let recv_l = receiver_radiance(recv);
+                        let recv_l = bend_radiance(recv);
                         if bend * l * lum(self.reflectance(recv)) > BEND_TOLERANCE * recv_l {
                             split_receiver(&mut stack, recv, rt, src, st);
                             continue;
@@ -1770,6 +1779,16 @@ fn disc_factor(n: Vec3, w: Vec3, proj: f32, d2: f32) -> f32 {
     (n.dot(w).max(0.0) * proj / (std::f32::consts::PI * d2 + proj)).min(1.0)
 }
 
+/// What a refinement pass judges the rules weighed against a receiver's own radiance by: the
+/// mean radiance of the surfaces that emit nothing (`DIM_RECEIVER_FLOOR`), and the least
+/// radiance the bend rules count a receiver as having (in a first pass of several, before any
+/// light has bounced, a fraction of that mean; else zero).
+#[derive(Clone, Copy)]
+struct Judge {
+    mean_radiance: f32,
+    dark_floor: f32,
+}
+
 /// A receiver and a source that may exchange light, with the corners of the receiver and of the
 /// source (when an element).
 type Pair = (ElemKey, [Vec3; 3], Source, [Vec3; 3]);
@@ -2065,10 +2084,18 @@ pub fn bake_with_progress(
             .map(|r| ctx.spreads(r, &trees[r as usize]))
             .collect();
         let mean_radiance = ctx.mean_radiance(&trees);
+        let judge = Judge {
+            mean_radiance,
+            dark_floor: if pass == 0 && params.refine_passes > 1 {
+                DIM_RECEIVER_FLOOR * mean_radiance
+            } else {
+                0.0
+            },
+        };
         let refined: Vec<(Vec<RawLink>, Vec<f32>)> = (0..n_roots)
             .into_par_iter()
             .map(|r| {
-                let out = ctx.refine_root(r, &trees, &cl, &spreads, eps_power, mean_radiance);
+                let out = ctx.refine_root(r, &trees, &cl, &spreads, eps_power, judge);
                 let done = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                 progress(&phase, done, n_roots as usize);
                 out
