@@ -198,6 +198,9 @@ struct RawLink {
     k_start: u32,
     /// Fraction of the visibility rays that were clear.
     visible: f32,
+    /// Whether the coefficients are followed by those of the receiver's refined normal
+    /// ([`Ctx::link_coefficients`]).
+    closure: bool,
 }
 
 /// A resolved link inside a root's tree.
@@ -208,6 +211,7 @@ struct Link {
     toward: Vec3,
     k_start: u32,
     visible: f32,
+    closure: bool,
 }
 
 #[derive(Clone, Copy)]
@@ -228,6 +232,19 @@ struct Tree {
     direct: Vec<Vec3>,
     links: Vec<Link>,
     k: Vec<f32>,
+    /// Per leaf (empty where the root has no refined surface): the form factor its links give
+    /// the refined surface's own normal at its points, pushed down to the leaves and averaged
+    /// over them (in a closed scene, one). A normal of the receiver's set turned away from the
+    /// surface's own sees, through the part of its hemisphere below the surface, the object's
+    /// neighbouring patches that the coarse scene does not have there; every form factor it
+    /// lacks against this one is filled with the mean radiance the geometric normal gathers,
+    /// so that a closed furnace stays exact for every normal.
+    closure: Vec<f32>,
+    /// Per leaf and normal (`self_view[i * nn + j]`; empty where the root has no refined
+    /// surface): the form factor from the leaf's centre on the refined surface to the rest of
+    /// its own root's refined triangles, which it gathers its own radiance through
+    /// ([`Ctx::closure`]).
+    self_view: Vec<f32>,
     /// Radiance per node and normal.
     l: Vec<Vec3>,
     /// Fraction of each node's area that is open, not shut in under other geometry
@@ -328,6 +345,10 @@ struct Ctx<'a> {
     /// the object casts shadows with its own triangles): rays leave from and arrive at the
     /// points of this surface that correspond to the root's ([`Ctx::on_surface`]).
     surface: Vec<Vec<[Vec3; 3]>>,
+    /// Per root: its corners carried onto its refined surface ([`Ctx::on_surface`]); its own
+    /// corners where it has none. The triangle that stands for it where its refined triangles
+    /// would be too many to sum: in clusters, and as a far source.
+    shape: Vec<[Vec3; 3]>,
     /// Per cluster: whether it holds emitting triangles beside others. Such a cluster is
     /// always opened: as one source it spread the emitters' light as if it left the whole
     /// cluster, and a room lit by a panel under its ceiling came out 2-6% darker than a path
@@ -374,7 +395,28 @@ fn surface_point(corners: [Vec3; 3], normal: Vec3, surface: &[[Vec3; 3]], p: Vec
         n * (d22 * d1 - d12 * d2) / den,
         n * (d11 * d2 - d12 * d1) / den,
     ];
-    for (path, tri) in surface.iter().enumerate() {
+    // Descend the 1-to-4 split to the refined triangle that holds q (children Top, Left,
+    // Center, Right, as `hce_geometry::lattice` numbers them), then weigh its corners.
+    let (mut u, mut v) = (q[0].clamp(0.0, n), q[1].clamp(0.0, n));
+    let (mut side, mut path) = (n, 0usize);
+    for _ in 0..level {
+        let h = side * 0.5;
+        let child = if u >= h {
+            u -= h;
+            1
+        } else if v >= h {
+            v -= h;
+            3
+        } else if u + v <= h {
+            0
+        } else {
+            (u, v) = (h - u, h - v);
+            2
+        };
+        path = path * 4 + child;
+        side = h;
+    }
+    if let Some(tri) = surface.get(path) {
         let c = hce_geometry::lattice::fine_corners(level, path as u32)
             .map(|x| [x[0] as f32, x[1] as f32]);
         // Barycentric weights of q in the lattice triangle c.
@@ -385,14 +427,12 @@ fn surface_point(corners: [Vec3; 3], normal: Vec3, surface: &[[Vec3; 3]], p: Vec
         let w1 = (x * b[1] - y * b[0]) / det;
         let w2 = (a[0] * y - a[1] * x) / det;
         let w0 = 1.0 - w1 - w2;
-        if w0 >= -1e-4 && w1 >= -1e-4 && w2 >= -1e-4 {
-            let at = tri[0] * w0 + tri[1] * w1 + tri[2] * w2;
-            let refined = (tri[1] - tri[0])
-                .cross(tri[2] - tri[0])
-                .try_normalize()
-                .unwrap_or(normal);
-            return (at, refined);
-        }
+        let at = tri[0] * w0 + tri[1] * w1 + tri[2] * w2;
+        let refined = (tri[1] - tri[0])
+            .cross(tri[2] - tri[0])
+            .try_normalize()
+            .unwrap_or(normal);
+        return (at, refined);
     }
     (p, normal)
 }
@@ -420,6 +460,50 @@ impl Ctx<'_> {
     fn on_surface(&self, r: u32, p: Vec3) -> (Vec3, Vec3) {
         let root = &self.roots[r as usize];
         surface_point(root.corners, root.normal, &self.surface[r as usize], p)
+    }
+
+    /// The triangles that stand for source element `k` (corners `st`) in form factors. For an
+    /// object that casts shadows with a refined surface ([`Ctx::on_surface`]) that surface:
+    /// where the source is `near` its receiver, the refined triangles under an element one
+    /// level above theirs, the four children of one further above with their corners carried
+    /// onto the surface, and below their level the element's corners carried onto its refined
+    /// triangle; where it is far, the triangle through its corners carried onto the surface.
+    /// Else the element itself.
+    ///
+    /// The surface drawn sends the light, as it casts the shadows. With the control mesh as
+    /// the source and the refined surface as the occluder a receiver counted the control
+    /// mesh's points both as a source and as a hole through which it saw what lies behind (a
+    /// wall in a closed furnace 5% too bright in front of a refined star's point), and at a
+    /// concave fold of one object each coarse triangle saw the other over a wider angle than
+    /// the refined surface does (the creases of curved objects 5-27% too bright, issue 20).
+    fn source_shape<'s>(
+        &'s self,
+        k: ElemKey,
+        st: [Vec3; 3],
+        near: bool,
+        buf: &'s mut [[Vec3; 3]; 4],
+    ) -> &'s [[Vec3; 3]] {
+        let surf = &self.surface[k.root as usize];
+        let level = surf.len().trailing_zeros() / 2;
+        if surf.is_empty() {
+            buf[0] = st;
+        } else if !near || k.level >= level {
+            buf[0] = st.map(|q| self.on_surface(k.root, q).0);
+        } else if k.level + 1 == level {
+            // Paths number the refined triangles as they number elements (first choice most
+            // significant), so the four under `k` are one run.
+            let first = (k.path as usize) << 2;
+            return &surf[first..first + 4];
+        } else {
+            // Further above the refined triangles: the element's four children, their corners
+            // carried onto the surface (four form factors where the refined triangles under
+            // it would take sixteen: the same surface, a level coarser).
+            for (b, c) in buf.iter_mut().zip(split(st)) {
+                *b = c.map(|q| self.on_surface(k.root, q).0);
+            }
+            return &buf[..];
+        }
+        &buf[..1]
     }
 
     /// The smallest area an element of `k`'s object is split to.
@@ -731,7 +815,7 @@ impl Ctx<'_> {
         let nn = self.nn(r);
         // Coefficients are a pure function of the pair: reuse those of the previous pass.
         let prev = &trees[r as usize];
-        let cache: std::collections::HashMap<(ElemKey, Source), (usize, f32)> = prev
+        let cache: std::collections::HashMap<(ElemKey, Source), (usize, f32, bool)> = prev
             .links
             .iter()
             .map(|l| {
@@ -743,7 +827,7 @@ impl Ctx<'_> {
                 };
                 (
                     (prev.keys[l.recv as usize], src),
-                    (l.k_start as usize, l.visible),
+                    (l.k_start as usize, l.visible, l.closure),
                 )
             })
             .collect();
@@ -822,15 +906,20 @@ impl Ctx<'_> {
                         continue;
                     }
                     let sn = self.roots[sk.root as usize].normal;
+                    // Two parts of one refined surface may see each other where their coarse
+                    // triangles are coplanar or turned apart: the link's form factors, on the
+                    // refined surface, judge that.
+                    let refined_pair = self.roots[sk.root as usize].object == root.object
+                        && !self.surface[r as usize].is_empty();
                     // Receiver entirely behind the source, or source behind every normal.
-                    if rt.iter().all(|&v| sn.dot(v - st[0]) <= self.plane_eps) {
+                    if !refined_pair && rt.iter().all(|&v| sn.dot(v - st[0]) <= self.plane_eps) {
                         continue;
                     }
                     let sees = |n: &Vec3| {
                         st.iter()
                             .any(|&s| rt.iter().any(|&v| n.dot(s - v) > self.plane_eps))
                     };
-                    if !root.normals.iter().any(sees) {
+                    if !refined_pair && !root.normals.iter().any(sees) {
                         continue;
                     }
                     s_area = self.roots[sk.root as usize].area / 4f32.powi(sk.level as i32);
@@ -852,10 +941,30 @@ impl Ctx<'_> {
                         let (mut fmax, mut fmin) = (0.0f32, f32::MAX);
                         let mut bend = 0.0f32;
                         let inset = inset_corners(rt);
+                        let mut buf = [st; 4];
+                        let polys: &[[Vec3; 3]] = if refined_pair {
+                            self.source_shape(sk, st, true, &mut buf)
+                        } else {
+                            &buf[..1]
+                        };
+                        // The points, carried onto the refined surface for a refined pair.
+                        let lift = |p: Vec3| {
+                            if refined_pair {
+                                self.on_surface(r, p).0
+                            } else {
+                                p
+                            }
+                        };
+                        let (lc, li) = (lift(rc), inset.map(lift));
                         for (j, n) in root.normals.iter().enumerate() {
-                            let f = |p: Vec3| point_to_polygon(p, *n, &st);
-                            let centre = f(rc);
-                            let at = inset.map(f);
+                            let f = |p: Vec3| {
+                                polys
+                                    .iter()
+                                    .map(|t| point_to_polygon(p, *n, t))
+                                    .sum::<f32>()
+                            };
+                            let centre = f(lc);
+                            let at = li.map(f);
                             for v in at.into_iter().chain([centre]) {
                                 fmax = fmax.max(v);
                                 fmin = fmin.min(v);
@@ -868,7 +977,7 @@ impl Ctx<'_> {
                                 known.corners = Some(at);
                                 bend = (centre - (at[0] + at[1] + at[2]) / 3.0).abs();
                                 for (a, b) in [(0, 1), (1, 2), (2, 0)] {
-                                    let mid = f((inset[a] + inset[b]) * 0.5);
+                                    let mid = f(lift((inset[a] + inset[b]) * 0.5));
                                     bend = bend.max((mid - (at[a] + at[b]) * 0.5).abs());
                                 }
                             }
@@ -994,7 +1103,7 @@ impl Ctx<'_> {
                         <= BEND_TOLERANCE * bend_radiance(recv);
                     if !faint && self.splittable(recv, r_area) {
                         // With the geometric normal: the bend is the geometry's.
-                        let (centre, at) = self.cluster_factors_over(c, rt, root.normal);
+                        let (centre, at) = self.cluster_factors_over(c, recv, rt, root.normal);
                         known = KnownFactors {
                             centre: Some(centre),
                             corners: Some(at),
@@ -1026,8 +1135,11 @@ impl Ctx<'_> {
                 }
             }
             let k_start = ks.len() as u32;
-            let (k, visible) = match cache.get(&(recv, src)) {
-                Some(&(at, visible)) => (prev.k[at..at + CORNERS * nn].to_vec(), visible),
+            let (k, visible, closure) = match cache.get(&(recv, src)) {
+                Some(&(at, visible, closure)) => {
+                    let len = CORNERS * nn + if closure { CORNERS } else { 0 };
+                    (prev.k[at..at + len].to_vec(), visible, closure)
+                }
                 None => {
                     // All the rays where the link brings a visible share of the scene's
                     // power or of its receiver's light; a few where it brings little of
@@ -1079,6 +1191,7 @@ impl Ctx<'_> {
                 toward,
                 k_start,
                 visible,
+                closure,
             });
         }
         (links, ks)
@@ -1087,13 +1200,18 @@ impl Ctx<'_> {
     /// Form factor times visibility from receiver `recv` to `src`, per receiver normal. A pair
     /// whose form factor is nowhere positive (a cluster whose box reaches above the receiver's
     /// plane while its triangles lie below it) is dropped by the caller, and casts no rays.
+    ///
+    /// Returns the coefficients (`CORNERS × nn`, corner-major), the visible fraction, and
+    /// whether `CORNERS` more follow: for a receiver on a refined surface (its points carried
+    /// onto it, [`Ctx::on_surface`]), the same for that surface's own normal at each point,
+    /// what the receiver's normals are filled against ([`Tree::closure`]).
     fn link_coefficients(
         &self,
         (recv, rt): (ElemKey, [Vec3; 3]),
         (src, st): (Source, [Vec3; 3]),
         nv: u32,
         known: KnownFactors,
-    ) -> (Vec<f32>, f32) {
+    ) -> (Vec<f32>, f32, bool) {
         let root = &self.roots[recv.root as usize];
         let nn = root.normals.len();
         let rc = (rt[0] + rt[1] + rt[2]) / 3.0;
@@ -1103,6 +1221,8 @@ impl Ctx<'_> {
             Source::Elem(k) => k.id(),
         };
         let mut k = vec![0.0f32; nn];
+        let lifted = !self.surface[recv.root as usize].is_empty();
+        let mut closure = 0.0f32;
         let visible = match src {
             Source::Elem(sk) => {
                 let sc = (st[0] + st[1] + st[2]) / 3.0;
@@ -1119,24 +1239,41 @@ impl Ctx<'_> {
                 } else {
                     stratified_points(rt, 2)
                 };
+                // Points and source on the refined surfaces where the objects have them.
+                let mut buf = [st; 4];
+                let polys = self.source_shape(sk, st, pts.len() > 1, &mut buf);
                 for p in &pts {
+                    let (p, pn) = self.on_surface(recv.root, *p);
                     for (kj, n) in k.iter_mut().zip(&root.normals) {
-                        *kj += point_to_polygon(*p, *n, &st);
+                        *kj += polys
+                            .iter()
+                            .map(|t| point_to_polygon(p, *n, t))
+                            .sum::<f32>();
+                    }
+                    if lifted {
+                        closure += polys
+                            .iter()
+                            .map(|t| point_to_polygon(p, pn, t))
+                            .sum::<f32>();
                     }
                 }
                 let inv = 1.0 / pts.len() as f32;
                 k.iter_mut().for_each(|v| *v *= inv);
+                closure *= inv;
                 let at_corners = known.corners.unwrap_or_else(|| {
                     inset_corners(rt).map(|p| point_to_polygon(p, root.normal, &st))
                 });
                 k = linear_over_receiver(&k, at_corners);
+                if lifted {
+                    k.extend(linear_over_receiver(&[closure], at_corners));
+                }
                 if k.iter().all(|&v| v <= 0.0) {
-                    return (k, 0.0);
+                    return (k, 0.0, lifted);
                 }
                 let sn = self.roots[sk.root as usize].normal;
                 let (lo, hi) = (st[0].min(st[1]).min(st[2]), st[0].max(st[1]).max(st[2]));
                 if self.certainly_clear(recv, rt, (lo, hi), Some((sn, st[0]))) {
-                    return (k, 1.0);
+                    return (k, 1.0, lifted);
                 }
                 geometric_first(&root.normals, |normals| {
                     visible_fraction(nv, |i| {
@@ -1160,17 +1297,23 @@ impl Ctx<'_> {
                 let c_size = 2.0 * self.clusters.clusters[c as usize].radius();
                 let (centre, at_corners) = match (known.centre, known.corners) {
                     (Some(centre), Some(at)) => (centre, at),
-                    _ => self.cluster_factors_over(c, rt, root.normal),
+                    _ => self.cluster_factors_over(c, recv, rt, root.normal),
                 };
                 k[0] = centre;
-                self.cluster_form_factors(c, rc, &root.normals[1..], &mut k[1..]);
+                let (p, pn) = self.on_surface(recv.root, rc);
+                self.cluster_form_factors(c, p, &root.normals[1..], &mut k[1..]);
                 k = linear_over_receiver(&k, at_corners);
+                if lifted {
+                    let mut f = [0.0f32];
+                    self.cluster_form_factors(c, p, &[pn], &mut f);
+                    k.extend(linear_over_receiver(&f, at_corners));
+                }
                 if k.iter().all(|&v| v <= 0.0) {
-                    return (k, 0.0);
+                    return (k, 0.0, lifted);
                 }
                 let cluster = &self.clusters.clusters[c as usize];
                 if self.certainly_clear(recv, rt, (cluster.lo, cluster.hi), None) {
-                    return (k, 1.0);
+                    return (k, 1.0, lifted);
                 }
                 geometric_first(&root.normals, |normals| {
                     visible_fraction(nv, |i| {
@@ -1198,7 +1341,7 @@ impl Ctx<'_> {
             }
         };
         k.iter_mut().for_each(|v| *v *= visible);
-        (k, visible)
+        (k, visible, lifted)
     }
 
     /// Unoccluded form factor from a point `p` with normal `n` to the triangles of cluster
@@ -1230,7 +1373,7 @@ impl Ctx<'_> {
             match ch {
                 ClusterChild::Cluster(x) => self.cluster_form_factors(x, p, normals, out),
                 ClusterChild::Root(x) => {
-                    let tri = &self.roots[x as usize].corners;
+                    let tri = &self.shape[x as usize];
                     for (o, n) in out.iter_mut().zip(normals) {
                         *o += point_to_polygon(p, *n, tri);
                     }
@@ -1260,9 +1403,15 @@ impl Ctx<'_> {
     /// at its inset corners, in one walk of the cluster tree: the centre's, and the corners'.
     /// Each point opens the clusters it would open alone and sums in the same order, so the
     /// four values are those of four walks.
-    fn cluster_factors_over(&self, c: u32, rt: [Vec3; 3], n: Vec3) -> (f32, [f32; CORNERS]) {
+    fn cluster_factors_over(
+        &self,
+        c: u32,
+        recv: ElemKey,
+        rt: [Vec3; 3],
+        n: Vec3,
+    ) -> (f32, [f32; CORNERS]) {
         let [a, b, d] = inset_corners(rt);
-        let pts = [(rt[0] + rt[1] + rt[2]) / 3.0, a, b, d];
+        let pts = [(rt[0] + rt[1] + rt[2]) / 3.0, a, b, d].map(|p| self.on_surface(recv.root, p).0);
         let mut out = [0.0f32; 4];
         self.cluster_factors_at(c, &pts, n, 0b1111, &mut out);
         (out[0], [out[1], out[2], out[3]])
@@ -1294,7 +1443,7 @@ impl Ctx<'_> {
             match ch {
                 ClusterChild::Cluster(x) => self.cluster_factors_at(x, pts, n, open, out),
                 ClusterChild::Root(x) => {
-                    let tri = &self.roots[x as usize].corners;
+                    let tri = &self.shape[x as usize];
                     for (i, p) in pts.iter().enumerate() {
                         if open & (1 << i) != 0 {
                             out[i] += point_to_polygon(*p, n, tri);
@@ -1451,6 +1600,8 @@ impl Ctx<'_> {
             direct: vec![Vec3::ZERO; n * nn],
             links: Vec::new(),
             k: Vec::new(),
+            closure: Vec::new(),
+            self_view: Vec::new(),
             l: vec![Vec3::ZERO; n * nn],
             keys: all,
         };
@@ -1481,6 +1632,59 @@ impl Ctx<'_> {
             tree.direct[i * nn..(i + 1) * nn].copy_from_slice(q);
         }
         tree
+    }
+
+    /// [`Tree::closure`] and [`Tree::self_view`] of tree `t` (root `r`), from its links.
+    fn closure(&self, r: u32, t: &Tree) -> (Vec<f32>, Vec<f32>) {
+        if self.surface[r as usize].is_empty() {
+            return (Vec::new(), Vec::new());
+        }
+        let block = CORNERS * self.nn(r);
+        let n = t.keys.len();
+        let mut f = vec![0.0f32; n * CORNERS];
+        for link in t.links.iter().filter(|l| l.closure) {
+            let at = link.k_start as usize + block;
+            for c in 0..CORNERS {
+                f[link.recv as usize * CORNERS + c] += t.k[at + c];
+            }
+        }
+        // Pushed down as the gather pushes its form factors (linear over each receiver).
+        for i in 0..n {
+            let first = t.child[i];
+            if first == u32::MAX {
+                continue;
+            }
+            for (ch, corners) in (first as usize..first as usize + 4).zip(CHILD_CORNERS) {
+                for (cc, (a, b)) in corners.into_iter().enumerate() {
+                    let v = (f[i * CORNERS + a] + f[i * CORNERS + b]) * 0.5;
+                    f[ch * CORNERS + cc] += v;
+                }
+            }
+        }
+        let mut closure: Vec<f32> = (0..n)
+            .map(|i| (f[i * CORNERS] + f[i * CORNERS + 1] + f[i * CORNERS + 2]) / 3.0)
+            .collect();
+        // A refined patch sees itself where it curves inwards, which no link carries (the
+        // coarse triangle under it is flat): from each leaf's centre, the form factors of its
+        // own root's refined triangles, for its normals and the surface's.
+        let nn = self.nn(r);
+        let surf = &self.surface[r as usize];
+        let root = &self.roots[r as usize];
+        let mut view = vec![0.0f32; n * nn];
+        for i in (0..n).filter(|&i| t.child[i] == u32::MAX) {
+            let c = self.elem_corners(t.keys[i]);
+            let (p, pn) = self.on_surface(r, (c[0] + c[1] + c[2]) / 3.0);
+            let f = |n: Vec3| {
+                surf.iter()
+                    .map(|tri| point_to_polygon(p, n, tri))
+                    .sum::<f32>()
+            };
+            for (j, n) in root.normals.iter().enumerate() {
+                view[i * nn + j] = f(*n);
+            }
+            closure[i] += f(pn);
+        }
+        (closure, view)
     }
 
     /// One gather + push-pull for root `r`; returns the new radiance array.
@@ -1561,7 +1765,15 @@ impl Ctx<'_> {
             // neighbouring patches). Every form factor a tilted normal lacks against the
             // geometric one is filled with the mean radiance the geometric normal gathers, so
             // that a closed furnace stays exact for every normal (SPEC.md G.1).
-            if nn > 1 {
+            // On a refined surface every normal, the geometric one too, is filled against the
+            // surface's own normal at the receiver's points ([`Tree::closure`]).
+            let closure = t.closure.get(i).copied();
+            if closure.is_some() {
+                for j in 0..nn {
+                    q_leaf[i * nn + j] += t.l[i * nn] * t.self_view[i * nn + j];
+                }
+            }
+            if nn > 1 || closure.is_some() {
                 let ffm = |j: usize| {
                     (ff[(i * CORNERS) * nn + j]
                         + ff[(i * CORNERS + 1) * nn + j]
@@ -1574,8 +1786,13 @@ impl Ctx<'_> {
                 }
                 let g = (g0[i * CORNERS] + g0[i * CORNERS + 1] + g0[i * CORNERS + 2]) / 3.0;
                 let m = g / f0;
-                for j in 1..nn {
-                    let missing = (f0 - ffm(j)).max(0.0);
+                let (full, first) = match closure {
+                    Some(f) => (f, 0),
+                    None => (f0, 1),
+                };
+                let view = |j: usize| t.self_view.get(i * nn + j).copied().unwrap_or(0.0);
+                for j in first..nn {
+                    let missing = (full - ffm(j) - view(j)).max(0.0);
                     q_leaf[i * nn + j] += m * missing;
                 }
             }
@@ -2019,6 +2236,14 @@ pub fn bake_with_progress(
             .collect(),
         occ,
         occ_owner,
+        shape: roots
+            .iter()
+            .zip(&surface)
+            .map(|(r, surf)| {
+                r.corners
+                    .map(|q| surface_point(r.corners, r.normal, surf, q).0)
+            })
+            .collect(),
         surface,
         min_area: {
             let mut area = vec![0.0f64; scene.objects.len()];
@@ -2135,10 +2360,12 @@ pub fn bake_with_progress(
                     toward: l.toward,
                     k_start: l.k_start,
                     visible: l.visible,
+                    closure: l.closure,
                 })
                 .collect();
             new_trees[r].links = resolved;
             new_trees[r].k = ks;
+            (new_trees[r].closure, new_trees[r].self_view) = ctx.closure(r as u32, &new_trees[r]);
         }
         // Start from the previous solution where it exists so that the solve converges fast.
         for (nt, ot) in new_trees.iter_mut().zip(&trees) {

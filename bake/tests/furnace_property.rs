@@ -15,6 +15,7 @@ mod common;
 
 use glam::Vec3;
 use hce_bake::element::Rng;
+use hce_bake::normal_sets::{select_normal_set, NormalSetParams};
 use hce_bake::{bake, BakeParams, Scene, SolverObject};
 
 const EMISSION: f32 = 0.4;
@@ -351,6 +352,117 @@ fn objects_inside_a_closed_room() {
         err.abs() <= CONTACT_TOLERANCE,
         "a node is {:+.2}% off at {at}",
         err * 100.0
+    );
+}
+
+/// A multiresolution object that casts its shadows with its refined surface, as the pipeline
+/// bakes one (`SolverObject::occluder`: its Loop refinement at level 2, normal sets selected from
+/// the refined triangles' normals): a star, an octahedron whose edges' midpoints are pulled
+/// halfway to its centre, so that its control mesh folds inwards between the points, where the
+/// refined surface is smooth, and reaches out further at its points. Light leaves it from that
+/// refined surface, and its own leaves gather on it.
+///
+/// Not yet within the 1% of the other scenes. The room's leaves are within 3% (a wall leaf in
+/// front of a point read +5.3% while the star's control triangles were its sources: the rays
+/// that say what it sees are cast against the refined surface, which stops short of the
+/// control mesh's point, so it saw the wall behind as well). The star's own leaves are up to
+/// 7.5% off, as before its links moved onto the refined surface (7.4%), at tilted normals of
+/// leaves on the points' flanks. The bounds hold what the solver achieves.
+const REFINED_ROOM_TOLERANCE: f32 = 0.035;
+const REFINED_STAR_TOLERANCE: f32 = 0.08;
+
+#[test]
+fn refined_star_in_a_closed_room() {
+    let room = closed_box(Vec3::new(2.0, 2.0, 1.5), 13, |_| Tessellation::Grid {
+        n: 3,
+        jitter: 0.3,
+    });
+    let (c, r) = (Vec3::new(1.0, 0.9, 0.8), 0.55);
+    let mut b = Builder::new(c, 14);
+    octahedron(&mut b, c, r, 2);
+    for p in &mut b.positions {
+        let v = Vec3::from(*p) - c;
+        if v.length() < 0.99 * r {
+            *p = (c + v * 0.5).to_array();
+        }
+    }
+    let weld = hce_geometry::weld(&b.positions, 0.0);
+    let top = hce_geometry::topology::build_control_mesh(
+        &weld.positions,
+        &weld.triangles(&b.triangles),
+        None,
+        &Default::default(),
+    )
+    .expect("a closed star");
+    let mesh = top.mesh;
+    let mut object = SolverObject::new(
+        "star",
+        mesh.positions
+            .chunks_exact(3)
+            .map(|p| [p[0], p[1], p[2]])
+            .collect(),
+        (0..mesh.triangle_count())
+            .map(|t| mesh.triangle(t))
+            .collect(),
+        [RHO; 3],
+    )
+    .with_emission([EMISSION; 3]);
+    // Normal sets as the pipeline selects them, from the refined triangles' normals.
+    let refined = hce_geometry::subdivide(&mesh, 2).expect("subdivides");
+    let tri = |f: &[u32; 3]| f.map(|v| Vec3::from(refined.positions[v as usize]));
+    object.multires = true;
+    object.normal_sets = (0..object.triangles.len())
+        .map(|t| {
+            let [a, b, c] = object.corners(t);
+            let subs: Vec<([f32; 3], f32)> = refined.indices[t * 16..(t + 1) * 16]
+                .iter()
+                .map(|f| {
+                    let [p, q, r] = tri(f);
+                    let n = (q - p).cross(r - p);
+                    (n.normalize_or_zero().to_array(), 0.5 * n.length())
+                })
+                .collect();
+            let n0 = (b - a).cross(c - a).normalize().to_array();
+            select_normal_set(n0, &subs, &NormalSetParams::default()).normals
+        })
+        .collect();
+    object.occluder = refined
+        .indices
+        .iter()
+        .enumerate()
+        .map(|(k, f)| (f.map(|v| refined.positions[v as usize]), (k / 16) as u32))
+        .collect();
+    let scene = Scene {
+        objects: vec![room, object],
+        lights: Vec::new(),
+    };
+    let res = bake(&scene, &BakeParams::default()).expect("bakes");
+    let expect = EMISSION / (1.0 - RHO);
+    let worst: Vec<f32> = res
+        .objects
+        .iter()
+        .map(|o| {
+            o.triangles
+                .iter()
+                .flat_map(|t| &t.colours)
+                .map(|c| (c[0] / expect - 1.0).abs())
+                .fold(0.0, f32::max)
+        })
+        .collect();
+    println!(
+        "refined star in a room: room {:.3}%, star {:.3}%",
+        worst[0] * 100.0,
+        worst[1] * 100.0
+    );
+    assert!(
+        worst[0] <= REFINED_ROOM_TOLERANCE,
+        "a room node is {:.2}% off",
+        worst[0] * 100.0
+    );
+    assert!(
+        worst[1] <= REFINED_STAR_TOLERANCE,
+        "a star node is {:.2}% off",
+        worst[1] * 100.0
     );
 }
 
