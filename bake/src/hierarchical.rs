@@ -1648,19 +1648,7 @@ impl Ctx<'_> {
                 f[link.recv as usize * CORNERS + c] += t.k[at + c];
             }
         }
-        // Pushed down as the gather pushes its form factors (linear over each receiver).
-        for i in 0..n {
-            let first = t.child[i];
-            if first == u32::MAX {
-                continue;
-            }
-            for (ch, corners) in (first as usize..first as usize + 4).zip(CHILD_CORNERS) {
-                for (cc, (a, b)) in corners.into_iter().enumerate() {
-                    let v = (f[i * CORNERS + a] + f[i * CORNERS + b]) * 0.5;
-                    f[ch * CORNERS + cc] += v;
-                }
-            }
-        }
+        push_linear(t, &mut f, 1);
         let mut closure: Vec<f32> = (0..n)
             .map(|i| (f[i * CORNERS] + f[i * CORNERS + 1] + f[i * CORNERS + 2]) / 3.0)
             .collect();
@@ -1722,28 +1710,9 @@ impl Ctx<'_> {
                 g0[link.recv as usize * CORNERS + c] += ls * ks[c * nn];
             }
         }
-        // Push: every node receives what its ancestors gathered (breadth-first order puts
-        // parents first), each child the linear function over its own part.
-        for i in 0..n {
-            let first = t.child[i];
-            if first == u32::MAX {
-                continue;
-            }
-            for (ch, corners) in (first as usize..first as usize + 4).zip(CHILD_CORNERS) {
-                for (cc, (a, b)) in corners.into_iter().enumerate() {
-                    let (pa, pb) = ((i * CORNERS + a) * nn, (i * CORNERS + b) * nn);
-                    let to = (ch * CORNERS + cc) * nn;
-                    for j in 0..nn {
-                        let v = (q[pa + j] + q[pb + j]) * 0.5;
-                        let f = (ff[pa + j] + ff[pb + j]) * 0.5;
-                        q[to + j] += v;
-                        ff[to + j] += f;
-                    }
-                    let v = (g0[i * CORNERS + a] + g0[i * CORNERS + b]) * 0.5;
-                    g0[ch * CORNERS + cc] += v;
-                }
-            }
-        }
+        push_linear(t, &mut q, nn);
+        push_linear(t, &mut ff, nn);
+        push_linear(t, &mut g0, 1);
         // What each leaf gathers: the mean of its linear function, the value at its centroid.
         let mean = |v: &[Vec3], i: usize, j: usize, nn: usize| {
             (v[(i * CORNERS) * nn + j]
@@ -1969,6 +1938,31 @@ fn linear_over_receiver(mean: &[f32], at: [f32; CORNERS]) -> Vec<f32> {
         }
     }
     out
+}
+
+/// Push: every node of `t` receives what its ancestors gathered (breadth-first order puts
+/// parents first), each child the linear function over its own part. `v` holds `width` values
+/// per corner of every node, corner-major (`v[(node * CORNERS + corner) * width + j]`).
+fn push_linear<T>(t: &Tree, v: &mut [T], width: usize)
+where
+    T: Copy + std::ops::Add<Output = T> + std::ops::Mul<f32, Output = T> + std::ops::AddAssign,
+{
+    for i in 0..t.keys.len() {
+        let first = t.child[i];
+        if first == u32::MAX {
+            continue;
+        }
+        for (ch, corners) in (first as usize..first as usize + 4).zip(CHILD_CORNERS) {
+            for (cc, (a, b)) in corners.into_iter().enumerate() {
+                let (pa, pb) = ((i * CORNERS + a) * width, (i * CORNERS + b) * width);
+                let to = (ch * CORNERS + cc) * width;
+                for j in 0..width {
+                    let x = (v[pa + j] + v[pb + j]) * 0.5;
+                    v[to + j] += x;
+                }
+            }
+        }
+    }
 }
 
 /// The corners of child `c` of the 1-to-4 split as weights of the parent's corners:
