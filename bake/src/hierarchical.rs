@@ -401,19 +401,9 @@ fn surface_point(corners: [Vec3; 3], normal: Vec3, surface: &[[Vec3; 3]], p: Vec
     let (mut side, mut path) = (n, 0usize);
     for _ in 0..level {
         let h = side * 0.5;
-        let child = if u >= h {
-            u -= h;
-            1
-        } else if v >= h {
-            v -= h;
-            3
-        } else if u + v <= h {
-            0
-        } else {
-            (u, v) = (h - u, h - v);
-            2
-        };
-        path = path * 4 + child;
+        let child;
+        (child, u, v) = hce_geometry::lattice::child_toward(u, v, h);
+        path = path * 4 + child as usize;
         side = h;
     }
     if let Some(tri) = surface.get(path) {

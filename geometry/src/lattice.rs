@@ -129,6 +129,26 @@ pub fn subtriangle_cells(level: u32) -> Vec<[[u32; 2]; 3]> {
     out
 }
 
+/// One step down the 1-to-4 split towards a point: for a point `(u, v)` in the frame of a node
+/// of side `2h` (origin at its corner 0, axes along its sides), the child that holds it (0 Top,
+/// 1 Left, 2 Center, 3 Right) and the point in that child's frame. The border between children
+/// goes to the first of Left (`u` at least `h`), Right (`v` at least `h`), Top (`u + v` at most
+/// `h`), Center (SPEC.md G.4, step 2). For lattice integers and for `f32` alike.
+pub fn child_toward<T>(u: T, v: T, h: T) -> (u32, T, T)
+where
+    T: Copy + PartialOrd + std::ops::Add<Output = T> + std::ops::Sub<Output = T>,
+{
+    if u >= h {
+        (1, u - h, v)
+    } else if v >= h {
+        (3, u, v - h)
+    } else if u + v <= h {
+        (0, u, v)
+    } else {
+        (2, h - u, h - v)
+    }
+}
+
 /// The path of the fine triangle whose centroid, times 3, is `q` (lattice `(b, c)` units).
 pub fn locate(level: u32, q: [i32; 2]) -> u32 {
     let mut c0 = [0i32, 0i32];

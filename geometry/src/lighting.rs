@@ -446,18 +446,8 @@ impl LightingTable {
         let mut word = self.nodes[base];
         while word & LEAF == 0 && side > 1 {
             let h = side / 2;
-            let c = if u >= h {
-                u -= h;
-                1
-            } else if v >= h {
-                v -= h;
-                3
-            } else if u + v <= h {
-                0
-            } else {
-                (u, v) = (h - u, h - v);
-                2
-            };
+            let c;
+            (c, u, v) = crate::lattice::child_toward(u, v, h);
             word = self.nodes[base + (word + c) as usize];
             side = h;
         }
