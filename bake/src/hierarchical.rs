@@ -198,9 +198,6 @@ struct RawLink {
     k_start: u32,
     /// Fraction of the visibility rays that were clear.
     visible: f32,
-    /// Whether the coefficients are followed by those of the receiver's refined normal
-    /// ([`Ctx::link_coefficients`]).
-    closure: bool,
 }
 
 /// A resolved link inside a root's tree.
@@ -211,7 +208,6 @@ struct Link {
     toward: Vec3,
     k_start: u32,
     visible: f32,
-    closure: bool,
 }
 
 #[derive(Clone, Copy)]
@@ -803,9 +799,17 @@ impl Ctx<'_> {
         let mut links = Vec::new();
         let mut ks = Vec::new();
         let nn = self.nn(r);
+        // Per link: its coefficients, and on a refined surface those of the surface's own
+        // normal ([`Ctx::link_coefficients`]).
+        let link_len = CORNERS * nn
+            + if self.surface[r as usize].is_empty() {
+                0
+            } else {
+                CORNERS
+            };
         // Coefficients are a pure function of the pair: reuse those of the previous pass.
         let prev = &trees[r as usize];
-        let cache: std::collections::HashMap<(ElemKey, Source), (usize, f32, bool)> = prev
+        let cache: std::collections::HashMap<(ElemKey, Source), (usize, f32)> = prev
             .links
             .iter()
             .map(|l| {
@@ -817,7 +821,7 @@ impl Ctx<'_> {
                 };
                 (
                     (prev.keys[l.recv as usize], src),
-                    (l.k_start as usize, l.visible, l.closure),
+                    (l.k_start as usize, l.visible),
                 )
             })
             .collect();
@@ -1081,17 +1085,8 @@ impl Ctx<'_> {
                     let l = lum(self.src_radiance(trees, cl, src, rc));
                     est = f * l * r_area * std::f32::consts::PI;
                     // As for near elements below: split a receiver over which the cluster's
-                    // form factor bends more than a linear link follows. The bend is at most
-                    // the largest form factor from the receiver to the cluster, at most its
-                    // area over π times the squared distance between the two (a convex
-                    // receiver's ball to the cluster's box): where even that is too faint,
-                    // the walk of the cluster's tree is spared, and the decision is the same.
-                    let rr = rt.iter().map(|v| (*v - rc).length()).fold(0.0, f32::max);
-                    let gap = ((rc.clamp(cluster.lo, cluster.hi) - rc).length() - rr).max(0.0);
-                    let bend_max = cluster.area / (std::f32::consts::PI * gap * gap);
-                    let faint = bend_max * l * lum(self.reflectance(recv))
-                        <= BEND_TOLERANCE * bend_radiance(recv);
-                    if !faint && self.splittable(recv, r_area) {
+                    // form factor bends more than a linear link follows.
+                    if self.splittable(recv, r_area) {
                         // With the geometric normal: the bend is the geometry's.
                         let (centre, at) = self.cluster_factors_over(c, recv, rt, root.normal);
                         known = KnownFactors {
@@ -1125,11 +1120,8 @@ impl Ctx<'_> {
                 }
             }
             let k_start = ks.len() as u32;
-            let (k, visible, closure) = match cache.get(&(recv, src)) {
-                Some(&(at, visible, closure)) => {
-                    let len = CORNERS * nn + if closure { CORNERS } else { 0 };
-                    (prev.k[at..at + len].to_vec(), visible, closure)
-                }
+            let (k, visible) = match cache.get(&(recv, src)) {
+                Some(&(at, visible)) => (prev.k[at..at + link_len].to_vec(), visible),
                 None => {
                     // All the rays where the link brings a visible share of the scene's
                     // power or of its receiver's light; a few where it brings little of
@@ -1181,7 +1173,6 @@ impl Ctx<'_> {
                 toward,
                 k_start,
                 visible,
-                closure,
             });
         }
         (links, ks)
@@ -1191,17 +1182,17 @@ impl Ctx<'_> {
     /// whose form factor is nowhere positive (a cluster whose box reaches above the receiver's
     /// plane while its triangles lie below it) is dropped by the caller, and casts no rays.
     ///
-    /// Returns the coefficients (`CORNERS × nn`, corner-major), the visible fraction, and
-    /// whether `CORNERS` more follow: for a receiver on a refined surface (its points carried
-    /// onto it, [`Ctx::on_surface`]), the same for that surface's own normal at each point,
-    /// what the receiver's normals are filled against ([`Tree::closure`]).
+    /// Returns the coefficients (`CORNERS × nn`, corner-major) and the visible fraction. For a
+    /// receiver on a refined surface (its points carried onto it, [`Ctx::on_surface`])
+    /// `CORNERS` more follow: the same for that surface's own normal at each point, what the
+    /// receiver's normals are filled against ([`Tree::closure`]).
     fn link_coefficients(
         &self,
         (recv, rt): (ElemKey, [Vec3; 3]),
         (src, st): (Source, [Vec3; 3]),
         nv: u32,
         known: KnownFactors,
-    ) -> (Vec<f32>, f32, bool) {
+    ) -> (Vec<f32>, f32) {
         let root = &self.roots[recv.root as usize];
         let nn = root.normals.len();
         let rc = (rt[0] + rt[1] + rt[2]) / 3.0;
@@ -1258,12 +1249,12 @@ impl Ctx<'_> {
                     k.extend(linear_over_receiver(&[closure], at_corners));
                 }
                 if k.iter().all(|&v| v <= 0.0) {
-                    return (k, 0.0, lifted);
+                    return (k, 0.0);
                 }
                 let sn = self.roots[sk.root as usize].normal;
                 let (lo, hi) = (st[0].min(st[1]).min(st[2]), st[0].max(st[1]).max(st[2]));
                 if self.certainly_clear(recv, rt, (lo, hi), Some((sn, st[0]))) {
-                    return (k, 1.0, lifted);
+                    return (k, 1.0);
                 }
                 geometric_first(&root.normals, |normals| {
                     visible_fraction(nv, |i| {
@@ -1299,11 +1290,11 @@ impl Ctx<'_> {
                     k.extend(linear_over_receiver(&f, at_corners));
                 }
                 if k.iter().all(|&v| v <= 0.0) {
-                    return (k, 0.0, lifted);
+                    return (k, 0.0);
                 }
                 let cluster = &self.clusters.clusters[c as usize];
                 if self.certainly_clear(recv, rt, (cluster.lo, cluster.hi), None) {
-                    return (k, 1.0, lifted);
+                    return (k, 1.0);
                 }
                 geometric_first(&root.normals, |normals| {
                     visible_fraction(nv, |i| {
@@ -1331,7 +1322,7 @@ impl Ctx<'_> {
             }
         };
         k.iter_mut().for_each(|v| *v *= visible);
-        (k, visible, lifted)
+        (k, visible)
     }
 
     /// Unoccluded form factor from a point `p` with normal `n` to the triangles of cluster
@@ -1632,7 +1623,7 @@ impl Ctx<'_> {
         let block = CORNERS * self.nn(r);
         let n = t.keys.len();
         let mut f = vec![0.0f32; n * CORNERS];
-        for link in t.links.iter().filter(|l| l.closure) {
+        for link in &t.links {
             let at = link.k_start as usize + block;
             for c in 0..CORNERS {
                 f[link.recv as usize * CORNERS + c] += t.k[at + c];
@@ -2344,7 +2335,6 @@ pub fn bake_with_progress(
                     toward: l.toward,
                     k_start: l.k_start,
                     visible: l.visible,
-                    closure: l.closure,
                 })
                 .collect();
             new_trees[r].links = resolved;
