@@ -37,10 +37,10 @@ pub struct BakeArgs {
     #[arg(long = "levels", hide = true, conflicts_with = "max_level", value_parser = level_parser())]
     pub levels_old: Option<u32>,
     /// Most normals per coarse triangle besides its geometric normal (0..=63).
-    #[arg(long, default_value_t = 7, value_parser = max_normals_parser())]
+    #[arg(long, default_value_t = NormalSetParams::default().max_normals, value_parser = max_normals_parser())]
     pub max_normals: usize,
     /// Target angle (degrees) between any subtriangle normal and its representative.
-    #[arg(long, default_value_t = 10.0, value_parser = non_negative_degrees)]
+    #[arg(long, default_value_t = NormalSetParams::default().normal_tolerance_deg, value_parser = non_negative_degrees)]
     pub normal_tolerance: f32,
     /// Sharp creases of multiresolution objects: none, auto (split input normals) or angle=DEG.
     #[arg(long, default_value = "none")]
