@@ -366,10 +366,10 @@ fn objects_inside_a_closed_room() {
 /// front of a point read +5.3% while the star's control triangles were its sources: the rays
 /// that say what it sees are cast against the refined surface, which stops short of the
 /// control mesh's point, so it saw the wall behind as well). The star's own leaves are up to
-/// 7.5% off, as before its links moved onto the refined surface (7.4%), at tilted normals of
-/// leaves on the points' flanks. The bounds hold what the solver achieves.
+/// 5.6% off, at tilted normals of leaves on the points' flanks (7.5% while every normal took
+/// the visibility of the geometric normal's rays). The bounds hold what the solver achieves.
 const REFINED_ROOM_TOLERANCE: f32 = 0.035;
-const REFINED_STAR_TOLERANCE: f32 = 0.08;
+const REFINED_STAR_TOLERANCE: f32 = 0.06;
 
 #[test]
 fn refined_star_in_a_closed_room() {
