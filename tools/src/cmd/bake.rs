@@ -52,6 +52,11 @@ pub struct BakeArgs {
     /// their receiver's light take up to 4x as many.
     #[arg(long, default_value_t = 8)]
     pub visibility_rays: u32,
+    /// Deepest element level below a coarse triangle that shadow edges and contacts are
+    /// refined to (the power rule stops at level 4); each level halves the finest shadow
+    /// detail, for more elements where shadows fall.
+    #[arg(long, default_value_t = BakeParams::default().detail_level)]
+    pub detail_level: u32,
     /// Worker threads (default: all cores). The output is the same whatever the count.
     #[arg(long, value_parser = thread_count_parser())]
     pub threads: Option<usize>,
@@ -100,6 +105,7 @@ pub fn run(args: BakeArgs) -> Result<()> {
         bake: BakeParams {
             bf_epsilon: args.bf_epsilon,
             visibility_rays: args.visibility_rays,
+            detail_level: args.detail_level,
             ..BakeParams::default()
         },
         output: args.output.clone(),
