@@ -121,3 +121,18 @@ fn a_scene_without_light_is_an_invalid_input_error() {
     assert!(stderr.contains("no light source"), "{stderr}");
     assert!(!out.exists());
 }
+
+#[test]
+fn a_detail_level_outside_its_range_is_a_usage_error_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("never.glb");
+    for level in ["2", "13"] {
+        let (code, _, stderr) = bake(&cornell(), &out, &["--detail-level", level]);
+        assert_eq!(code, 2, "--detail-level {level}: {stderr}");
+        assert!(
+            stderr.contains(&format!("detail_level {level} must lie between")),
+            "{stderr}"
+        );
+        assert!(!out.exists());
+    }
+}
