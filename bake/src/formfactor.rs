@@ -48,16 +48,15 @@ pub fn point_to_polygon(p: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
     for i in 0..len {
         let a = clipped[i];
         let b = clipped[(i + 1) % len];
-        let (la, lb) = (a.length(), b.length());
-        if la < 1e-300 || lb < 1e-300 {
-            continue;
-        }
         let c = a.cross(b);
         let lc = c.length();
         if lc < 1e-300 {
             continue;
         }
-        let gamma = (a.dot(b) / (la * lb)).clamp(-1.0, 1.0).acos();
+        // The angle between `a` and `b`: atan2(|a × b|, a · b) needs neither length and
+        // stays accurate for small angles, where the arc cosine of their normalised dot
+        // product loses half its digits.
+        let gamma = lc.atan2(a.dot(b));
         sum += gamma * n.dot(c) / lc;
     }
     ((-sum / (2.0 * std::f64::consts::PI)).max(0.0)) as f32
