@@ -1304,16 +1304,14 @@ impl Ctx<'_> {
                 if self.certainly_clear(recv, rt, (lo, hi), Some((sn, st[0]))) {
                     return (k, 1.0);
                 }
-                let size = r_size + s_size;
-                visible_fractions(nv, &mut vis, |i, w| {
-                    let mut rng = Rng::new(recv.id(), src_id, u64::from(i));
-                    let p = jittered_point(rt, i, nv, &mut rng);
-                    let q = jittered_point(st, i, nv, &mut rng);
-                    let (a, na) = self.on_surface(recv.root, p);
-                    let (b, nb) = self.on_surface(sk.root, q);
-                    self.ray_weights(a, na, &root.normals, lifted, b, nb, size, w)
-                        .then(|| self.occ.segment_clear_between(a, na, b, nb))
-                })
+                self.cast_visibility(
+                    (recv, rt),
+                    src_id,
+                    r_size + s_size,
+                    nv,
+                    &mut vis,
+                    |i, rng| (sk.root, jittered_point(st, i, nv, rng)),
+                );
             }
             Source::Cluster(c) => {
                 let c_size = 2.0 * self.clusters.clusters[c as usize].radius();
@@ -1337,21 +1335,20 @@ impl Ctx<'_> {
                 if self.certainly_clear(recv, rt, (cluster.lo, cluster.hi), None) {
                     return (k, 1.0);
                 }
-                let size = r_size + c_size;
-                visible_fractions(nv, &mut vis, |i, w| {
-                    let mut rng = Rng::new(recv.id(), src_id, u64::from(i));
-                    let p = jittered_point(rt, i, nv, &mut rng);
-                    // Stratified over the cluster's area as the receiver point is over
-                    // the receiver.
-                    let u = (i as f32 + rng.next_f32()) / nv as f32;
-                    let t = self.clusters.pick(c, u.min(1.0 - f32::EPSILON));
-                    let tc = self.roots[t as usize].corners;
-                    let q = jittered_point(tc, 0, 1, &mut rng);
-                    let (a, na) = self.on_surface(recv.root, p);
-                    let (b, nb) = self.on_surface(t, q);
-                    self.ray_weights(a, na, &root.normals, lifted, b, nb, size, w)
-                        .then(|| self.occ.segment_clear_between(a, na, b, nb))
-                })
+                self.cast_visibility(
+                    (recv, rt),
+                    src_id,
+                    r_size + c_size,
+                    nv,
+                    &mut vis,
+                    |i, rng| {
+                        // Stratified over the cluster's area as the receiver point is over
+                        // the receiver.
+                        let u = (i as f32 + rng.next_f32()) / nv as f32;
+                        let t = self.clusters.pick(c, u.min(1.0 - f32::EPSILON));
+                        (t, jittered_point(self.roots[t as usize].corners, 0, 1, rng))
+                    },
+                );
             }
         };
         for row in k.chunks_mut(nn).take(CORNERS) {
@@ -1474,35 +1471,44 @@ impl Ctx<'_> {
         }
     }
 
-    /// The weights of one visibility ray from receiver point `a` (refined normal `na`) to source
-    /// point `b` (normal `nb`) for each of the receiver's `normals` and, when `lifted`, for its
-    /// refined surface's own normal `na` after them: the form-factor kernel where light passes
-    /// from `b` to `a` across that normal's plane, `None` where it cannot. Whether any can: a
+    /// Casts the `nv` visibility rays of the link from receiver `recv` (corners `rt`) to a source
+    /// and puts into `vis` the fraction each receiver normal sees clear, and after them, on a
+    /// refined surface, that of the surface's own normal ([`visible_fractions`]). Ray `i` runs
+    /// from a jittered point of the receiver's stratum `i` to `source(i, rng)`, a root and a
+    /// point on it, both carried onto their refined surfaces; each normal weighs it by the
+    /// form-factor kernel (`size`: the two elements' sizes together) where light passes from
+    /// the source point across that normal's plane, and does not count it where it cannot. A
     /// ray that no normal counts is not cast.
-    #[allow(clippy::too_many_arguments)]
-    fn ray_weights(
+    fn cast_visibility(
         &self,
-        a: Vec3,
-        na: Vec3,
-        normals: &[Vec3],
-        lifted: bool,
-        b: Vec3,
-        nb: Vec3,
+        (recv, rt): (ElemKey, [Vec3; 3]),
+        src_id: u64,
         size: f32,
-        w: &mut [Option<f32>],
-    ) -> bool {
-        let d = b - a;
-        if nb.dot(-d) <= self.plane_eps {
-            w.iter_mut().for_each(|x| *x = None);
-            return false;
-        }
-        let extra = lifted.then_some(na);
-        let mut any = false;
-        for (x, n) in w.iter_mut().zip(normals.iter().chain(extra.iter())) {
-            *x = (n.dot(d) > self.plane_eps).then(|| kernel(a, *n, b, nb, size));
-            any |= x.is_some();
-        }
-        any
+        nv: u32,
+        vis: &mut [f32],
+        source: impl Fn(u32, &mut Rng) -> (u32, Vec3),
+    ) {
+        let normals = &self.roots[recv.root as usize].normals;
+        visible_fractions(nv, vis, |i, w| {
+            let mut rng = Rng::new(recv.id(), src_id, u64::from(i));
+            let p = jittered_point(rt, i, nv, &mut rng);
+            let (t, q) = source(i, &mut rng);
+            let (a, na) = self.on_surface(recv.root, p);
+            let (b, nb) = self.on_surface(t, q);
+            let d = b - a;
+            if nb.dot(-d) <= self.plane_eps {
+                return None;
+            }
+            // The refined surface's own normal follows the receiver's normals where `w` has
+            // a slot for it.
+            let own = [na];
+            let mut any = false;
+            for (x, n) in w.iter_mut().zip(normals.iter().chain(&own)) {
+                *x = (n.dot(d) > self.plane_eps).then(|| kernel(a, *n, b, nb, size));
+                any |= x.is_some();
+            }
+            any.then(|| self.occ.segment_clear_between(a, na, b, nb))
+        });
     }
 
     /// Whether the parts of element `k` of an object with a refined surface are shut in by
