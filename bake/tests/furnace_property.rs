@@ -159,10 +159,24 @@ fn tetrahedron(n: u32) -> SolverObject {
 
 /// Worst relative error of any node (interior or leaf) for any normal, with where it is.
 fn worst_node(scene: &Scene) -> (f32, String) {
+    worst_per_object(scene)
+        .into_iter()
+        .fold((0.0, String::new()), |a, b| {
+            if b.0.abs() > a.0.abs() {
+                b
+            } else {
+                a
+            }
+        })
+}
+
+/// [`worst_node`] for each object of the scene.
+fn worst_per_object(scene: &Scene) -> Vec<(f32, String)> {
     let res = bake(scene, &BakeParams::default()).expect("bakes");
     let expect = EMISSION / (1.0 - RHO);
-    let mut worst = (0.0f32, String::new());
+    let mut out = Vec::new();
     for (oi, o) in res.objects.iter().enumerate() {
+        let mut worst = (0.0f32, String::new());
         let (mut lo, mut hi) = (f32::MAX, f32::MIN);
         for sol in &o.triangles {
             for c in &sol.colours {
@@ -197,8 +211,9 @@ fn worst_node(scene: &Scene) -> (f32, String) {
                 }
             }
         }
+        out.push(worst);
     }
-    worst
+    out
 }
 
 fn check(name: &str, object: SolverObject) {
@@ -320,14 +335,17 @@ fn octahedron(b: &mut Builder, c: Vec3, r: f32, n: u32) {
 /// alike, so the objects too must read `E / (1 − ρ)`, on the sides facing the walls, under
 /// them where they face the floor closely, and for every normal.
 ///
-/// Not yet within the 1% of the other scenes: the floor's leaves next to the resting
-/// octahedron's point of contact and under the floating one are up to 4.3% off. What is left
-/// is the noise of the links' visibility (eight rays each over sources that the octahedra half
-/// hide); the bias that made them 6.7% too bright (visibility counted by area, not by the
-/// kernel, and rays stopped once four agreed) and the shadow spread over receivers larger
-/// than the contact are gone (BENCHMARKS.md, "Leaves of the bake"). The bound below holds
-/// what the solver achieves, so that neither comes back.
-const CONTACT_TOLERANCE: f32 = 0.05;
+/// The room is within the 1% of the other scenes. Its floor's leaves next to the resting
+/// octahedron's point of contact and under the floating one were up to 4.2% off: the noise of
+/// dozens of links each partly hidden by the octahedra, now held to the leaf's coverage (the
+/// share of its hemisphere that meets a surface, all of it in a closed room), and the
+/// octahedra seen as clusters of up to twice their projected area (1-2% too bright over half
+/// the room's nodes; BENCHMARKS.md, "Tenth round").
+///
+/// Not yet within 1%: the octahedra's tilted normals, up to 2% too bright next to their
+/// equators (not the rays' noise: 2.5% with 128 rays per link). The bound holds what the solver
+/// achieves.
+const CONTACT_TOLERANCE: f32 = 0.025;
 
 #[test]
 fn objects_inside_a_closed_room() {
@@ -346,12 +364,22 @@ fn objects_inside_a_closed_room() {
         objects: vec![room, object],
         lights: Vec::new(),
     };
-    let (err, at) = worst_node(&scene);
-    println!("objects in a room: worst {:+.3}% at {at}", err * 100.0);
+    let worst = worst_per_object(&scene);
+    let ((room, room_at), (objects, objects_at)) = (&worst[0], &worst[1]);
+    println!(
+        "objects in a room: room {:+.3}% at {room_at}; objects {:+.3}% at {objects_at}",
+        room * 100.0,
+        objects * 100.0
+    );
     assert!(
-        err.abs() <= CONTACT_TOLERANCE,
-        "a node is {:+.2}% off at {at}",
-        err * 100.0
+        room.abs() <= TOLERANCE,
+        "a room node is {:+.2}% off at {room_at}",
+        room * 100.0
+    );
+    assert!(
+        objects.abs() <= CONTACT_TOLERANCE,
+        "an octahedron's node is {:+.2}% off at {objects_at}",
+        objects * 100.0
     );
 }
 
@@ -362,13 +390,15 @@ fn objects_inside_a_closed_room() {
 /// refined surface is smooth, and reaches out further at its points. Light leaves it from that
 /// refined surface, and its own leaves gather on it.
 ///
-/// Not yet within the 1% of the other scenes. The room's leaves are within 3% (a wall leaf in
-/// front of a point read +5.3% while the star's control triangles were its sources: the rays
-/// that say what it sees are cast against the refined surface, which stops short of the
-/// control mesh's point, so it saw the wall behind as well). The star's own leaves are up to
-/// 5.6% off, at tilted normals of leaves on the points' flanks (7.5% while every normal took
-/// the visibility of the geometric normal's rays). The bounds hold what the solver achieves.
-const REFINED_ROOM_TOLERANCE: f32 = 0.035;
+/// The room's leaves are within the 1% of the other scenes (2.8% before their links' noise was
+/// held to their coverage, and 5.3% while the star's control triangles were its sources: the
+/// rays that say what a wall leaf sees are cast against the refined surface, which stops short
+/// of the control mesh's point, so it saw the wall behind as well).
+///
+/// Not yet within 1%: the star's own leaves are up to 5.6% off, at tilted normals of leaves
+/// on the points' flanks (7.5% while every normal took the visibility of the geometric
+/// normal's rays). Its leaves lie on the refined surface, whose coverage is not measured.
+/// The bound holds what the solver achieves.
 const REFINED_STAR_TOLERANCE: f32 = 0.06;
 
 #[test]
@@ -455,7 +485,7 @@ fn refined_star_in_a_closed_room() {
         worst[1] * 100.0
     );
     assert!(
-        worst[0] <= REFINED_ROOM_TOLERANCE,
+        worst[0] <= TOLERANCE,
         "a room node is {:.2}% off",
         worst[0] * 100.0
     );
