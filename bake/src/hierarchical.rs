@@ -202,8 +202,6 @@ struct RawLink {
     k_start: u32,
     /// Fraction of the visibility rays that were clear.
     visible: f32,
-    /// How many visibility rays were cast (none where the pair is certainly clear).
-    rays: u32,
 }
 
 /// A resolved link inside a root's tree.
@@ -214,7 +212,6 @@ struct Link {
     toward: Vec3,
     k_start: u32,
     visible: f32,
-    rays: u32,
 }
 
 #[derive(Clone, Copy)]
@@ -248,10 +245,6 @@ struct Tree {
     /// its own root's refined triangles, which it gathers its own radiance through
     /// ([`Ctx::closure`]).
     self_view: Vec<f32>,
-    /// Per node and normal (empty where not estimated): the factor the light a leaf gathers through its
-    /// links' visibility rays is scaled by, so that its total form factor agrees with the
-    /// fraction of its hemisphere that meets a surface ([`Ctx::coverage`]).
-    partial_scale: Vec<f32>,
     /// Radiance per node and normal.
     l: Vec<Vec3>,
     /// Fraction of each node's area that is open, not shut in under other geometry
@@ -839,7 +832,7 @@ impl Ctx<'_> {
             };
         // Coefficients are a pure function of the pair: reuse those of the previous pass.
         let prev = &trees[r as usize];
-        let cache: std::collections::HashMap<(ElemKey, Source), (usize, f32, u32)> = prev
+        let cache: std::collections::HashMap<(ElemKey, Source), (usize, f32)> = prev
             .links
             .iter()
             .map(|l| {
@@ -851,7 +844,7 @@ impl Ctx<'_> {
                 };
                 (
                     (prev.keys[l.recv as usize], src),
-                    (l.k_start as usize, l.visible, l.rays),
+                    (l.k_start as usize, l.visible),
                 )
             })
             .collect();
@@ -1190,10 +1183,8 @@ impl Ctx<'_> {
                 nv.min(2)
             };
             // A previous pass's coefficients, where they took as many rays.
-            let (k, visible, cast) = match cache.get(&(recv, src)) {
-                Some(&(at, visible, cast)) if rays <= nv => {
-                    (prev.k[at..at + link_len].to_vec(), visible, cast)
-                }
+            let (k, visible) = match cache.get(&(recv, src)) {
+                Some(&(at, visible)) if rays <= nv => (prev.k[at..at + link_len].to_vec(), visible),
                 _ => self.link_coefficients((recv, rt), (src, st), rays, known),
             };
             if k.iter().all(|&v| v <= 0.0) {
@@ -1229,7 +1220,6 @@ impl Ctx<'_> {
                 toward,
                 k_start,
                 visible,
-                rays: cast,
             });
         }
         (links, ks)
@@ -1239,18 +1229,17 @@ impl Ctx<'_> {
     /// whose form factor is nowhere positive (a cluster whose box reaches above the receiver's
     /// plane while its triangles lie below it) is dropped by the caller, and casts no rays.
     ///
-    /// Returns the coefficients (`CORNERS × nn`, corner-major), the visible fraction and how
-    /// many rays were cast (none where nothing can hide the source). For a receiver on a
-    /// refined surface (its points carried onto it, [`Ctx::on_surface`]) `CORNERS` more
-    /// follow: the same for that surface's own normal at each point, what the receiver's
-    /// normals are filled against ([`Tree::closure`]).
+    /// Returns the coefficients (`CORNERS × nn`, corner-major) and the visible fraction. For a
+    /// receiver on a refined surface (its points carried onto it, [`Ctx::on_surface`])
+    /// `CORNERS` more follow: the same for that surface's own normal at each point, what the
+    /// receiver's normals are filled against ([`Tree::closure`]).
     fn link_coefficients(
         &self,
         (recv, rt): (ElemKey, [Vec3; 3]),
         (src, st): (Source, [Vec3; 3]),
         nv: u32,
         known: KnownFactors,
-    ) -> (Vec<f32>, f32, u32) {
+    ) -> (Vec<f32>, f32) {
         let root = &self.roots[recv.root as usize];
         let nn = root.normals.len();
         let rc = (rt[0] + rt[1] + rt[2]) / 3.0;
@@ -1263,7 +1252,6 @@ impl Ctx<'_> {
         let lifted = !self.surface[recv.root as usize].is_empty();
         let mut closure = 0.0f32;
         let mut vis = vec![1.0f32; nn + usize::from(lifted)];
-        let cast;
         match src {
             Source::Elem(sk) => {
                 let sc = (st[0] + st[1] + st[2]) / 3.0;
@@ -1309,14 +1297,14 @@ impl Ctx<'_> {
                     k.extend(linear_over_receiver(&[closure], at_corners));
                 }
                 if k.iter().all(|&v| v <= 0.0) {
-                    return (k, 0.0, 0);
+                    return (k, 0.0);
                 }
                 let sn = self.roots[sk.root as usize].normal;
                 let (lo, hi) = (st[0].min(st[1]).min(st[2]), st[0].max(st[1]).max(st[2]));
                 if self.certainly_clear(recv, rt, (lo, hi), Some((sn, st[0]))) {
-                    return (k, 1.0, 0);
+                    return (k, 1.0);
                 }
-                cast = self.cast_visibility(
+                self.cast_visibility(
                     (recv, rt),
                     src_id,
                     r_size + s_size,
@@ -1341,13 +1329,13 @@ impl Ctx<'_> {
                     k.extend(linear_over_receiver(&f, at_corners));
                 }
                 if k.iter().all(|&v| v <= 0.0) {
-                    return (k, 0.0, 0);
+                    return (k, 0.0);
                 }
                 let cluster = &self.clusters.clusters[c as usize];
                 if self.certainly_clear(recv, rt, (cluster.lo, cluster.hi), None) {
-                    return (k, 1.0, 0);
+                    return (k, 1.0);
                 }
-                cast = self.cast_visibility(
+                self.cast_visibility(
                     (recv, rt),
                     src_id,
                     r_size + c_size,
@@ -1370,7 +1358,7 @@ impl Ctx<'_> {
             let f = vis[nn];
             k[CORNERS * nn..].iter_mut().for_each(|v| *v *= f);
         }
-        (k, vis[0], cast)
+        (k, vis[0])
     }
 
     /// Unoccluded form factor from a point `p` with normal `n` to the triangles of cluster
@@ -1499,7 +1487,7 @@ impl Ctx<'_> {
         nv: u32,
         vis: &mut [f32],
         source: impl Fn(u32, &mut Rng) -> (u32, Vec3),
-    ) -> u32 {
+    ) {
         let normals = &self.roots[recv.root as usize].normals;
         visible_fractions(nv, vis, |i, w| {
             let mut rng = Rng::new(recv.id(), src_id, u64::from(i));
@@ -1520,7 +1508,7 @@ impl Ctx<'_> {
                 any |= x.is_some();
             }
             any.then(|| self.occ.segment_clear_between(a, na, b, nb))
-        })
+        });
     }
 
     /// Whether the parts of element `k` of an object with a refined surface are shut in by
@@ -1684,7 +1672,6 @@ impl Ctx<'_> {
             k: Vec::new(),
             closure: Vec::new(),
             self_view: Vec::new(),
-            partial_scale: Vec::new(),
             l: vec![Vec3::ZERO; n * nn],
             keys: all,
         };
@@ -1758,142 +1745,6 @@ impl Ctx<'_> {
         (closure, view)
     }
 
-    /// [`Tree::partial_scale`] of tree `t` (root `r`), from its links.
-    ///
-    /// A link's visibility is a fraction of a few rays, and a leaf gathers through dozens of
-    /// links partly hidden: beside an object resting on a floor, each of the walls and the
-    /// ceiling is part hidden, and the noise of their fractions added up, no matter how fine
-    /// the leaves (a floor leaf in a closed furnace read 3.5% too bright at the default eight
-    /// rays, with the mean right). The leaf's total form factor is the fraction of its
-    /// cosine-weighted hemisphere that meets the front of a surface, and that one number is
-    /// cheap to measure well: [`COVERAGE_RAYS`] rays from stratified points of the leaf. Where
-    /// the links' noise is large, the two estimates of the total are combined by their
-    /// variances, and the part the rays decided (links certainly clear are exact) is scaled to
-    /// match. In a closed scene every coverage ray meets a front, and the furnace is exact
-    /// whatever the links' rays said; in an open one both estimates are unbiased. Leaves on a
-    /// refined surface keep their links as they are (their own surface is gathered apart,
-    /// [`Tree::self_view`]).
-    fn coverage(&self, r: u32, t: &Tree) -> Vec<f32> {
-        if !self.surface[r as usize].is_empty() {
-            return Vec::new();
-        }
-        let nn = self.nn(r);
-        let n = t.keys.len();
-        // Per node, corner and normal: all links' coefficients and those of the links whose
-        // rays decided; per node and normal, the variance of the latter.
-        let mut all = vec![0.0f32; n * CORNERS * nn];
-        let mut cast = vec![0.0f32; n * CORNERS * nn];
-        let mut var = vec![0.0f64; n * nn];
-        for link in &t.links {
-            let at = link.k_start as usize;
-            let recv = link.recv as usize;
-            let ks = &t.k[at..at + CORNERS * nn];
-            for (x, &k) in ks.iter().enumerate() {
-                all[recv * CORNERS * nn + x] += k;
-            }
-            if link.rays == 0 {
-                continue;
-            }
-            for (x, &k) in ks.iter().enumerate() {
-                cast[recv * CORNERS * nn + x] += k;
-            }
-            // A fraction read from m rays: variance v(1 − v)/m, with v kept off 0 and 1 by
-            // half a ray (all rays clear does not make a link certain).
-            let m = f64::from(link.rays);
-            let v = (f64::from(link.visible) * m + 0.5) / (m + 1.0);
-            // Over the leaves of a larger receiver the visible part varies, and the link gives
-            // each its mean: as much as the hidden or the clear part, whichever is smaller,
-            // may be wrong at a leaf.
-            let spread = if t.child[recv] != u32::MAX {
-                f64::from(link.visible.min(1.0 - link.visible))
-            } else {
-                0.0
-            };
-            for j in 0..nn {
-                let k = f64::from(ks[j] + ks[nn + j] + ks[2 * nn + j]) / CORNERS as f64;
-                var[recv * nn + j] += k * k * (v * (1.0 - v) / m + spread * spread);
-            }
-        }
-        push_linear(t, &mut all, nn);
-        push_linear(t, &mut cast, nn);
-        // A leaf gathers its ancestors' links too: their variances add down the tree
-        // (breadth-first, parents first).
-        for i in 0..n {
-            let c = t.child[i];
-            if c != u32::MAX {
-                for ch in c as usize..c as usize + 4 {
-                    for j in 0..nn {
-                        var[ch * nn + j] += var[i * nn + j];
-                    }
-                }
-            }
-        }
-        let root = &self.roots[r as usize];
-        let m = COVERAGE_RAYS;
-        let side = (m as f32).sqrt() as u32;
-        let mut scale = vec![1.0f32; n * nn];
-        for i in (0..n).filter(|&i| t.child[i] == u32::MAX) {
-            let rt = self.elem_corners(t.keys[i]);
-            for (j, &nrm) in root.normals.iter().enumerate() {
-                let vi = var[i * nn + j];
-                let mean = |v: &[f32]| {
-                    f64::from(
-                        v[(i * CORNERS) * nn + j]
-                            + v[(i * CORNERS + 1) * nn + j]
-                            + v[(i * CORNERS + 2) * nn + j],
-                    ) / 3.0
-                };
-                let (t1, tp) = (mean(&all), mean(&cast));
-                if tp <= 0.0 || t1 <= 0.0 {
-                    continue;
-                }
-                // The noise moves the leaf's radiance by its share of the total form factor
-                // times the part of the radiance that is gathered (in the solution so far; all
-                // of it before there is one).
-                let l = f64::from(lum(t.l[i * nn + j]));
-                let gathered = if l > 0.0 {
-                    let own = lum(root.emission) + lum(t.rho[i]) * lum(t.direct[i * nn + j]);
-                    ((l - f64::from(own)) / l).clamp(0.0, 1.0)
-                } else {
-                    1.0
-                };
-                if vi.sqrt() / t1 * gathered < COVERAGE_NOISE {
-                    continue;
-                }
-                let a = if nrm.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
-                let tu = nrm.cross(a).normalize();
-                let tv = nrm.cross(tu);
-                let mut rng = Rng::new(t.keys[i].id(), 0xC0FE, j as u64);
-                let mut hits = 0u32;
-                for s in 0..m {
-                    let p = jittered_point(rt, s, m, &mut rng);
-                    // Cosine-weighted, one stratum of a side × side grid each, the strata
-                    // dealt to the points in a shuffled order.
-                    let d = (s * 7 + 3) % m;
-                    let u1 = ((d / side) as f32 + rng.next_f32()) / side as f32;
-                    let u2 = ((d % side) as f32 + rng.next_f32()) / side as f32;
-                    let (sin, cos) = (u1.sqrt(), (1.0 - u1).max(0.0).sqrt());
-                    let phi = std::f32::consts::TAU * u2;
-                    let dir = tu * (sin * phi.cos()) + tv * (sin * phi.sin()) + nrm * cos;
-                    // A tilted normal's links see only above the element's plane; below it
-                    // is what they lack, filled apart (`iterate_root`).
-                    if dir.dot(root.normal) <= 0.0 {
-                        continue;
-                    }
-                    hits += u32::from(self.occ.first_hit_front(p, dir) == Some(true));
-                }
-                let mf = f64::from(m);
-                let c = f64::from(hits) / mf;
-                let cs = (f64::from(hits) + COVERAGE_PRIOR) / (mf + 2.0 * COVERAGE_PRIOR);
-                let var2 = cs * (1.0 - cs) / mf;
-                let total = (t1 * var2 + c * vi) / (vi + var2);
-                scale[i * nn + j] =
-                    ((total - (t1 - tp)) / tp).clamp(0.0, COVERAGE_MAX_SCALE) as f32;
-            }
-        }
-        scale
-    }
-
     /// One gather + push-pull for root `r`; returns the new radiance array.
     fn iterate_root(&self, r: u32, trees: &[Tree], cl: &[ClusterLight]) -> Vec<Vec3> {
         let t = &trees[r as usize];
@@ -1912,13 +1763,6 @@ impl Ctx<'_> {
         }
         let mut ff = vec![0.0f32; n * CORNERS * nn];
         let mut g0 = vec![Vec3::ZERO; n * CORNERS];
-        // The same for the links whose visibility rays decided, where leaves scale them
-        // ([`Tree::partial_scale`]).
-        let scaled = !t.partial_scale.is_empty();
-        let m = if scaled { n } else { 0 };
-        let mut qp = vec![Vec3::ZERO; m * CORNERS * nn];
-        let mut ffp = vec![0.0f32; m * CORNERS * nn];
-        let mut gp0 = vec![Vec3::ZERO; m * CORNERS];
         for link in &t.links {
             let ls = match link.src {
                 SrcIdx::Cluster(c) => cl[c as usize].toward(link.toward),
@@ -1935,24 +1779,10 @@ impl Ctx<'_> {
             for c in 0..CORNERS {
                 g0[link.recv as usize * CORNERS + c] += ls * ks[c * nn];
             }
-            if scaled && link.rays > 0 {
-                for (x, &k) in ks.iter().enumerate() {
-                    qp[base + x] += ls * k;
-                    ffp[base + x] += k;
-                }
-                for c in 0..CORNERS {
-                    gp0[link.recv as usize * CORNERS + c] += ls * ks[c * nn];
-                }
-            }
         }
         push_linear(t, &mut q, nn);
         push_linear(t, &mut ff, nn);
         push_linear(t, &mut g0, 1);
-        if scaled {
-            push_linear(t, &mut qp, nn);
-            push_linear(t, &mut ffp, nn);
-            push_linear(t, &mut gp0, 1);
-        }
         // What each leaf gathers: the mean of its linear function, the value at its centroid.
         let mean = |v: &[Vec3], i: usize, j: usize, nn: usize| {
             (v[(i * CORNERS) * nn + j]
@@ -1965,13 +1795,8 @@ impl Ctx<'_> {
             if t.child[i] != u32::MAX {
                 continue;
             }
-            // The ray-decided part scaled to the leaf's coverage: `s − 1` more of it.
-            let extra = |j: usize| t.partial_scale.get(i * nn + j).map_or(0.0, |s| s - 1.0);
             for j in 0..nn {
                 q_leaf[i * nn + j] = mean(&q, i, j, nn);
-                if extra(j) != 0.0 {
-                    q_leaf[i * nn + j] += mean(&qp, i, j, nn) * extra(j);
-                }
             }
             // Light from below the coarse plane. A normal turned away from the coarse one sees,
             // through the part of its hemisphere below the element's plane, surface that the
@@ -1988,29 +1813,17 @@ impl Ctx<'_> {
                 }
             }
             if nn > 1 || closure.is_some() {
-                let sum3 = |v: &[f32], j: usize| {
-                    (v[(i * CORNERS) * nn + j]
-                        + v[(i * CORNERS + 1) * nn + j]
-                        + v[(i * CORNERS + 2) * nn + j])
-                        / 3.0
-                };
                 let ffm = |j: usize| {
-                    sum3(&ff, j)
-                        + if extra(j) != 0.0 {
-                            sum3(&ffp, j) * extra(j)
-                        } else {
-                            0.0
-                        }
+                    (ff[(i * CORNERS) * nn + j]
+                        + ff[(i * CORNERS + 1) * nn + j]
+                        + ff[(i * CORNERS + 2) * nn + j])
+                        / 3.0
                 };
                 let f0 = ffm(0);
                 if f0 <= 0.0 {
                     continue;
                 }
-                let mut g = (g0[i * CORNERS] + g0[i * CORNERS + 1] + g0[i * CORNERS + 2]) / 3.0;
-                if extra(0) != 0.0 {
-                    g += (gp0[i * CORNERS] + gp0[i * CORNERS + 1] + gp0[i * CORNERS + 2]) / 3.0
-                        * extra(0);
-                }
+                let g = (g0[i * CORNERS] + g0[i * CORNERS + 1] + g0[i * CORNERS + 2]) / 3.0;
                 let m = g / f0;
                 let (full, first) = match closure {
                     Some(f) => (f, 0),
@@ -2125,22 +1938,6 @@ impl Ctx<'_> {
 /// 20). With the first-order variation of every link kept, the push hands each child the
 /// coefficient over its own part of the receiver, and what remains is curvature.
 const CORNERS: usize = 3;
-
-/// Rays a leaf's coverage is measured with ([`Ctx::coverage`]): a square, for the strata.
-const COVERAGE_RAYS: u32 = 64;
-
-/// The noise of a leaf's radiance from its links' visibility rays, relative to the radiance,
-/// below which its coverage is not measured ([`Ctx::coverage`]; 64 rays that all meet a
-/// surface read it to 0.5%).
-const COVERAGE_NOISE: f64 = 0.0025;
-
-/// The rays counted as having met a surface, and as not, before any is cast, for the variance
-/// of a leaf's coverage ([`Ctx::coverage`]): a small prior, since coverage is often exactly one
-/// (a closed room) and a leaf whose rays all met a surface should be believed.
-const COVERAGE_PRIOR: f64 = 0.1;
-
-/// The most a leaf's ray-decided light is scaled by ([`Ctx::coverage`]).
-const COVERAGE_MAX_SCALE: f64 = 3.0;
 
 /// Largest error, relative to the receiver's radiance, that a link's bend over its receiver
 /// may put into it before the receiver is split (see `refine_root`).
@@ -2350,8 +2147,6 @@ struct KnownFactors {
 /// count) and casts it, or returns `None` when no normal counts it.
 ///
 /// Each normal weighs the rays by its own kernel and counts only those its plane lets through.
-/// Returns how many rays were cast.
-///
 /// One fraction for all, the geometric normal's, left a tilted normal with the visibility of
 /// rays it does not see along (and with none at all, read as wholly clear, where the source
 /// lies behind the geometric plane): under spot's muzzle, normals facing the chest and the
@@ -2368,7 +2163,7 @@ fn visible_fractions(
     n: u32,
     vis: &mut [f32],
     mut ray: impl FnMut(u32, &mut [Option<f32>]) -> Option<bool>,
-) -> u32 {
+) {
     let m = vis.len();
     // Per normal: clear weight, total weight, clear rays, rays.
     let mut acc = vec![(0.0f64, 0.0f64, 0u32, 0u32); m];
@@ -2401,7 +2196,6 @@ fn visible_fractions(
             1.0
         };
     }
-    cast
 }
 
 /// The form-factor kernel `cos θp cos θq / r²` between a receiver point `p` (normal `np`) and
@@ -2697,7 +2491,6 @@ pub fn bake_with_progress(
                     toward: l.toward,
                     k_start: l.k_start,
                     visible: l.visible,
-                    rays: l.rays,
                 })
                 .collect();
             new_trees[r].links = resolved;
@@ -2710,17 +2503,6 @@ pub fn bake_with_progress(
             for i in 0..nt.keys.len() {
                 let j = ot.deepest_toward(nt.keys[i]) as usize;
                 nt.l[i * nn..(i + 1) * nn].copy_from_slice(&ot.l[j * nn..(j + 1) * nn]);
-            }
-        }
-        // In the file's pass (earlier ones only judge where to refine), against that solution.
-        if judge.last_pass {
-            let scales: Vec<Vec<f32>> = new_trees
-                .par_iter()
-                .enumerate()
-                .map(|(r, t)| ctx.coverage(r as u32, t))
-                .collect();
-            for (t, s) in new_trees.iter_mut().zip(scales) {
-                t.partial_scale = s;
             }
         }
         trees = new_trees;

@@ -193,24 +193,17 @@ impl Occluders {
     /// Whether the ray from `origin` along unit `dir` first meets the back of a triangle (the
     /// side its counter-clockwise winding does not face); false when it meets nothing.
     pub fn first_hit_is_back(&self, origin: Vec3, dir: Vec3) -> bool {
-        self.first_hit_front(origin, dir) == Some(false)
-    }
-
-    /// What the ray from `origin` along unit `dir` meets first: `Some(true)` the front of a
-    /// triangle (the side its counter-clockwise winding faces), `Some(false)` the back, `None`
-    /// nothing.
-    pub fn first_hit_front(&self, origin: Vec3, dir: Vec3) -> Option<bool> {
-        let bvh = self.bvh.as_ref()?;
+        let Some(bvh) = &self.bvh else { return false };
         let ray = bvh_ray(origin.into(), dir.into(), self.eps, f32::INFINITY);
         let mut hit = RayHit::none();
         if !bvh.ray_traverse(ray, &mut hit, |r, id| {
             self.tris[bvh.primitive_indices[id] as usize].intersect(r)
         }) {
-            return None;
+            return false;
         }
         let t = &self.tris[bvh.primitive_indices[hit.primitive_id as usize] as usize];
         let n = (t.v1 - t.v0).cross(t.v2 - t.v0);
-        Some(n.dot(Vec3A::from(dir)) <= 0.0)
+        n.dot(Vec3A::from(dir)) > 0.0
     }
 
     /// Whether the ray from `origin` along unit `dir` meets no triangle before `max_t`.
