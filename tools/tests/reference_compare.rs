@@ -54,6 +54,23 @@ fn compare_gives_the_known_answer_and_explains_bad_input() {
     let (code, out, _) = common::hce(&["compare", s(&a), s(&b)]);
     assert_eq!(code, 0);
     assert!(out.contains("relative RMS: 0.23570"), "{out}");
+    // Pixel 1 sums 6 against 5.
+    assert!(out.contains("worst pixel: 0.20000 at (1, 0)"), "{out}");
+
+    // Against a constant (a closed furnace's 0.8): pixel 0 sums 5 against 6, pixel 1 6.
+    let (code, out, err) = common::hce(&["compare", s(&a), "--constant", "2", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!((v["relative_bias"].as_f64().unwrap() + 1.0 / 12.0).abs() < 1e-9);
+    assert!((v["worst_pixel"].as_f64().unwrap() - 1.0 / 6.0).abs() < 1e-9);
+    assert_eq!(v["worst_at"], serde_json::json!([0, 0]));
+    for bad in ["--constant=0", "--constant=-1", "--constant=nan"] {
+        let (code, _, err) = common::hce(&["compare", s(&a), bad]);
+        assert_eq!(code, 3, "{bad}: {err}");
+        assert!(err.contains("--constant"), "{err}");
+    }
+    let (code, _, err) = common::hce(&["compare", s(&a)]);
+    assert_ne!(code, 0, "no reference: {err}");
 
     // Sizes that differ, a mask of the wrong size, garbage and a missing file.
     let small = dir.path().join("small.exr");

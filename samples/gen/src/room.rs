@@ -145,6 +145,22 @@ pub fn room_with_mesh(name: &str, mesh: &Mesh, turn_degrees: f64) -> Scene {
     s
 }
 
+/// Radiance every surface of [`furnace`] emits, and its reflectance.
+pub const FURNACE_EMISSION: f64 = 0.4;
+pub const FURNACE_REFLECTANCE: f64 = 0.5;
+
+/// Turns `scene` into a closed furnace: every material emits [`FURNACE_EMISSION`] and reflects
+/// [`FURNACE_REFLECTANCE`], so that the exact radiance everywhere is `E / (1 − ρ)` = 0.8,
+/// whatever the geometry. A bake of the room around a mesh made so shows at every leaf and
+/// refined vertex how far the solver's form factors are from summing to one (`hce compare
+/// --constant 0.8`), with no path tracer's noise in the way.
+pub fn furnace(scene: &mut Scene) {
+    for m in &mut scene.materials {
+        m.base_color = [FURNACE_REFLECTANCE; 3];
+        m.emission = [FURNACE_EMISSION; 3];
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -185,5 +201,18 @@ mod tests {
             Err(ObjError::Syntax { line: 1, .. })
         ));
         assert!(matches!(parse_obj("# nothing\n"), Err(ObjError::Empty)));
+    }
+
+    #[test]
+    fn a_furnace_room_emits_and_reflects_alike_everywhere() {
+        let mut s = room_with_mesh("tetra", &parse_obj(TETRA).unwrap(), 0.0);
+        furnace(&mut s);
+        assert!(s.materials.len() >= 5);
+        for m in &s.materials {
+            assert_eq!(m.emission, [FURNACE_EMISSION; 3], "{}", m.name);
+            assert_eq!(m.base_color, [FURNACE_REFLECTANCE; 3], "{}", m.name);
+        }
+        let exact = FURNACE_EMISSION / (1.0 - FURNACE_REFLECTANCE);
+        assert!((exact - 0.8).abs() < 1e-12);
     }
 }

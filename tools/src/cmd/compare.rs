@@ -8,7 +8,11 @@
 //!   channels (and per channel, the sums over pixels only);
 //! * mean relative bias `Σ (a - b) / Σ b`, over pixels and channels: positive when the first
 //!   image is brighter on the whole;
+//! * the worst pixel: the largest `|Σa − Σb| / Σb` of one pixel's summed RGB, and where it is;
 //! * the number of pixels compared.
+//!
+//! Instead of a reference image, `--constant V` compares against `V` in every channel of every
+//! pixel: a closed furnace (`gen-samples room --furnace`) is exactly 0.8 everywhere.
 //!
 //! A mask is a PNG of the same size (`hce reference --mask`): pixels whose first channel is at
 //! least half of full scale are compared.
@@ -23,8 +27,13 @@ use serde::Serialize;
 pub struct CompareArgs {
     /// The image to judge (linear .exr).
     pub image: PathBuf,
-    /// The reference (linear .exr).
-    pub reference: PathBuf,
+    /// The reference (linear .exr); or `--constant`.
+    #[arg(required_unless_present = "constant")]
+    pub reference: Option<PathBuf>,
+    /// Compare against this value in every channel of every pixel instead of a reference
+    /// image (a closed furnace: 0.8 for `gen-samples room --furnace`).
+    #[arg(long, value_name = "V", conflicts_with = "reference")]
+    pub constant: Option<f32>,
     /// Compare only where this PNG (same size) is white.
     #[arg(long, value_name = "PATH.png")]
     pub mask: Option<PathBuf>,
@@ -90,6 +99,10 @@ pub struct Comparison {
     pub relative_rms_rgb: [f64; 3],
     /// `Σ (a - b) / Σ b` over pixels and channels.
     pub relative_bias: f64,
+    /// The largest `|Σa − Σb| / Σb` of one pixel (summed RGB) where `Σb > 0`.
+    pub worst_pixel: f64,
+    /// That pixel's `[x, y]`.
+    pub worst_at: [u32; 2],
 }
 
 /// A linear RGB image.
@@ -154,11 +167,17 @@ pub fn read_mask(path: &Path) -> Result<(usize, usize, Vec<bool>)> {
 pub fn compare(a: &Rgb, b: &Rgb, mask: Option<&[bool]>) -> Result<Comparison> {
     let (mut d2, mut b2, mut diff, mut sum) = ([0f64; 3], [0f64; 3], 0f64, 0f64);
     let mut pixels = 0u64;
+    let (mut worst, mut worst_i) = (0f64, 0usize);
     for (i, (pa, pb)) in a.pixels.iter().zip(&b.pixels).enumerate() {
         if mask.is_some_and(|m| !m[i]) {
             continue;
         }
         pixels += 1;
+        let sa: f64 = pa.iter().map(|&x| f64::from(x)).sum();
+        let sb: f64 = pb.iter().map(|&x| f64::from(x)).sum();
+        if sb > 0.0 && (sa - sb).abs() / sb > worst {
+            (worst, worst_i) = ((sa - sb).abs() / sb, i);
+        }
         for c in 0..3 {
             let (x, y) = (f64::from(pa[c]), f64::from(pb[c]));
             d2[c] += (x - y) * (x - y);
@@ -182,23 +201,46 @@ pub fn compare(a: &Rgb, b: &Rgb, mask: Option<&[bool]>) -> Result<Comparison> {
         relative_rms: rel(d2_all, b2_all),
         relative_rms_rgb: [0, 1, 2].map(|c| rel(d2[c], b2[c])),
         relative_bias: diff / sum,
+        worst_pixel: worst,
+        worst_at: [
+            (worst_i % a.width.max(1)) as u32,
+            (worst_i / a.width.max(1)) as u32,
+        ],
     })
 }
 
 pub fn run(args: CompareArgs) -> Result<()> {
     let a = read_exr(&args.image)?;
-    let b = read_exr(&args.reference)?;
-    if (a.width, a.height) != (b.width, b.height) {
-        bail!(InvalidImage(format!(
-            "{} is {}x{} but the reference {} is {}x{}; render both at the same --size",
-            args.image.display(),
-            a.width,
-            a.height,
-            args.reference.display(),
-            b.width,
-            b.height
-        )));
-    }
+    let b = match (&args.reference, args.constant) {
+        (_, Some(v)) => {
+            if !(v.is_finite() && v > 0.0) {
+                bail!(InvalidImage(format!(
+                    "--constant {v}: a reference value must be positive and finite"
+                )));
+            }
+            Rgb {
+                width: a.width,
+                height: a.height,
+                pixels: vec![[v; 3]; a.pixels.len()],
+            }
+        }
+        (Some(path), None) => {
+            let b = read_exr(path)?;
+            if (a.width, a.height) != (b.width, b.height) {
+                bail!(InvalidImage(format!(
+                    "{} is {}x{} but the reference {} is {}x{}; render both at the same --size",
+                    args.image.display(),
+                    a.width,
+                    a.height,
+                    path.display(),
+                    b.width,
+                    b.height
+                )));
+            }
+            b
+        }
+        (None, None) => bail!("give a reference image or --constant"),
+    };
     let mask = match &args.mask {
         Some(path) => {
             let (w, h, m) = read_mask(path)?;
@@ -228,6 +270,10 @@ pub fn run(args: CompareArgs) -> Result<()> {
             c.relative_rms, c.relative_rms_rgb[0], c.relative_rms_rgb[1], c.relative_rms_rgb[2]
         );
         println!("relative bias: {:+.5}", c.relative_bias);
+        println!(
+            "worst pixel: {:.5} at ({}, {})",
+            c.worst_pixel, c.worst_at[0], c.worst_at[1]
+        );
     }
     Ok(())
 }
@@ -256,6 +302,9 @@ mod tests {
         assert!((all.relative_rms_rgb[0] - (1.0f64 / 3.0).sqrt()).abs() < 1e-12);
         assert!((all.relative_rms_rgb[1] - (4.0f64 / 12.0).sqrt()).abs() < 1e-12);
         assert!((all.relative_bias - 1.0 / 15.0).abs() < 1e-12);
+        // Pixel 1: |6 - 5| / 5; pixel 2: |5 - 5| / 5.
+        assert!((all.worst_pixel - 0.2).abs() < 1e-12);
+        assert_eq!(all.worst_at, [1, 0]);
         let masked = compare(&a, &b, Some(&[true, true, false])).unwrap();
         assert_eq!(masked.pixels, 2);
         assert!((masked.relative_rms - (1.0f64 / 18.0).sqrt()).abs() < 1e-12);

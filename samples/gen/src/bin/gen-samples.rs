@@ -3,12 +3,15 @@
 //!
 //! Usage: `cargo run -p hce-samples --bin gen-samples [-- OUT_DIR]`
 //!
-//! `gen-samples room --mesh MESH.obj -o ROOM.glb [--name NAME] [--turn DEG] [--triangles N]` writes
+//! `gen-samples room --mesh MESH.obj -o ROOM.glb [--name NAME] [--turn DEG] [--triangles N]
+//! [--furnace]` writes
 //! instead a test room around one mesh ([`hce_samples::room`]): a closed room lit by a ceiling
 //! light, the mesh turned `DEG` degrees about +Y (default 0), scaled to fit, standing on the
 //! floor, multiresolution, and a camera looking at it. With `--triangles N` the mesh is first
 //! simplified to at most `N` triangles ([`hce_samples::simplify`]), so that a fine scan becomes
-//! the coarse control mesh a multiresolution object is meant to be.
+//! the coarse control mesh a multiresolution object is meant to be. With `--furnace` every
+//! surface, the light included, emits 0.4 and reflects 0.5 ([`hce_samples::room::furnace`]):
+//! a closed furnace whose exact radiance is 0.8 everywhere (`hce compare --constant 0.8`).
 #![forbid(unsafe_code)]
 
 use std::io::Write;
@@ -46,14 +49,19 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     result
 }
 
-/// `room --mesh PATH -o OUT.glb [--name NAME] [--turn DEG] [--triangles N]`.
+/// `room --mesh PATH -o OUT.glb [--name NAME] [--turn DEG] [--triangles N] [--furnace]`.
 fn room(args: &[String]) -> Result<()> {
     let usage = "usage: gen-samples room --mesh MESH.obj -o ROOM.glb [--name NAME] [--turn DEG] \
-                 [--triangles N]";
+                 [--triangles N] [--furnace]";
     let (mut mesh, mut out, mut name, mut turn) = (None, None, None, 0.0);
     let mut triangles: Option<usize> = None;
+    let mut furnace = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
+        if a == "--furnace" {
+            furnace = true;
+            continue;
+        }
         let value = it
             .next()
             .with_context(|| format!("{a} needs a value; {usage}"));
@@ -99,7 +107,10 @@ fn room(args: &[String]) -> Result<()> {
     if let Some(n) = triangles {
         mesh = hce_samples::simplify::simplify(&mesh, n);
     }
-    let scene = hce_samples::room::room_with_mesh(&name, &mesh, turn);
+    let mut scene = hce_samples::room::room_with_mesh(&name, &mesh, turn);
+    if furnace {
+        hce_samples::room::furnace(&mut scene);
+    }
     let bytes = hce_samples::glb::write_glb(&scene).context("cannot build the GLB")?;
     write_atomically(&out, &bytes)?;
     let simplified = match triangles {
@@ -107,11 +118,16 @@ fn room(args: &[String]) -> Result<()> {
         None => String::new(),
     };
     println!(
-        "{}: {} bytes, {} triangles, '{name}' {} triangles (multires{simplified})",
+        "{}: {} bytes, {} triangles, '{name}' {} triangles (multires{simplified}){}",
         out.display(),
         bytes.len(),
         scene.triangle_count(),
-        mesh.triangles.len()
+        mesh.triangles.len(),
+        if furnace {
+            ", a closed furnace (E 0.4, reflectance 0.5: 0.8 everywhere)"
+        } else {
+            ""
+        }
     );
     Ok(())
 }
