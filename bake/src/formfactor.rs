@@ -56,10 +56,48 @@ pub fn point_to_polygon(p: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
         // The angle between `a` and `b`: atan2(|a × b|, a · b) needs neither length and
         // stays accurate for small angles, where the arc cosine of their normalised dot
         // product loses half its digits.
-        let gamma = lc.atan2(a.dot(b));
+        let gamma = angle(lc, a.dot(b));
         sum += gamma * n.dot(c) / lc;
     }
     ((-sum / (2.0 * std::f64::consts::PI)).max(0.0)) as f32
+}
+
+/// `atan2(y, x)` for `y ≥ 0` (an angle in `0..=π`), to within 1e-9 rad: the library's `atan2`
+/// took a twelfth of a bake's time in [`point_to_polygon`]. Reduced to `|t| ≤ tan(π/8)` by
+/// `atan t = π/2 − atan(1/t)` and `atan t = π/4 + atan((t − 1)/(t + 1))`, then the Taylor
+/// series to `t¹⁹` (its remainder below `0.4143²¹ / 21`).
+fn angle(y: f64, x: f64) -> f64 {
+    use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+    let ax = x.abs();
+    if y == 0.0 && ax == 0.0 {
+        return 0.0;
+    }
+    // t = min / max in 0..=1, and whether the arguments were swapped.
+    let (t, swapped) = if y <= ax {
+        (y / ax, false)
+    } else {
+        (ax / y, true)
+    };
+    const TAN_PI_8: f64 = 0.414_213_562_373_095_1;
+    let (u, base) = if t > TAN_PI_8 {
+        ((t - 1.0) / (t + 1.0), FRAC_PI_4)
+    } else {
+        (t, 0.0)
+    };
+    let u2 = u * u;
+    let mut series = 0.0f64;
+    for k in (0..10).rev() {
+        let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+        series = series * u2 + sign / f64::from(2 * k + 1);
+    }
+    let mut r = base + u * series;
+    if swapped {
+        r = FRAC_PI_2 - r;
+    }
+    if x < 0.0 {
+        r = PI - r;
+    }
+    r
 }
 
 /// Stratified sample points of a triangle: the centroids of its `4^level` subtriangles after
@@ -111,6 +149,22 @@ pub fn disc_estimate(cos_r: f32, cos_s: f32, src_area: f32, dist2: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn angle_is_atan2_over_the_upper_half_plane() {
+        let mut worst = 0.0f64;
+        for i in 0..=2000 {
+            let phi = std::f64::consts::PI * f64::from(i) / 2000.0;
+            for r in [1e-12, 1e-3, 1.0, 7.5e5] {
+                let (y, x) = (r * phi.sin().abs(), r * phi.cos());
+                worst = worst.max((angle(y, x) - y.atan2(x)).abs());
+            }
+        }
+        assert!(worst < 1e-9, "{worst}");
+        assert_eq!(angle(0.0, 0.0), 0.0);
+        assert_eq!(angle(0.0, 2.0), 0.0);
+        assert!((angle(0.0, -2.0) - std::f64::consts::PI).abs() < 1e-15);
+    }
 
     fn square(o: Vec3, u: Vec3, v: Vec3) -> Vec<[Vec3; 3]> {
         // Counter-clockwise seen from u × v.

@@ -534,19 +534,46 @@ impl Ctx<'_> {
     }
 
     /// Whether the bend rule may split receiver `k` for source element `sk`: one level below
-    /// `max_level` where the two lie on different objects (a room's corner between a wall and
-    /// the ceiling, where a leaf of `max_level` drew a bright line along the corner: the light
-    /// falls towards it faster than a linear link follows), down to `max_level` on one object.
-    /// At the edges an object shares with itself the deeper leaves came out further from a
-    /// closed furnace's exact answer (1.1-1.3%), so there it stops at `max_level`.
+    /// `max_level` (a room's corner between a wall and the ceiling, where a leaf of
+    /// `max_level` drew a bright line along the corner: the light falls towards it faster than
+    /// a linear link follows), but down to `max_level` alone between two coarse triangles of
+    /// one object with a refined surface.
+    ///
+    /// Every link a receiver takes must be able to follow it down: a leaf split below
+    /// `max_level` for one source takes the links it could not split for, pushed from its
+    /// parent as linear functions, and next to a corner those are far from linear. When one
+    /// object stopped at `max_level` at its own edges, a room's walls, one object beside the
+    /// floor and the ceiling, were split a level deeper along the floor and the ceiling for
+    /// them, and the leaves by the corner where two walls meet read 6% too dark and too bright
+    /// in turn in a closed furnace (`tests/furnace_property.rs`, `large_faces`; bright lines
+    /// along the room's corners in issue 20).
     fn bend_splittable(&self, k: ElemKey, area: f32, sk: ElemKey) -> bool {
-        if self.roots[k.root as usize].object == self.roots[sk.root as usize].object {
+        if self.roots[k.root as usize].object == self.roots[sk.root as usize].object
+            && !self.surface[k.root as usize].is_empty()
+        {
             return self.splittable(k, area);
         }
         let depth = (self.params.max_level + 1)
             .min(self.params.detail_level)
             .min(MAX_TREE_DEPTH);
         k.level < depth && area * 0.25 >= self.min_area_of(k)
+    }
+
+    /// The bend rule's tolerance for receiver `k` and source `src`: half of
+    /// [`BEND_TOLERANCE`] where the two lie on one object. Around an edge an object shares
+    /// with itself every face on the other side bends alike, and their errors add: at 0.001 the
+    /// leaves along the edges of a closed furnace's jittered box came out 1.1-1.3% off, at
+    /// 0.0005 within 0.6% (halving it for every pair cost the scaling scene 14% more elements).
+    fn bend_tolerance(&self, k: ElemKey, src: Source) -> f32 {
+        let object = match src {
+            Source::Elem(sk) => Some(self.roots[sk.root as usize].object),
+            Source::Cluster(c) => self.cluster_object[c as usize].map(|o| o as usize),
+        };
+        if object == Some(self.roots[k.root as usize].object) {
+            0.5 * BEND_TOLERANCE
+        } else {
+            BEND_TOLERANCE
+        }
     }
 
     /// Whether root `r`, with its geometric normal alone, sees nothing of object `object`: its
@@ -1016,7 +1043,8 @@ impl Ctx<'_> {
                         // receiver has: every leaf is drawn, so a small one next to an edge
                         // matters as much as a large one.
                         let recv_l = bend_radiance(recv);
-                        if bend * l * lum(self.reflectance(recv)) > BEND_TOLERANCE * recv_l
+                        if bend * l * lum(self.reflectance(recv))
+                            > self.bend_tolerance(recv, src) * recv_l
                             && self.bend_splittable(recv, r_area, sk)
                         {
                             split_receiver(&mut stack, recv, rt, src, st);
@@ -1127,7 +1155,9 @@ impl Ctx<'_> {
                         };
                         let bend = (centre - (at[0] + at[1] + at[2]) / 3.0).abs();
                         let recv_l = bend_radiance(recv);
-                        if bend * l * lum(self.reflectance(recv)) > BEND_TOLERANCE * recv_l {
+                        if bend * l * lum(self.reflectance(recv))
+                            > self.bend_tolerance(recv, src) * recv_l
+                        {
                             split_receiver(&mut stack, recv, rt, src, st);
                             continue;
                         }
@@ -1419,7 +1449,7 @@ impl Ctx<'_> {
     /// [`Ctx::cluster_form_factors`] with normal `n` at the centre of receiver triangle `rt` and
     /// at its inset corners, in one walk of the cluster tree: the centre's, and the corners'.
     /// Each point opens the clusters it would open alone and sums in the same order, so the
-    /// four values are those of four walks.
+    /// four values are those of four walks (but for the disc's area, which the points share).
     fn cluster_factors_over(
         &self,
         c: u32,
@@ -1439,6 +1469,10 @@ impl Ctx<'_> {
     fn cluster_factors_at(&self, c: u32, pts: &[Vec3; 4], n: Vec3, active: u8, out: &mut [f32; 4]) {
         let cluster = &self.clusters.clusters[c as usize];
         let mut open = 0u8;
+        // The disc's area seen from the first point that takes it, for all: the points are a
+        // receiver's, within a fifth of the distance of each other (a sixteenth of the bake's
+        // time went to computing it four times).
+        let mut proj = None;
         for (i, p) in pts.iter().enumerate() {
             if active & (1 << i) == 0 {
                 continue;
@@ -1448,7 +1482,8 @@ impl Ctx<'_> {
             let dist = d2.sqrt();
             if cluster.radius() < dist * CLUSTER_DISC_OPENING {
                 let w = d / dist;
-                out[i] += disc_factor(n, w, cluster.projected_area(-w), d2);
+                let area = *proj.get_or_insert_with(|| cluster.projected_area(-w));
+                out[i] += disc_factor(n, w, area, d2);
             } else {
                 open |= 1 << i;
             }

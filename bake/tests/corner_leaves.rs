@@ -1,8 +1,9 @@
-//! The leaves along a room's corners (issue 20): where two walls that are separate objects meet
-//! (nothing joins them), the bend rule refines one level below `max_level`, so that the light's
-//! fall into the corner is not drawn as a bright line one leaf wide; along an edge an object
-//! shares with itself it stops at `max_level` (deeper leaves there came out further from a
-//! closed furnace's answer).
+//! The leaves along a room's corners (issue 20): where two walls meet, the bend rule refines one
+//! level below `max_level`, so that the light's fall into the corner is not drawn as a bright
+//! line one leaf wide. Alike whether the walls are separate objects or one object whose faces
+//! share their edges: a room whose walls were one object beside a separate floor stopped at
+//! `max_level` along its vertical corners, where the floor's links had taken the leaves deeper,
+//! and those leaves read 6% off in a closed furnace (`furnace_property.rs`, `large_faces`).
 
 use glam::Vec3;
 use hce_bake::element::ElemKey;
@@ -107,7 +108,7 @@ fn edge_leaves_below(scene: &Scene, result: &BakeResult, level: u32) -> usize {
 }
 
 #[test]
-fn separate_walls_are_refined_one_level_deeper_along_their_corners() {
+fn walls_are_refined_one_level_deeper_along_their_corners() {
     let params = BakeParams {
         max_level: 3,
         ..BakeParams::default()
@@ -120,12 +121,12 @@ fn separate_walls_are_refined_one_level_deeper_along_their_corners() {
         "leaves along the edges below max_level: separate walls {deep_separate}, one object \
          {deep_joined}"
     );
-    // Along every edge of the separate walls: each side of each of the 12 edges is 8 leaf
-    // edges long at level 3, each at least two leaves at level 4. The joined room's few are at
-    // its three-way corners, where the contact rules look.
-    assert!(
-        deep_separate >= 12 * 8 * 2 * 2,
-        "separate walls: {deep_separate}"
-    );
-    assert!(deep_joined * 5 < deep_separate, "one object: {deep_joined}");
+    // Along every edge: each side of each of the 12 edges is 8 leaf edges long at level 3,
+    // each at least two leaves at level 4.
+    for (name, deep) in [
+        ("separate walls", deep_separate),
+        ("one object", deep_joined),
+    ] {
+        assert!(deep >= 12 * 8 * 2 * 2, "{name}: {deep}");
+    }
 }

@@ -242,6 +242,36 @@ fn irregular_boxes() {
 }
 
 #[test]
+fn large_faces() {
+    // A room of `gen-samples room`'s size, each face two triangles: the leaves next to its
+    // corners are large, a sixteenth of a wall. As one object, and as `gen-samples room`
+    // builds it: floor, walls and ceiling three objects.
+    let size = Vec3::new(6.0, 3.0, 6.0);
+    let two = |_| Tessellation::Grid { n: 1, jitter: 0.0 };
+    check("room of two triangles a face", closed_box(size, 4, two));
+    let faces = common::box_faces(size);
+    let part = |which: &[usize]| {
+        let mut b = Builder::new(size * 0.5, 5);
+        for &f in which {
+            let (o, u, v) = faces[f];
+            b.parallelogram(o, u, v, two(f));
+        }
+        b.object()
+    };
+    let scene = Scene {
+        objects: vec![part(&[4]), part(&[0, 1, 2, 3]), part(&[5])],
+        lights: Vec::new(),
+    };
+    let (err, at) = worst_node(&scene);
+    println!("floor, walls, ceiling: worst {:+.3}% at {at}", err * 100.0);
+    assert!(
+        err.abs() <= TOLERANCE,
+        "a node is {:+.2}% off at {at}",
+        err * 100.0
+    );
+}
+
+#[test]
 fn thin_triangles() {
     check(
         "fans",
@@ -321,13 +351,15 @@ fn octahedron(b: &mut Builder, c: Vec3, r: f32, n: u32) {
 /// them where they face the floor closely, and for every normal.
 ///
 /// Not yet within the 1% of the other scenes: the floor's leaves next to the resting
-/// octahedron's point of contact and under the floating one are up to 4.3% off. What is left
-/// is the noise of the links' visibility (eight rays each over sources that the octahedra half
-/// hide); the bias that made them 6.7% too bright (visibility counted by area, not by the
-/// kernel, and rays stopped once four agreed) and the shadow spread over receivers larger
-/// than the contact are gone (BENCHMARKS.md, "Leaves of the bake"). The bound below holds
-/// what the solver achieves, so that neither comes back.
-const CONTACT_TOLERANCE: f32 = 0.05;
+/// octahedron's point of contact are up to 3.5% off (4.3% while clusters took the per-axis
+/// sums of their faces for the area they show, up to twice too large). What is left is the
+/// noise of the links' visibility (eight rays each over sources that the octahedra half hide)
+/// and the second-moment bound on a cluster's area (15% over for a sphere); the bias that made
+/// them 6.7% too bright (visibility counted by area, not by the kernel, and rays stopped once
+/// four agreed) and the shadow spread over receivers larger than the contact are gone
+/// (BENCHMARKS.md, "Leaves of the bake"). The bound below holds what the solver achieves, so
+/// that neither comes back.
+const CONTACT_TOLERANCE: f32 = 0.04;
 
 #[test]
 fn objects_inside_a_closed_room() {
@@ -368,7 +400,7 @@ fn objects_inside_a_closed_room() {
 /// control mesh's point, so it saw the wall behind as well). The star's own leaves are up to
 /// 5.6% off, at tilted normals of leaves on the points' flanks (7.5% while every normal took
 /// the visibility of the geometric normal's rays). The bounds hold what the solver achieves.
-const REFINED_ROOM_TOLERANCE: f32 = 0.035;
+const REFINED_ROOM_TOLERANCE: f32 = 0.03;
 const REFINED_STAR_TOLERANCE: f32 = 0.06;
 
 #[test]
