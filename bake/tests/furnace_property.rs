@@ -9,7 +9,8 @@
 //! The scenes are generated from a seed: boxes, a prism with a sharp edge and a tetrahedron,
 //! their faces tessellated as grids with jittered vertices and random diagonals, as fans of
 //! long thin triangles, or as barycentric grids of triangles, each face on its own (so T
-//! junctions along the shared edges are part of the test).
+//! junctions along the shared edges are part of the test); a room of large faces as one object
+//! and as three (floor, walls, ceiling); multiresolution objects in closed rooms.
 
 mod common;
 
