@@ -67,6 +67,17 @@ pub fn point_to_polygon(p: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
 /// `atan t = π/2 − atan(1/t)` and `atan t = π/4 + atan((t − 1)/(t + 1))`, then the Taylor
 /// series to `t¹⁹` (its remainder below `0.4143²¹ / 21`).
 fn angle(y: f64, x: f64) -> f64 {
+    /// The Taylor coefficients of `atan u / u` in `u²`: `(−1)ᵏ / (2k + 1)`.
+    const ATAN_SERIES: [f64; 10] = {
+        let mut c = [0.0f64; 10];
+        let mut k = 0;
+        while k < 10 {
+            let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+            c[k] = sign / (2 * k + 1) as f64;
+            k += 1;
+        }
+        c
+    };
     use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
     let ax = x.abs();
     if y == 0.0 && ax == 0.0 {
@@ -85,11 +96,7 @@ fn angle(y: f64, x: f64) -> f64 {
         (t, 0.0)
     };
     let u2 = u * u;
-    let mut series = 0.0f64;
-    for k in (0..10).rev() {
-        let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
-        series = series * u2 + sign / f64::from(2 * k + 1);
-    }
+    let series = ATAN_SERIES.iter().rev().fold(0.0f64, |s, c| s * u2 + c);
     let mut r = base + u * series;
     if swapped {
         r = FRAC_PI_2 - r;

@@ -48,10 +48,16 @@ pub struct CompareArgs {
     /// The difference that `--diff` draws at full colour, as a fraction of the mean reference.
     #[arg(long, default_value_t = 0.2)]
     pub diff_scale: f32,
+    /// Draw in `--diff` the mean difference over blocks of N × N pixels (those inside the
+    /// mask), so that a bias of a percent or two shows through a path-traced reference's
+    /// noise; 1 draws each pixel's own.
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
+    pub diff_block: u32,
 }
 
-/// RGBA8 picture of the signed difference of `a` from `b` (see `--diff`).
-pub fn diff_picture(a: &Rgb, b: &Rgb, mask: Option<&[bool]>, scale: f32) -> Vec<u8> {
+/// RGBA8 picture of the signed difference of `a` from `b` (see `--diff`), each pixel drawn
+/// with the mean difference of its `block` × `block` block (see `--diff-block`).
+pub fn diff_picture(a: &Rgb, b: &Rgb, mask: Option<&[bool]>, scale: f32, block: usize) -> Vec<u8> {
     let inside = |i: usize| mask.is_none_or(|m| m[i]);
     let sum = |p: [f32; 3]| f64::from(p[0]) + f64::from(p[1]) + f64::from(p[2]);
     let (mut total, mut count) = (0.0f64, 0u64);
@@ -66,13 +72,25 @@ pub fn diff_picture(a: &Rgb, b: &Rgb, mask: Option<&[bool]>, scale: f32) -> Vec<
     } else {
         1.0
     };
-    let mut out = Vec::with_capacity(4 * a.pixels.len());
+    // Mean difference of summed RGB per block, over the pixels inside the mask.
+    let block = block.max(1);
+    let (bw, bh) = (a.width.div_ceil(block), a.height.div_ceil(block));
+    let mut acc = vec![(0.0f64, 0u32); bw * bh];
     for (i, (pa, pb)) in a.pixels.iter().zip(&b.pixels).enumerate() {
+        if inside(i) {
+            let cell = &mut acc[(i / a.width / block) * bw + (i % a.width) / block];
+            cell.0 += sum(*pa) - sum(*pb);
+            cell.1 += 1;
+        }
+    }
+    let mut out = Vec::with_capacity(4 * a.pixels.len());
+    for i in 0..a.pixels.len() {
         if !inside(i) {
             out.extend([40, 40, 40, 255]);
             continue;
         }
-        let e = ((sum(*pa) - sum(*pb)) / mean) as f32 / scale.max(1e-6);
+        let (d, n) = acc[(i / a.width / block) * bw + (i % a.width) / block];
+        let e = (d / f64::from(n) / mean) as f32 / scale.max(1e-6);
         let t = e.clamp(-1.0, 1.0);
         let fade = |x: f32| (255.0 * (1.0 - x.abs())).round() as u8;
         out.extend(if t >= 0.0 {
@@ -258,7 +276,13 @@ pub fn run(args: CompareArgs) -> Result<()> {
     };
     let c = compare(&a, &b, mask.as_deref())?;
     if let Some(path) = &args.diff {
-        let rgba = diff_picture(&a, &b, mask.as_deref(), args.diff_scale);
+        let rgba = diff_picture(
+            &a,
+            &b,
+            mask.as_deref(),
+            args.diff_scale,
+            args.diff_block as usize,
+        );
         super::render::write_png(path, a.width as u32, a.height as u32, &rgba)?;
     }
     if args.json {
@@ -327,10 +351,37 @@ mod tests {
             height: 1,
             pixels: vec![[1.0; 3], [1.2; 3], [0.85; 3], [5.0; 3]],
         };
-        let rgba = diff_picture(&a, &b, Some(&[true, true, true, false]), 0.2);
+        let rgba = diff_picture(&a, &b, Some(&[true, true, true, false]), 0.2, 1);
         assert_eq!(&rgba[0..4], &[255, 255, 255, 255]);
         assert_eq!(&rgba[4..8], &[255, 0, 0, 255]);
         assert_eq!(&rgba[8..12], &[64, 64, 255, 255]);
         assert_eq!(&rgba[12..16], &[40, 40, 40, 255]);
+        // Blocks of two: pixels 0 and 1 share +0.1 of the mean (half red, rounded down: 1.2 is not exact in f32); pixels 2 and 3
+        // share pixel 2's -0.15 (pixel 3 is outside the mask, left out of the mean and drawn
+        // grey).
+        let rgba = diff_picture(&a, &b, Some(&[true, true, true, false]), 0.2, 2);
+        assert_eq!(&rgba[0..8], &[255, 127, 127, 255, 255, 127, 127, 255]);
+        assert_eq!(&rgba[8..12], &[64, 64, 255, 255]);
+        assert_eq!(&rgba[12..16], &[40, 40, 40, 255]);
+        // Blocks larger than the image, and blocks over rows: a 3 × 2 image in 2 × 2 blocks.
+        let b = Rgb {
+            width: 3,
+            height: 2,
+            pixels: vec![[1.0; 3]; 6],
+        };
+        let a = Rgb {
+            width: 3,
+            height: 2,
+            pixels: vec![[1.2; 3], [1.0; 3], [0.7; 3], [1.0; 3], [1.0; 3], [1.0; 3]],
+        };
+        let rgba = diff_picture(&a, &b, None, 0.2, 2);
+        // Block (0, 0) holds pixels 0, 1, 3, 4: +0.05; block (1, 0) pixels 2 and 5: -0.15.
+        for i in [0, 1, 3, 4] {
+            assert_eq!(&rgba[4 * i..4 * i + 4], &[255, 191, 191, 255], "pixel {i}");
+        }
+        for i in [2, 5] {
+            assert_eq!(&rgba[4 * i..4 * i + 4], &[64, 64, 255, 255], "pixel {i}");
+        }
+        assert_eq!(diff_picture(&a, &b, None, 0.2, 64).len(), 24);
     }
 }
