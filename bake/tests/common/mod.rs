@@ -1,4 +1,5 @@
-//! Shapes the solver's scene tests share.
+//! Shapes the solver's scene tests share (each test uses some of them).
+#![allow(dead_code)]
 
 use glam::Vec3;
 
