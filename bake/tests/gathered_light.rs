@@ -136,6 +136,6 @@ fn a_lit_rooms_faces_gather_what_their_sources_send() {
 }
 
 /// Bound on a face's gathered light against the exact transport (BENCHMARKS.md, "Twelfth
-/// round"): while links gathered their element sources' mean radiance the ceiling was 1.27%
-/// short and the walls 0.5%; reading it where the receiver looks leaves -0.91% and -0.4%.
+/// round"): while links gathered their sources' mean radiance the ceiling was 1.27% short and
+/// the walls 0.5%; reading it where the receiver looks leaves -0.80% and -0.26% to -0.33%.
 const GATHER_TOLERANCE: f64 = 0.01;
