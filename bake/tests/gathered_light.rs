@@ -18,7 +18,6 @@
 mod common;
 
 use glam::Vec3;
-use hce_bake::element::ElemKey;
 use hce_bake::formfactor::{point_to_polygon, stratified_points};
 use hce_bake::{bake, BakeParams, Scene, SolverObject};
 
@@ -63,34 +62,12 @@ fn scene() -> Scene {
     }
 }
 
-/// Every leaf element of object `o`: corners and radiance (first channel).
-fn leaves(scene: &Scene, res: &hce_bake::BakeResult, o: usize) -> Vec<([Vec3; 3], f32)> {
-    let mut out = Vec::new();
-    for (t, ts) in res.objects[o].triangles.iter().enumerate() {
-        let nn = ts.normals.len();
-        for (i, &(level, path)) in ts.nodes.iter().enumerate() {
-            if !ts.subdivided[i] {
-                let key = ElemKey {
-                    root: 0,
-                    level,
-                    path,
-                };
-                out.push((
-                    key.corners(scene.objects[o].corners(t)),
-                    ts.colours[i * nn][0],
-                ));
-            }
-        }
-    }
-    out
-}
-
 #[test]
 fn a_lit_rooms_faces_gather_what_their_sources_send() {
     let scene = scene();
     let res = bake(&scene, &BakeParams::default()).unwrap();
-    let mut sources = leaves(&scene, &res, 0);
-    sources.extend(leaves(&scene, &res, 1));
+    let mut sources = common::leaves(&scene, &res, 0);
+    sources.extend(common::leaves(&scene, &res, 1));
     let room = &scene.objects[0];
     // Room triangles in face order, 18 a face but 16 on the ceiling (face 1).
     let mut first = 0;

@@ -16,8 +16,9 @@
 //! point-to-polygon form factor (zero from behind) times the leaf's radiance. Averaged over
 //! each ball triangle and compared with the triangle's baked radiance over its reflectance.
 
+mod common;
+
 use glam::Vec3;
-use hce_bake::element::ElemKey;
 use hce_bake::formfactor::{point_to_polygon, stratified_points};
 use hce_bake::{bake, BakeParams, Scene, SolverObject};
 
@@ -88,35 +89,13 @@ fn scene() -> Scene {
     }
 }
 
-/// The leaf elements of every triangle of object `o`: corners and radiance (first channel).
-fn leaves(scene: &Scene, res: &hce_bake::BakeResult, o: usize) -> Vec<([Vec3; 3], f32)> {
-    let mut out = Vec::new();
-    for (t, ts) in res.objects[o].triangles.iter().enumerate() {
-        let nn = ts.normals.len();
-        for (i, &(level, path)) in ts.nodes.iter().enumerate() {
-            if !ts.subdivided[i] {
-                let key = ElemKey {
-                    root: 0,
-                    level,
-                    path,
-                };
-                out.push((
-                    key.corners(scene.objects[o].corners(t)),
-                    ts.colours[i * nn][0],
-                ));
-            }
-        }
-    }
-    out
-}
-
 #[test]
 fn a_finely_tessellated_ball_gathers_the_bright_patch_it_faces() {
     let scene = scene();
     let res = bake(&scene, &BakeParams::default()).unwrap();
     // Everything in the scene but the ball (the lamp's back sends nothing).
-    let mut sources = leaves(&scene, &res, 0);
-    sources.extend(leaves(&scene, &res, 1));
+    let mut sources = common::leaves(&scene, &res, 0);
+    sources.extend(common::leaves(&scene, &res, 1));
     let ball = &scene.objects[2];
     // Ball triangles facing the bright patch (sideways, towards +x): baked against exact.
     let (mut baked, mut exact, mut area) = (0.0f64, 0.0f64, 0.0f64);

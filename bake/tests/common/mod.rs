@@ -46,3 +46,29 @@ pub fn box_faces(s: Vec3) -> [(Vec3, Vec3, Vec3); 6] {
         (y, z, x),
     ]
 }
+
+/// Every leaf element of object `o`: corners and radiance (first channel).
+pub fn leaves(
+    scene: &hce_bake::Scene,
+    res: &hce_bake::BakeResult,
+    o: usize,
+) -> Vec<([Vec3; 3], f32)> {
+    let mut out = Vec::new();
+    for (t, ts) in res.objects[o].triangles.iter().enumerate() {
+        let nn = ts.normals.len();
+        for (i, &(level, path)) in ts.nodes.iter().enumerate() {
+            if !ts.subdivided[i] {
+                let key = hce_bake::element::ElemKey {
+                    root: 0,
+                    level,
+                    path,
+                };
+                out.push((
+                    key.corners(scene.objects[o].corners(t)),
+                    ts.colours[i * nn][0],
+                ));
+            }
+        }
+    }
+    out
+}
