@@ -204,6 +204,9 @@ struct RawLink {
     /// For a cluster source, the share of its first child in what the receiver sees of it
     /// ([`Ctx::cluster_share`]); unused for an element source.
     share: f32,
+    /// For an element source: which of its normals' radiance it sends towards the receiver
+    /// ([`Ctx::facing_normal`]); 0 for a cluster.
+    facing: u8,
     k_start: u32,
     /// Fraction of the visibility rays that were clear.
     visible: f32,
@@ -216,6 +219,7 @@ struct Link {
     /// As in [`RawLink`].
     aim: Vec3,
     share: f32,
+    facing: u8,
     k_start: u32,
     visible: f32,
 }
@@ -833,14 +837,14 @@ impl Ctx<'_> {
     ///
     /// With `aᵢ` the corner children's (Top, Left, Right) radiances and `m` the node's, a
     /// linear function with those child means is `m + 2 Σ (bᵢ − 1/3) aᵢ` at `b`.
-    fn seen_radiance(&self, r: u32, t: &Tree, i: usize, aim: Vec3) -> Vec3 {
-        let mean = self.source_radiance(r, t, i);
+    fn seen_radiance(&self, r: u32, t: &Tree, i: usize, aim: Vec3, j: usize) -> Vec3 {
+        let mean = self.source_radiance_for(r, t, i, j);
         let c = t.child[i];
         if c == u32::MAX {
             return mean;
         }
         let c = c as usize;
-        let kids = [c, c + 1, c + 2, c + 3].map(|k| self.source_radiance(r, t, k));
+        let kids = [c, c + 1, c + 2, c + 3].map(|k| self.source_radiance_for(r, t, k, j));
         let (lo, hi) = kids
             .iter()
             .fold((mean, mean), |(lo, hi), k| (lo.min(*k), hi.max(*k)));
@@ -860,12 +864,51 @@ impl Ctx<'_> {
     /// is cut once by the dark part in the average and again by the link. Emission is
     /// uniform over the element and is not diluted.
     fn source_radiance(&self, r: u32, t: &Tree, i: usize) -> Vec3 {
+        self.source_radiance_for(r, t, i, 0)
+    }
+
+    /// [`Ctx::source_radiance`] for normal `j` of the root's set.
+    fn source_radiance_for(&self, r: u32, t: &Tree, i: usize, j: usize) -> Vec3 {
         let o = t.open[i];
         if o <= 0.0 {
             return Vec3::ZERO;
         }
         let le = self.roots[r as usize].emission;
-        le + (t.l[i * self.nn(r)] - le) / o
+        le + (t.l[i * self.nn(r) + j] - le) / o
+    }
+
+    /// Which normal of source element `sk`'s set stands for the surface that sends light
+    /// towards `p`: the one nearest the mean normal of its refined triangles, each weighed by
+    /// its area turned towards `p`. 0 where the root has one normal or no refined surface.
+    fn facing_normal(&self, sk: ElemKey, p: Vec3) -> u8 {
+        let root = &self.roots[sk.root as usize];
+        let surf = &self.surface[sk.root as usize];
+        if root.normals.len() < 2 || surf.is_empty() {
+            return 0;
+        }
+        let level = surf.len().trailing_zeros() / 2;
+        let tris = if sk.level >= level {
+            let i = (sk.path >> (2 * (sk.level - level))) as usize;
+            &surf[i..i + 1]
+        } else {
+            let span = 1usize << (2 * (level - sk.level));
+            let first = sk.path as usize * span;
+            &surf[first..first + span]
+        };
+        let mut m = Vec3::ZERO;
+        for t in tris {
+            let n2 = (t[1] - t[0]).cross(t[2] - t[0]);
+            let d = (p - (t[0] + t[1] + t[2]) / 3.0).normalize_or_zero();
+            m += n2.normalize_or_zero() * n2.dot(d).max(0.0);
+        }
+        let mut best = (0u8, root.normals[0].dot(m));
+        for (j, n) in root.normals.iter().enumerate().skip(1) {
+            let d = n.dot(m);
+            if d > best.1 {
+                best = (j as u8, d);
+            }
+        }
+        best.0
     }
 
     /// Per node of `t`: the spread (largest minus smallest) of the source radiance over the
@@ -1364,18 +1407,24 @@ impl Ctx<'_> {
                 }
             }
             ks.extend(k);
-            let (aim, share) = match src {
+            let (aim, share, facing) = match src {
                 Source::Cluster(c) => (
                     self.leaving(c, rc),
                     self.cluster_share(trees, c, rc, root.normal),
+                    0,
                 ),
-                Source::Elem(sk) => (self.kernel_centre(rc, root.normal, sk, st), 0.0),
+                Source::Elem(sk) => (
+                    self.kernel_centre(rc, root.normal, sk, st),
+                    0.0,
+                    self.facing_normal(sk, rc),
+                ),
             };
             links.push(RawLink {
                 recv,
                 src,
                 aim,
                 share,
+                facing,
                 k_start,
                 visible,
             });
@@ -1929,9 +1978,13 @@ impl Ctx<'_> {
         for link in &t.links {
             let ls = match link.src {
                 SrcIdx::Cluster(c) => self.cluster_seen(trees, cl, c, link.aim, link.share),
-                SrcIdx::Node { root, node } => {
-                    self.seen_radiance(root, &trees[root as usize], node as usize, link.aim)
-                }
+                SrcIdx::Node { root, node } => self.seen_radiance(
+                    root,
+                    &trees[root as usize],
+                    node as usize,
+                    link.aim,
+                    link.facing as usize,
+                ),
             };
             let base = link.recv as usize * CORNERS * nn;
             let ks = &t.k[link.k_start as usize..link.k_start as usize + CORNERS * nn];
@@ -2653,6 +2706,7 @@ pub fn bake_with_progress(
                     },
                     aim: l.aim,
                     share: l.share,
+                    facing: l.facing,
                     k_start: l.k_start,
                     visible: l.visible,
                 })
