@@ -39,6 +39,8 @@
 //! Determinism: work is split per root triangle, every random number is seeded from element
 //! ids, and every sum runs in a fixed order, so the result does not depend on the thread count.
 
+use std::collections::HashMap;
+use std::sync::Mutex;
 use std::time::Instant;
 
 use glam::Vec3;
@@ -1019,7 +1021,9 @@ impl Ctx<'_> {
         }
     }
 
-    /// Refines the links arriving at root `r` against the previous solution.
+    /// Refines the links arriving at root `r` against the previous solution: a depth-first
+    /// walk over (receiver, source) pairs from (the root, the scene's top cluster), whose
+    /// pairs left after [`REFINE_STEPS`] go on in parallel ([`refine_in_parallel`]).
     fn refine_root(
         &self,
         r: u32,
@@ -1034,8 +1038,6 @@ impl Ctx<'_> {
             dark_floor,
             last_pass,
         } = judge;
-        let mut links = Vec::new();
-        let mut ks = Vec::new();
         let nn = self.nn(r);
         // Per link: its coefficients, and on a refined surface those of the surface's own
         // normal ([`Ctx::link_coefficients`]).
@@ -1073,14 +1075,24 @@ impl Ctx<'_> {
         };
         // Each pair with the corners of its receiver and (an element) source, carried down as
         // they split.
-        let mut stack: Vec<Pair> = vec![(
+        let stack: Vec<Pair> = vec![(
             ElemKey::root(r),
             self.roots[r as usize].corners,
             top,
             corners_of(top),
         )];
-        let mut near_shadow: std::collections::HashMap<ElemKey, bool> = Default::default();
-        let mut shade_varies: std::collections::HashMap<ElemKey, bool> = Default::default();
+        // What the rules judged by the geometry alone found per receiver, shared by the
+        // parts of the refinement that run in parallel (a value is the same whoever finds it).
+        let near_shadow: Mutex<HashMap<ElemKey, bool>> = Default::default();
+        let shade_varies: Mutex<HashMap<ElemKey, bool>> = Default::default();
+        let cached = |m: &Mutex<HashMap<ElemKey, bool>>, k: ElemKey, f: &dyn Fn() -> bool| {
+            if let Some(&v) = m.lock().unwrap_or_else(|e| e.into_inner()).get(&k) {
+                return v;
+            }
+            let v = f();
+            m.lock().unwrap_or_else(|e| e.into_inner()).insert(k, v);
+            v
+        };
         let root = &self.roots[r as usize];
         // Radius and area of the clusters of its own object holding this root, largest
         // first: the receivers around it (see the source variation rule below).
@@ -1104,360 +1116,377 @@ impl Ctx<'_> {
         // in the dark of the direct light has none, and every bend split it (the scaling
         // scene's ball, pass 1: 97,000 elements, of which the second pass kept 54,000).
         let bend_radiance = |recv: ElemKey| receiver_radiance(recv).max(dark_floor);
-        while let Some((recv, rt, src, st)) = stack.pop() {
-            let r_area = root.area / 4f32.powi(recv.level as i32);
-            if self.detail_splittable(recv, r_area)
-                && *near_shadow
-                    .entry(recv)
-                    .or_insert_with(|| self.near_shadow(recv))
-            {
-                split_receiver(&mut stack, recv, rt, src, st);
-                continue;
-            }
-            if self.self_shade_splittable(recv)
-                && *shade_varies
-                    .entry(recv)
-                    .or_insert_with(|| self.self_shade_varies(recv))
-            {
-                split_receiver(&mut stack, recv, rt, src, st);
-                continue;
-            }
-            let rc = (rt[0] + rt[1] + rt[2]) / 3.0;
-            let open = |c: u32, stack: &mut Vec<Pair>| {
-                for ch in self.clusters.clusters[c as usize].children.iter().rev() {
-                    let s = match *ch {
-                        ClusterChild::Cluster(c) => Source::Cluster(c),
-                        ClusterChild::Root(x) => Source::Elem(ElemKey::root(x)),
-                    };
-                    stack.push((recv, rt, s, corners_of(s)));
+        // Refines the pairs on `stack` depth-first for at most `REFINE_STEPS` pairs; returns the
+        // links, their coefficients and the pairs left.
+        let run = |mut stack: Vec<Pair>| {
+            let mut links = Vec::new();
+            let mut ks = Vec::new();
+            let mut steps = 0;
+            while let Some((recv, rt, src, st)) = stack.pop() {
+                if steps == REFINE_STEPS {
+                    stack.push((recv, rt, src, st));
+                    break;
                 }
-            };
-            let est;
-            let s_area;
-            let s_splittable;
-            // The geometric normal's form factors the split rules below computed, which the
-            // link's coefficients reuse.
-            let mut known = KnownFactors::default();
-            match src {
-                Source::Elem(sk) => {
-                    if sk.root == r {
-                        continue; // A planar triangle does not see itself.
-                    }
-                    if nn == 1 && self.sees_none_of_own(r, self.roots[sk.root as usize].object) {
-                        continue;
-                    }
-                    let sn = self.roots[sk.root as usize].normal;
-                    // Two parts of one refined surface may see each other where their coarse
-                    // triangles are coplanar or turned apart: the link's form factors, on the
-                    // refined surface, judge that.
-                    let refined_pair = self.roots[sk.root as usize].object == root.object
-                        && !self.surface[r as usize].is_empty();
-                    // Receiver entirely behind the source, or source behind every normal.
-                    if !refined_pair && rt.iter().all(|&v| sn.dot(v - st[0]) <= self.plane_eps) {
-                        continue;
-                    }
-                    let sees = |n: &Vec3| {
-                        st.iter()
-                            .any(|&s| rt.iter().any(|&v| n.dot(s - v) > self.plane_eps))
-                    };
-                    if !refined_pair && !root.normals.iter().any(sees) {
-                        continue;
-                    }
-                    s_area = self.roots[sk.root as usize].area / 4f32.powi(sk.level as i32);
-                    s_splittable = self.splittable(sk, s_area);
-                    let sc = (st[0] + st[1] + st[2]) / 3.0;
-                    let d2 = (sc - rc).length_squared();
-                    let l = lum(self.src_radiance(trees, cl, src, rc));
-                    let far = d2 > 36.0 * (r_area + s_area);
-                    let f_bound;
-                    if far {
-                        let w = (sc - rc) / d2.sqrt();
-                        let cos_r = root.normals.iter().map(|n| n.dot(w)).fold(0.0, f32::max);
-                        let f = disc_estimate(cos_r, (-w).dot(sn), s_area, d2);
-                        est = f * l * r_area * std::f32::consts::PI;
-                        f_bound = f;
-                    } else {
-                        // Near pairs: the point form factor at the centre and near each
-                        // corner of the receiver bounds both its size and its variation.
-                        let (mut fmax, mut fmin) = (0.0f32, f32::MAX);
-                        let mut bend = 0.0f32;
-                        let inset = inset_corners(rt);
-                        let mut buf = [st; 4];
-                        let polys: &[[Vec3; 3]] = if refined_pair {
-                            self.source_shape(sk, st, true, &mut buf)
-                        } else {
-                            &buf[..1]
+                steps += 1;
+                let r_area = root.area / 4f32.powi(recv.level as i32);
+                if self.detail_splittable(recv, r_area)
+                    && cached(&near_shadow, recv, &|| self.near_shadow(recv))
+                {
+                    split_receiver(&mut stack, recv, rt, src, st);
+                    continue;
+                }
+                if self.self_shade_splittable(recv)
+                    && cached(&shade_varies, recv, &|| self.self_shade_varies(recv))
+                {
+                    split_receiver(&mut stack, recv, rt, src, st);
+                    continue;
+                }
+                let rc = (rt[0] + rt[1] + rt[2]) / 3.0;
+                let open = |c: u32, stack: &mut Vec<Pair>| {
+                    for ch in self.clusters.clusters[c as usize].children.iter().rev() {
+                        let s = match *ch {
+                            ClusterChild::Cluster(c) => Source::Cluster(c),
+                            ClusterChild::Root(x) => Source::Elem(ElemKey::root(x)),
                         };
-                        // The points, carried onto the refined surface for a refined pair.
-                        let lift = |p: Vec3| {
-                            if refined_pair {
-                                self.on_surface(r, p).0
-                            } else {
-                                p
-                            }
-                        };
-                        let (lc, li) = (lift(rc), inset.map(lift));
-                        for (j, n) in root.normals.iter().enumerate() {
-                            let f = |p: Vec3| {
-                                polys
-                                    .iter()
-                                    .map(|t| point_to_polygon(p, *n, t))
-                                    .sum::<f32>()
-                            };
-                            let centre = f(lc);
-                            let at = li.map(f);
-                            for v in at.into_iter().chain([centre]) {
-                                fmax = fmax.max(v);
-                                fmin = fmin.min(v);
-                            }
-                            // Against the plane through the three corner samples: at the
-                            // centre, and between each two corners (a source corner touching
-                            // the receiver's side peaks there). The bend is the geometry's,
-                            // alike for every normal: the geometric one judges it.
-                            if j == 0 {
-                                known.corners = Some(at);
-                                bend = (centre - (at[0] + at[1] + at[2]) / 3.0).abs();
-                                for (a, b) in [(0, 1), (1, 2), (2, 0)] {
-                                    let mid = f(lift((inset[a] + inset[b]) * 0.5));
-                                    bend = bend.max((mid - (at[a] + at[b]) * 0.5).abs());
-                                }
-                            }
+                        stack.push((recv, rt, s, corners_of(s)));
+                    }
+                };
+                let est;
+                let s_area;
+                let s_splittable;
+                // The geometric normal's form factors the split rules below computed, which the
+                // link's coefficients reuse.
+                let mut known = KnownFactors::default();
+                match src {
+                    Source::Elem(sk) => {
+                        if sk.root == r {
+                            continue; // A planar triangle does not see itself.
                         }
-                        est = fmax * l * r_area * std::f32::consts::PI;
-                        f_bound = fmax;
-                        // What a link linear over the receiver cannot follow (the form factor
-                        // bends, next to the edge a wall shares with the floor), judged as the
-                        // radiance it puts wrong into the receiver against the radiance the
-                        // receiver has: every leaf is drawn, so a small one next to an edge
-                        // matters as much as a large one.
-                        let recv_l = bend_radiance(recv);
-                        if bend * l * lum(self.reflectance(recv))
-                            > self.bend_tolerance(recv, src) * recv_l
-                            && self.bend_splittable(recv, r_area, sk)
+                        if nn == 1 && self.sees_none_of_own(r, self.roots[sk.root as usize].object)
                         {
-                            split_receiver(&mut stack, recv, rt, src, st);
                             continue;
                         }
-                        // The form factor varies over the receiver: only a smaller receiver
-                        // resolves that (splitting the source would only share the same error
-                        // among four links), unless the receiver is as small as it gets.
-                        let var = (fmax - fmin) * l * r_area * std::f32::consts::PI;
-                        if var > eps_power * 0.2 {
-                            if self.splittable(recv, r_area) {
+                        let sn = self.roots[sk.root as usize].normal;
+                        // Two parts of one refined surface may see each other where their coarse
+                        // triangles are coplanar or turned apart: the link's form factors, on the
+                        // refined surface, judge that.
+                        let refined_pair = self.roots[sk.root as usize].object == root.object
+                            && !self.surface[r as usize].is_empty();
+                        // Receiver entirely behind the source, or source behind every normal.
+                        if !refined_pair && rt.iter().all(|&v| sn.dot(v - st[0]) <= self.plane_eps)
+                        {
+                            continue;
+                        }
+                        let sees = |n: &Vec3| {
+                            st.iter()
+                                .any(|&s| rt.iter().any(|&v| n.dot(s - v) > self.plane_eps))
+                        };
+                        if !refined_pair && !root.normals.iter().any(sees) {
+                            continue;
+                        }
+                        s_area = self.roots[sk.root as usize].area / 4f32.powi(sk.level as i32);
+                        s_splittable = self.splittable(sk, s_area);
+                        let sc = (st[0] + st[1] + st[2]) / 3.0;
+                        let d2 = (sc - rc).length_squared();
+                        let l = lum(self.src_radiance(trees, cl, src, rc));
+                        let far = d2 > 36.0 * (r_area + s_area);
+                        let f_bound;
+                        if far {
+                            let w = (sc - rc) / d2.sqrt();
+                            let cos_r = root.normals.iter().map(|n| n.dot(w)).fold(0.0, f32::max);
+                            let f = disc_estimate(cos_r, (-w).dot(sn), s_area, d2);
+                            est = f * l * r_area * std::f32::consts::PI;
+                            f_bound = f;
+                        } else {
+                            // Near pairs: the point form factor at the centre and near each
+                            // corner of the receiver bounds both its size and its variation.
+                            let (mut fmax, mut fmin) = (0.0f32, f32::MAX);
+                            let mut bend = 0.0f32;
+                            let inset = inset_corners(rt);
+                            let mut buf = [st; 4];
+                            let polys: &[[Vec3; 3]] = if refined_pair {
+                                self.source_shape(sk, st, true, &mut buf)
+                            } else {
+                                &buf[..1]
+                            };
+                            // The points, carried onto the refined surface for a refined pair.
+                            let lift = |p: Vec3| {
+                                if refined_pair {
+                                    self.on_surface(r, p).0
+                                } else {
+                                    p
+                                }
+                            };
+                            let (lc, li) = (lift(rc), inset.map(lift));
+                            for (j, n) in root.normals.iter().enumerate() {
+                                let f = |p: Vec3| {
+                                    polys
+                                        .iter()
+                                        .map(|t| point_to_polygon(p, *n, t))
+                                        .sum::<f32>()
+                                };
+                                let centre = f(lc);
+                                let at = li.map(f);
+                                for v in at.into_iter().chain([centre]) {
+                                    fmax = fmax.max(v);
+                                    fmin = fmin.min(v);
+                                }
+                                // Against the plane through the three corner samples: at the
+                                // centre, and between each two corners (a source corner touching
+                                // the receiver's side peaks there). The bend is the geometry's,
+                                // alike for every normal: the geometric one judges it.
+                                if j == 0 {
+                                    known.corners = Some(at);
+                                    bend = (centre - (at[0] + at[1] + at[2]) / 3.0).abs();
+                                    for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+                                        let mid = f(lift((inset[a] + inset[b]) * 0.5));
+                                        bend = bend.max((mid - (at[a] + at[b]) * 0.5).abs());
+                                    }
+                                }
+                            }
+                            est = fmax * l * r_area * std::f32::consts::PI;
+                            f_bound = fmax;
+                            // What a link linear over the receiver cannot follow (the form factor
+                            // bends, next to the edge a wall shares with the floor), judged as the
+                            // radiance it puts wrong into the receiver against the radiance the
+                            // receiver has: every leaf is drawn, so a small one next to an edge
+                            // matters as much as a large one.
+                            let recv_l = bend_radiance(recv);
+                            if bend * l * lum(self.reflectance(recv))
+                                > self.bend_tolerance(recv, src) * recv_l
+                                && self.bend_splittable(recv, r_area, sk)
+                            {
                                 split_receiver(&mut stack, recv, rt, src, st);
                                 continue;
                             }
-                            if s_splittable {
+                            // The form factor varies over the receiver: only a smaller receiver
+                            // resolves that (splitting the source would only share the same error
+                            // among four links), unless the receiver is as small as it gets.
+                            let var = (fmax - fmin) * l * r_area * std::f32::consts::PI;
+                            if var > eps_power * 0.2 {
+                                if self.splittable(recv, r_area) {
+                                    split_receiver(&mut stack, recv, rt, src, st);
+                                    continue;
+                                }
+                                if s_splittable {
+                                    split_source(&mut stack, recv, rt, sk, st);
+                                    continue;
+                                }
+                            }
+                        }
+                        // The source's radiance varies (a lit wall with a shadow on it): a link
+                        // gathers its average, and only a smaller source resolves that. The
+                        // estimate is the power the error would carry into every receiver that
+                        // makes the same error, not into this element alone: receivers are split
+                        // finely near sources (the rule above), and with their own small areas
+                        // every piece would pass while the error, the same in each, stayed. The
+                        // same holds across coarse triangles: the many small ones of a curved
+                        // object all gather the mean of a floor they see from about the same
+                        // place, although they mostly see its bright middle under the light
+                        // (weighed against one coarse triangle, the sides of the objects in
+                        // `gen-samples room` came out 5% too dark; `tests/small_receivers.rs`).
+                        // So the error is weighed against the largest cluster of the receiver's
+                        // own object around it whose radius is below `cluster_opening` times the
+                        // larger of the source's distance and radius (the receivers that see the
+                        // source from about the same place, as the opening criterion judges a
+                        // cluster of sources), or against the coarse triangle if that is larger.
+                        // A source is split as deep as its tree goes (below `max_level` where a
+                        // shadow's edge crosses it: the floor in front of a block), or the dark
+                        // and the lit sides of the edge reach a receiver next to it as one mean.
+                        // A receiver darker than the scene's mean is judged against a threshold
+                        // lowered with its radiance (see `DIM_RECEIVER_FLOOR`).
+                        if self.detail_splittable(sk, s_area) {
+                            let spread = self.src_spread(trees, spreads, sk);
+                            let s_radius =
+                                st.iter().map(|v| (*v - sc).length()).fold(0.0, f32::max);
+                            let reach = self.params.cluster_opening * d2.sqrt().max(s_radius);
+                            let sharing = neighbourhood
+                                .iter()
+                                .find(|(radius, _)| *radius < reach)
+                                .map_or(root.area, |&(_, area)| area.max(root.area));
+                            let svar = f_bound * spread * sharing * std::f32::consts::PI;
+                            let dim = (receiver_radiance(recv)
+                                / mean_radiance.max(f32::MIN_POSITIVE))
+                            .clamp(DIM_RECEIVER_FLOOR, 1.0);
+                            if svar > eps_power * dim {
                                 split_source(&mut stack, recv, rt, sk, st);
                                 continue;
                             }
                         }
                     }
-                    // The source's radiance varies (a lit wall with a shadow on it): a link
-                    // gathers its average, and only a smaller source resolves that. The
-                    // estimate is the power the error would carry into every receiver that
-                    // makes the same error, not into this element alone: receivers are split
-                    // finely near sources (the rule above), and with their own small areas
-                    // every piece would pass while the error, the same in each, stayed. The
-                    // same holds across coarse triangles: the many small ones of a curved
-                    // object all gather the mean of a floor they see from about the same
-                    // place, although they mostly see its bright middle under the light
-                    // (weighed against one coarse triangle, the sides of the objects in
-                    // `gen-samples room` came out 5% too dark; `tests/small_receivers.rs`).
-                    // So the error is weighed against the largest cluster of the receiver's
-                    // own object around it whose radius is below `cluster_opening` times the
-                    // larger of the source's distance and radius (the receivers that see the
-                    // source from about the same place, as the opening criterion judges a
-                    // cluster of sources), or against the coarse triangle if that is larger.
-                    // A source is split as deep as its tree goes (below `max_level` where a
-                    // shadow's edge crosses it: the floor in front of a block), or the dark
-                    // and the lit sides of the edge reach a receiver next to it as one mean.
-                    // A receiver darker than the scene's mean is judged against a threshold
-                    // lowered with its radiance (see `DIM_RECEIVER_FLOOR`).
-                    if self.detail_splittable(sk, s_area) {
-                        let spread = self.src_spread(trees, spreads, sk);
-                        let s_radius = st.iter().map(|v| (*v - sc).length()).fold(0.0, f32::max);
-                        let reach = self.params.cluster_opening * d2.sqrt().max(s_radius);
-                        let sharing = neighbourhood
-                            .iter()
-                            .find(|(radius, _)| *radius < reach)
-                            .map_or(root.area, |&(_, area)| area.max(root.area));
-                        let svar = f_bound * spread * sharing * std::f32::consts::PI;
-                        let dim = (receiver_radiance(recv) / mean_radiance.max(f32::MIN_POSITIVE))
-                            .clamp(DIM_RECEIVER_FLOOR, 1.0);
-                        if svar > eps_power * dim {
-                            split_source(&mut stack, recv, rt, sk, st);
-                            continue;
-                        }
-                    }
-                }
-                Source::Cluster(c) => {
-                    if nn == 1
-                        && self.cluster_object[c as usize]
-                            .is_some_and(|o| self.sees_none_of_own(r, o as usize))
-                    {
-                        continue;
-                    }
-                    let cluster = &self.clusters.clusters[c as usize];
-                    if self.clusters.holds(c, r) || rt.iter().any(|&v| cluster.contains_point(v)) {
-                        open(c, &mut stack);
-                        continue;
-                    }
-                    let r_radius = rt.iter().map(|v| (*v - rc).length()).fold(0.0, f32::max);
-                    if cluster.faces_away_from(rc, r_radius) {
-                        continue;
-                    }
-                    let corners = cluster.corners();
-                    let sees = |n: &Vec3| {
-                        corners
-                            .iter()
-                            .any(|&s| rt.iter().any(|&v| n.dot(s - v) > self.plane_eps))
-                    };
-                    if !root.normals.iter().any(sees) {
-                        continue;
-                    }
-                    s_area = cluster.area;
-                    s_splittable = true;
-                    let d = cluster.centre - rc;
-                    let d2 = d.length_squared().max(1e-20);
-                    let dist = d2.sqrt();
-                    let w = d / dist;
-                    if cluster.radius() >= dist * self.params.cluster_opening
-                        || self.mixes_emitters[c as usize]
-                    {
-                        open(c, &mut stack);
-                        continue;
-                    }
-                    let proj = self.clusters.projected_area(c, -w);
-                    let f = proj / (std::f32::consts::PI * d2 + proj);
-                    let l = lum(self.src_radiance(trees, cl, src, rc));
-                    est = f * l * r_area * std::f32::consts::PI;
-                    // As for near elements below: split a receiver over which the cluster's
-                    // form factor bends more than a linear link follows.
-                    if self.splittable(recv, r_area) {
-                        // With the geometric normal: the bend is the geometry's.
-                        let (centre, at) = self.cluster_factors_over(c, recv, rt, root.normal);
-                        known = KnownFactors {
-                            centre: Some(centre),
-                            corners: Some(at),
-                        };
-                        let bend = (centre - (at[0] + at[1] + at[2]) / 3.0).abs();
-                        let recv_l = bend_radiance(recv);
-                        if bend * l * lum(self.reflectance(recv))
-                            > self.bend_tolerance(recv, src) * recv_l
+                    Source::Cluster(c) => {
+                        if nn == 1
+                            && self.cluster_object[c as usize]
+                                .is_some_and(|o| self.sees_none_of_own(r, o as usize))
                         {
-                            split_receiver(&mut stack, recv, rt, src, st);
                             continue;
                         }
-                    }
-                }
-            }
-            if est > eps_power {
-                let r_split = self.splittable(recv, r_area);
-                let split_recv = r_split && (r_area >= s_area || !s_splittable);
-                if split_recv {
-                    split_receiver(&mut stack, recv, rt, src, st);
-                    continue;
-                }
-                if s_splittable {
-                    match src {
-                        Source::Cluster(c) => open(c, &mut stack),
-                        Source::Elem(sk) => {
-                            split_source(&mut stack, recv, rt, sk, st);
+                        let cluster = &self.clusters.clusters[c as usize];
+                        if self.clusters.holds(c, r)
+                            || rt.iter().any(|&v| cluster.contains_point(v))
+                        {
+                            open(c, &mut stack);
+                            continue;
+                        }
+                        let r_radius = rt.iter().map(|v| (*v - rc).length()).fold(0.0, f32::max);
+                        if cluster.faces_away_from(rc, r_radius) {
+                            continue;
+                        }
+                        let corners = cluster.corners();
+                        let sees = |n: &Vec3| {
+                            corners
+                                .iter()
+                                .any(|&s| rt.iter().any(|&v| n.dot(s - v) > self.plane_eps))
+                        };
+                        if !root.normals.iter().any(sees) {
+                            continue;
+                        }
+                        s_area = cluster.area;
+                        s_splittable = true;
+                        let d = cluster.centre - rc;
+                        let d2 = d.length_squared().max(1e-20);
+                        let dist = d2.sqrt();
+                        let w = d / dist;
+                        if cluster.radius() >= dist * self.params.cluster_opening
+                            || self.mixes_emitters[c as usize]
+                        {
+                            open(c, &mut stack);
+                            continue;
+                        }
+                        let proj = self.clusters.projected_area(c, -w);
+                        let f = proj / (std::f32::consts::PI * d2 + proj);
+                        let l = lum(self.src_radiance(trees, cl, src, rc));
+                        est = f * l * r_area * std::f32::consts::PI;
+                        // As for near elements below: split a receiver over which the cluster's
+                        // form factor bends more than a linear link follows.
+                        if self.splittable(recv, r_area) {
+                            // With the geometric normal: the bend is the geometry's.
+                            let (centre, at) = self.cluster_factors_over(c, recv, rt, root.normal);
+                            known = KnownFactors {
+                                centre: Some(centre),
+                                corners: Some(at),
+                            };
+                            let bend = (centre - (at[0] + at[1] + at[2]) / 3.0).abs();
+                            let recv_l = bend_radiance(recv);
+                            if bend * l * lum(self.reflectance(recv))
+                                > self.bend_tolerance(recv, src) * recv_l
+                            {
+                                split_receiver(&mut stack, recv, rt, src, st);
+                                continue;
+                            }
                         }
                     }
-                    continue;
                 }
-            }
-            let k_start = ks.len() as u32;
-            // All the rays where the link brings a visible share of the scene's power or of
-            // its receiver's light; a few where it brings little of either (the error it can
-            // add is a fraction of that). Judged by the scene's power alone, every link of a
-            // small leaf was faint and took two rays, and next to an object resting on a floor
-            // the noise of a dozen half-hidden links left leaves 8% off in a closed furnace.
-            let nv = self.params.visibility_rays;
-            let recv_l = receiver_radiance(recv);
-            let share = est / (r_area * std::f32::consts::PI) * lum(self.reflectance(recv));
-            // In the last pass, whose links make the file, a link that brings much of its
-            // receiver's light takes enough rays that their noise cannot move the receiver by
-            // more than `VISIBILITY_NOISE` of its radiance: n rays read a visible fraction to
-            // within 0.5/√n (one standard deviation), so n ≥ (share / 2τ)², up to
-            // `MAX_RAY_FACTOR` times the default. Chosen before any ray is cast, so the
-            // estimate stays unbiased (stopping or going on by what the rays found does not).
-            // Earlier passes only judge where to refine, and take the default.
-            // A light's link carries most of its receiver's light, and its shadow's edges
-            // show: it may take more rays.
-            let ray_factor = if self.emits(src) {
-                EMITTER_RAY_FACTOR
-            } else {
-                MAX_RAY_FACTOR
-            };
-            let need = if last_pass {
-                (share / recv_l.max(f32::MIN_POSITIVE) / (2.0 * VISIBILITY_NOISE))
-                    .powi(2)
-                    .ceil()
-                    .min((nv * ray_factor) as f32) as u32
-            } else {
-                0
-            };
-            let rays = if need > nv {
-                need
-            } else if est >= 0.05 * eps_power || share >= FAINT_LINK * recv_l {
-                nv
-            } else {
-                nv.min(2)
-            };
-            // A previous pass's coefficients, where they took as many rays.
-            let (k, visible) = match cache.get(&(recv, src)) {
-                Some(&(at, visible)) if rays <= nv => (prev.k[at..at + link_len].to_vec(), visible),
-                _ => self.link_coefficients((recv, rt), (src, st), rays, known),
-            };
-            if k.iter().all(|&v| v <= 0.0) {
-                continue;
-            }
-            // Part of the source hidden from part of the receiver: a shadow's edge crosses the
-            // receiver (under a block standing on the floor, or a face in the block's shadow),
-            // and the link spreads its light evenly over both sides. Split the receiver while
-            // the light put on the wrong side is a visible fraction of what the receiver
-            // gets. Judged against the light this link brings as well as the receiver's own
-            // radiance, so that the first pass, before any light has arrived, resolves the
-            // shadows the emitters cast.
-            if visible > 0.0 && visible < 1.0 && self.shadow_splittable(recv, r_area, src) {
-                let gathered = lum(self.reflectance(recv))
-                    * lum(self.src_radiance(trees, cl, src, rc))
-                    * (k[0] + k[nn] + k[2 * nn])
-                    / 3.0;
-                let wrong = gathered * (1.0 - visible).min(visible) / visible;
+                if est > eps_power {
+                    let r_split = self.splittable(recv, r_area);
+                    let split_recv = r_split && (r_area >= s_area || !s_splittable);
+                    if split_recv {
+                        split_receiver(&mut stack, recv, rt, src, st);
+                        continue;
+                    }
+                    if s_splittable {
+                        match src {
+                            Source::Cluster(c) => open(c, &mut stack),
+                            Source::Elem(sk) => {
+                                split_source(&mut stack, recv, rt, sk, st);
+                            }
+                        }
+                        continue;
+                    }
+                }
+                let k_start = ks.len() as u32;
+                // All the rays where the link brings a visible share of the scene's power or of
+                // its receiver's light; a few where it brings little of either (the error it can
+                // add is a fraction of that). Judged by the scene's power alone, every link of a
+                // small leaf was faint and took two rays, and next to an object resting on a floor
+                // the noise of a dozen half-hidden links left leaves 8% off in a closed furnace.
+                let nv = self.params.visibility_rays;
                 let recv_l = receiver_radiance(recv);
-                if wrong > SHADOW_TOLERANCE * recv_l.max(gathered) {
-                    split_receiver(&mut stack, recv, rt, src, st);
+                let share = est / (r_area * std::f32::consts::PI) * lum(self.reflectance(recv));
+                // In the last pass, whose links make the file, a link that brings much of its
+                // receiver's light takes enough rays that their noise cannot move the receiver by
+                // more than `VISIBILITY_NOISE` of its radiance: n rays read a visible fraction to
+                // within 0.5/√n (one standard deviation), so n ≥ (share / 2τ)², up to
+                // `MAX_RAY_FACTOR` times the default. Chosen before any ray is cast, so the
+                // estimate stays unbiased (stopping or going on by what the rays found does not).
+                // Earlier passes only judge where to refine, and take the default.
+                // A light's link carries most of its receiver's light, and its shadow's edges
+                // show: it may take more rays.
+                let ray_factor = if self.emits(src) {
+                    EMITTER_RAY_FACTOR
+                } else {
+                    MAX_RAY_FACTOR
+                };
+                let need = if last_pass {
+                    (share / recv_l.max(f32::MIN_POSITIVE) / (2.0 * VISIBILITY_NOISE))
+                        .powi(2)
+                        .ceil()
+                        .min((nv * ray_factor) as f32) as u32
+                } else {
+                    0
+                };
+                let rays = if need > nv {
+                    need
+                } else if est >= 0.05 * eps_power || share >= FAINT_LINK * recv_l {
+                    nv
+                } else {
+                    nv.min(2)
+                };
+                // A previous pass's coefficients, where they took as many rays.
+                let (k, visible) = match cache.get(&(recv, src)) {
+                    Some(&(at, visible)) if rays <= nv => {
+                        (prev.k[at..at + link_len].to_vec(), visible)
+                    }
+                    _ => self.link_coefficients((recv, rt), (src, st), rays, known),
+                };
+                if k.iter().all(|&v| v <= 0.0) {
                     continue;
                 }
+                // Part of the source hidden from part of the receiver: a shadow's edge crosses the
+                // receiver (under a block standing on the floor, or a face in the block's shadow),
+                // and the link spreads its light evenly over both sides. Split the receiver while
+                // the light put on the wrong side is a visible fraction of what the receiver
+                // gets. Judged against the light this link brings as well as the receiver's own
+                // radiance, so that the first pass, before any light has arrived, resolves the
+                // shadows the emitters cast.
+                if visible > 0.0 && visible < 1.0 && self.shadow_splittable(recv, r_area, src) {
+                    let gathered = lum(self.reflectance(recv))
+                        * lum(self.src_radiance(trees, cl, src, rc))
+                        * (k[0] + k[nn] + k[2 * nn])
+                        / 3.0;
+                    let wrong = gathered * (1.0 - visible).min(visible) / visible;
+                    let recv_l = receiver_radiance(recv);
+                    if wrong > SHADOW_TOLERANCE * recv_l.max(gathered) {
+                        split_receiver(&mut stack, recv, rt, src, st);
+                        continue;
+                    }
+                }
+                ks.extend(k);
+                let (aim, share, facing) = match src {
+                    Source::Cluster(c) => (
+                        self.leaving(c, rc),
+                        self.cluster_share(trees, c, rc, root.normal),
+                        0,
+                    ),
+                    Source::Elem(sk) => (
+                        self.kernel_centre(rc, root.normal, sk, st),
+                        0.0,
+                        self.facing_normal(sk, rc),
+                    ),
+                };
+                links.push(RawLink {
+                    recv,
+                    src,
+                    aim,
+                    share,
+                    facing,
+                    k_start,
+                    visible,
+                });
             }
-            ks.extend(k);
-            let (aim, share, facing) = match src {
-                Source::Cluster(c) => (
-                    self.leaving(c, rc),
-                    self.cluster_share(trees, c, rc, root.normal),
-                    0,
-                ),
-                Source::Elem(sk) => (
-                    self.kernel_centre(rc, root.normal, sk, st),
-                    0.0,
-                    self.facing_normal(sk, rc),
-                ),
-            };
-            links.push(RawLink {
-                recv,
-                src,
-                aim,
-                share,
-                facing,
-                k_start,
-                visible,
-            });
-        }
-        (links, ks)
+            (links, ks, stack)
+        };
+        refine_in_parallel(&run, stack)
     }
 
     /// Form factor times visibility from receiver `recv` to `src`, per receiver normal. A pair
@@ -2376,6 +2405,58 @@ struct Judge {
 /// A receiver and a source that may exchange light, with the corners of the receiver and of the
 /// source (when an element).
 type Pair = (ElemKey, [Vec3; 3], Source, [Vec3; 3]);
+
+/// Pairs one part of a root's refinement takes before it hands the pairs left on its stack
+/// to parts that run in parallel ([`refine_in_parallel`]).
+const REFINE_STEPS: usize = 16384;
+
+/// Refines `stack` with `run` ([`Ctx::refine_root`]'s depth-first walk of at most
+/// [`REFINE_STEPS`] pairs), then each pair it left in parallel, the same way; the links in
+/// the order the walk would have popped them, their coefficients' offsets moved to match.
+/// Where the parts fall depends on the step count alone, so the links come out the same for
+/// any number of threads. A room of a few large coarse triangles was refined one triangle per
+/// thread, and the floor's alone took most of the time (the Cornell box: 1.2 cores busy of 2).
+#[allow(clippy::type_complexity)]
+fn refine_in_parallel(
+    run: &(dyn Fn(Vec<Pair>) -> (Vec<RawLink>, Vec<f32>, Vec<Pair>) + Sync),
+    stack: Vec<Pair>,
+) -> (Vec<RawLink>, Vec<f32>) {
+    // The parts' results in order, joined once at the end.
+    #[allow(clippy::type_complexity)]
+    fn parts(
+        run: &(dyn Fn(Vec<Pair>) -> (Vec<RawLink>, Vec<f32>, Vec<Pair>) + Sync),
+        stack: Vec<Pair>,
+    ) -> Vec<(Vec<RawLink>, Vec<f32>)> {
+        let (links, ks, left) = run(stack);
+        let mut out = vec![(links, ks)];
+        if !left.is_empty() {
+            let rest: Vec<Vec<(Vec<RawLink>, Vec<f32>)>> = left
+                .into_par_iter()
+                .rev()
+                .map(|p| parts(run, vec![p]))
+                .collect();
+            out.extend(rest.into_iter().flatten());
+        }
+        out
+    }
+    let mut all = parts(run, stack);
+    if all.len() == 1 {
+        return all.pop().unwrap_or_default();
+    }
+    let (mut links, mut ks) = (
+        Vec::with_capacity(all.iter().map(|p| p.0.len()).sum()),
+        Vec::with_capacity(all.iter().map(|p| p.1.len()).sum()),
+    );
+    for (part_links, part_ks) in all {
+        let offset = ks.len() as u32;
+        links.extend(part_links.into_iter().map(|mut l| {
+            l.k_start += offset;
+            l
+        }));
+        ks.extend(part_ks);
+    }
+    (links, ks)
+}
 
 /// Pushes the pairs of the four children of receiver `recv` (corners `rt`) with `src`.
 fn split_receiver(stack: &mut Vec<Pair>, recv: ElemKey, rt: [Vec3; 3], src: Source, st: [Vec3; 3]) {
