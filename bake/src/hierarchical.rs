@@ -807,7 +807,7 @@ impl Ctx<'_> {
     /// centre (seen from a height `d`, a plane sends 80% of what a point gathers from it from
     /// within `2d` of the foot), so its link reads the node of about four times that distance
     /// there, `depth` levels down, at the centre's barycentric coordinates (the kernel
-    /// `cos cos / r²` weighed over 64 stratified points of the source, clamped into it).
+    /// `cos cos / r²` weighed over sixteen stratified points of the source, clamped into it).
     /// `(0, _)` otherwise.
     ///
     /// A link to a large near source gathered its mean, where its receiver sees the part in
@@ -827,7 +827,7 @@ impl Ctx<'_> {
         }
         // The kernel's centre over sixteen stratified points of the source.
         let (mut sum, mut total) = (Vec3::ZERO, 0.0f32);
-        for q in stratified_points(st, 3) {
+        for q in stratified_points(st, 2) {
             let v = q - p;
             let d2 = v.length_squared().max(f32::MIN_POSITIVE);
             let w = n.dot(v).max(0.0) * (-sn.dot(v)).max(0.0) / (d2 * d2);
