@@ -81,13 +81,14 @@ pub struct BakeParams {
     /// the room, without refining the rest of the room as finely. (At 6 the floor's leaves
     /// were as wide as the legs of an object standing on it, and its contact shadows came out
     /// faint and wide: spot's room 2.4% against a path tracer over the whole image, 1.7% at 7.)
-    /// Where the shadow edge of an emitter crosses a receiver the shadow rule goes two levels
-    /// deeper, down to a sixteenth of the least element area (`EMITTER_SHADOW_LEVELS`).
+    /// Two levels deeper on the shadow edges of emitters, down to a sixteenth of the least
+    /// element area, took the umbra under suzanne's chin from 8.9% to 1.9% too bright, but drew
+    /// the thin shadow of Teatime's spoon as a row of dashes, and was taken out again
+    /// (BENCHMARKS.md, thirteenth round).
     pub detail_level: u32,
     /// Jittered rays per link (and per element and light) for visibility; 0 disables
     /// occlusion. A link that brings a large share of its receiver's light takes up to four
-    /// times as many (sixteen from an emitter), so that their noise stays under 2% of the
-    /// receiver's radiance. Default 8.
+    /// times as many, so that their noise stays under 2% of the receiver's radiance. Default 8.
     pub visibility_rays: u32,
     /// Iterate gather and push-pull until the relative change of the solution drops below
     /// this. Default 1e-4.
@@ -549,29 +550,6 @@ impl Ctx<'_> {
     /// ([`BakeParams::detail_level`]).
     fn detail_splittable(&self, k: ElemKey, area: f32) -> bool {
         k.level < self.params.detail_level.min(MAX_TREE_DEPTH) && area * 0.25 >= self.min_area_of(k)
-    }
-
-    /// Whether `src` emits light (a cluster holding an emitter is always opened).
-    fn emits(&self, src: Source) -> bool {
-        match src {
-            Source::Elem(sk) => self.roots[sk.root as usize].emission != Vec3::ZERO,
-            Source::Cluster(_) => false,
-        }
-    }
-
-    /// Whether the shadow rule may split receiver `k` for a link from `src`: as
-    /// [`Ctx::detail_splittable`], but [`EMITTER_SHADOW_LEVELS`] deeper and to a
-    /// [`EMITTER_SHADOW_AREA`]th of the least area where the source emits and the receiver
-    /// has no refined surface.
-    fn shadow_splittable(&self, k: ElemKey, area: f32, src: Source) -> bool {
-        // A refined surface's leaves below `detail_level` are finer than the surface its
-        // visibility rays leave from: deeper there, spot's own penumbrae came out noisier
-        // (2.1% -> 2.4% against path-traced images).
-        if !self.emits(src) || !self.surface[k.root as usize].is_empty() {
-            return self.detail_splittable(k, area);
-        }
-        k.level < (self.params.detail_level + EMITTER_SHADOW_LEVELS).min(MAX_TREE_DEPTH)
-            && area * 0.25 * EMITTER_SHADOW_AREA >= self.min_area_of(k)
     }
 
     /// Whether the bend rule may split receiver `k` for source element `sk`: one level below
@@ -1502,18 +1480,11 @@ impl Ctx<'_> {
                 // `MAX_RAY_FACTOR` times the default. Chosen before any ray is cast, so the
                 // estimate stays unbiased (stopping or going on by what the rays found does not).
                 // Earlier passes only judge where to refine, and take the default.
-                // A light's link carries most of its receiver's light, and its shadow's edges
-                // show: it may take more rays.
-                let ray_factor = if self.emits(src) {
-                    EMITTER_RAY_FACTOR
-                } else {
-                    MAX_RAY_FACTOR
-                };
                 let need = if last_pass {
                     (share / recv_l.max(f32::MIN_POSITIVE) / (2.0 * VISIBILITY_NOISE))
                         .powi(2)
                         .ceil()
-                        .min((nv * ray_factor) as f32) as u32
+                        .min((nv * MAX_RAY_FACTOR) as f32) as u32
                 } else {
                     0
                 };
@@ -1541,7 +1512,7 @@ impl Ctx<'_> {
                 // gets. Judged against the light this link brings as well as the receiver's own
                 // radiance, so that the first pass, before any light has arrived, resolves the
                 // shadows the emitters cast.
-                if visible > 0.0 && visible < 1.0 && self.shadow_splittable(recv, r_area, src) {
+                if visible > 0.0 && visible < 1.0 && self.detail_splittable(recv, r_area) {
                     let gathered = lum(self.reflectance(recv))
                         * lum(self.src_radiance(trees, cl, src, rc))
                         * (k[0] + k[nn] + k[2 * nn])
@@ -2327,19 +2298,6 @@ const DIM_RECEIVER_FLOOR: f32 = 0.3;
 /// receiver may put into it before the receiver is split (see `refine_root`).
 const SHADOW_TOLERANCE: f32 = 0.05;
 
-/// How many levels below [`BakeParams::detail_level`] the shadow rule splits a receiver where
-/// the shadow edge of an emitter crosses it ([`Ctx::shadow_splittable`]). The penumbra under
-/// an object resting on a room's floor spans a few leaves of `detail_level`, and each leaf
-/// spreads the light of its lit part over its dark part: the umbra next to suzanne's chin read
-/// 8.9% too bright against two 512-path references (`gen-samples room`, pixels under 0.1),
-/// 3.4% one level deeper, 1.9% two levels deeper, where the time to bake that room did not
-/// change measurably. Other sources' shadows are soft and faint, and keep `detail_level`.
-const EMITTER_SHADOW_LEVELS: u32 = 2;
-
-/// The least area the shadow rule splits to where an emitter's shadow edge crosses a
-/// receiver, as a fraction of the object's least element area.
-const EMITTER_SHADOW_AREA: f32 = 16.0;
-
 /// How far from a receiver, in receiver radii, an occluder is looked for by
 /// [`Ctx::near_shadow`].
 const NEAR_SHADOW_REACH: f32 = 10.0;
@@ -2365,10 +2323,6 @@ const VISIBILITY_NOISE: f32 = 0.02;
 
 /// At most this many times `visibility_rays` for one link ([`VISIBILITY_NOISE`]).
 const MAX_RAY_FACTOR: u32 = 4;
-
-/// [`MAX_RAY_FACTOR`] for a link from an emitter: in a penumbra its visibility is most of
-/// what its receiver gets, and at four times the rays the leaves there were blotchy.
-const EMITTER_RAY_FACTOR: u32 = 16;
 
 /// A link bringing less than this share of its receiver's radiance is faint: a few rays bound
 /// what its visibility can put wrong.
