@@ -101,10 +101,7 @@ fn scene() -> Scene {
 #[test]
 fn the_floor_under_and_beside_objects_agrees_with_a_path_tracer() {
     let scene = scene();
-    let paths: u64 = std::env::var("HCE_REFERENCE_PATHS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(16384);
+    let paths = common::reference_paths();
     let baked = bake(&scene, &BakeParams::default()).expect("bakes");
     let tracer = PathTracer::new(&scene);
     let floor = &scene.objects[0];

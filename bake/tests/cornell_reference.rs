@@ -15,6 +15,8 @@
 //! bright while the refinement weighed every receiver's error against the scene's power alone
 //! (now +2.4 %, `DIM_RECEIVER_FLOOR` in `hierarchical.rs`).
 
+mod common;
+
 use std::path::Path;
 
 use glam::Vec3;
@@ -82,10 +84,7 @@ fn cornell_box_agrees_with_a_path_traced_reference() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../samples/cornell-box.glb");
     let imported = import_scene(&path, &ImportOptions::default()).unwrap();
     let scene = imported.solver_scene();
-    let paths: u64 = std::env::var("HCE_REFERENCE_PATHS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(16384);
+    let paths = common::reference_paths();
     let t0 = std::time::Instant::now();
     let baked = bake(&scene, &BakeParams::default()).unwrap();
     let bake_s = t0.elapsed().as_secs_f64();

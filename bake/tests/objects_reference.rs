@@ -132,10 +132,7 @@ fn scene() -> Scene {
 #[test]
 fn objects_in_a_lit_room_agree_with_a_path_tracer() {
     let scene = scene();
-    let paths: u64 = std::env::var("HCE_REFERENCE_PATHS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(16384);
+    let paths = common::reference_paths();
     let baked = bake(&scene, &BakeParams::default()).expect("bakes");
     let tracer = PathTracer::new(&scene);
     let (mut bias_num, mut bias_den) = (0.0f64, 0.0f64);

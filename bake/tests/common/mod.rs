@@ -72,3 +72,11 @@ pub fn leaves(
     }
     out
 }
+
+/// Paths per estimate of the path-traced tests: `HCE_REFERENCE_PATHS`, default 16384.
+pub fn reference_paths() -> u64 {
+    std::env::var("HCE_REFERENCE_PATHS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(16384)
+}
