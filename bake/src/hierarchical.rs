@@ -389,6 +389,20 @@ struct Ctx<'a> {
     /// Distances to a plane below this count as lying in it (rounding of coplanar
     /// geometry), relative to the scene size.
     plane_eps: f32,
+    /// Per root: what the rules judged by the geometry alone found for its elements, kept
+    /// from pass to pass ([`Ctx::memo`]).
+    memos: Vec<Mutex<GeometryMemo>>,
+}
+
+/// What [`Ctx::near_shadow`], [`Ctx::self_shade_varies`] and [`Ctx::open_fraction`] found for
+/// the elements of one root. They depend on the geometry alone, so each element's value is
+/// found once for the whole bake (every pass judged them again: an eighth of the scaling
+/// scene's bake).
+#[derive(Default)]
+struct GeometryMemo {
+    near_shadow: HashMap<ElemKey, bool>,
+    shade_varies: HashMap<ElemKey, bool>,
+    open: HashMap<ElemKey, f32>,
 }
 
 /// The point of the refined triangles `surface` over the coarse triangle `corners` (by path at
@@ -1151,18 +1165,6 @@ impl Ctx<'_> {
             top,
             corners_of(top),
         )];
-        // What the rules judged by the geometry alone found per receiver, shared by the
-        // parts of the refinement that run in parallel (a value is the same whoever finds it).
-        let near_shadow: Mutex<HashMap<ElemKey, bool>> = Default::default();
-        let shade_varies: Mutex<HashMap<ElemKey, bool>> = Default::default();
-        let cached = |m: &Mutex<HashMap<ElemKey, bool>>, k: ElemKey, f: &dyn Fn() -> bool| {
-            if let Some(&v) = m.lock().unwrap_or_else(|e| e.into_inner()).get(&k) {
-                return v;
-            }
-            let v = f();
-            m.lock().unwrap_or_else(|e| e.into_inner()).insert(k, v);
-            v
-        };
         let root = &self.roots[r as usize];
         // Radius and area of the clusters of its own object holding this root, largest
         // first: the receivers around it (see the source variation rule below).
@@ -1200,13 +1202,17 @@ impl Ctx<'_> {
                 steps += 1;
                 let r_area = root.area / 4f32.powi(recv.level as i32);
                 if self.detail_splittable(recv, r_area)
-                    && cached(&near_shadow, recv, &|| self.near_shadow(recv))
+                    && self.memo(recv, |m| &mut m.near_shadow, || self.near_shadow(recv))
                 {
                     split_receiver(&mut stack, recv, rt, src, st);
                     continue;
                 }
                 if self.self_shade_splittable(recv)
-                    && cached(&shade_varies, recv, &|| self.self_shade_varies(recv))
+                    && self.memo(
+                        recv,
+                        |m| &mut m.shade_varies,
+                        || self.self_shade_varies(recv),
+                    )
                 {
                     split_receiver(&mut stack, recv, rt, src, st);
                     continue;
@@ -1931,6 +1937,25 @@ impl Ctx<'_> {
         false
     }
 
+    /// `find()`, the value of a rule judged by the geometry alone for element `k`, found once:
+    /// `pick` chooses the rule's map in its root's [`GeometryMemo`]. The lock is not held while
+    /// `find` runs; parts of the refinement running in parallel may both find a value, and
+    /// find the same one.
+    fn memo<T: Copy>(
+        &self,
+        k: ElemKey,
+        pick: impl Fn(&mut GeometryMemo) -> &mut HashMap<ElemKey, T>,
+        find: impl FnOnce() -> T,
+    ) -> T {
+        let memo = &self.memos[k.root as usize];
+        if let Some(&v) = pick(&mut memo.lock().unwrap_or_else(|e| e.into_inner())).get(&k) {
+            return v;
+        }
+        let v = find();
+        pick(&mut memo.lock().unwrap_or_else(|e| e.into_inner())).insert(k, v);
+        v
+    }
+
     /// Fraction of element `k` that is open, from four stratified points: a point is shut
     /// in when the first surface met along its normal and along four directions 30 degrees
     /// above its plane is, every time, the back of a triangle (a floor point under a block,
@@ -2023,7 +2048,8 @@ impl Ctx<'_> {
         for i in 0..n {
             if tree.child[i] == u32::MAX {
                 tree.rho[i] = self.reflectance(tree.keys[i]);
-                tree.open[i] = self.open_fraction(tree.keys[i]);
+                let k = tree.keys[i];
+                tree.open[i] = self.memo(k, |m| &mut m.open, || self.open_fraction(k));
             }
         }
         for i in (0..n).rev() {
@@ -2797,6 +2823,7 @@ pub fn bake_with_progress(
                 .collect()
         },
         plane_eps,
+        memos: roots.iter().map(|_| Mutex::default()).collect(),
         roots,
     };
     stats.coarse_triangles = ctx.roots.len();
