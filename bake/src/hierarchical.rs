@@ -39,7 +39,7 @@
 //! Determinism: work is split per root triangle, every random number is seeded from element
 //! ids, and every sum runs in a fixed order, so the result does not depend on the thread count.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::sync::Mutex;
 use std::time::Instant;
 
@@ -81,14 +81,14 @@ pub struct BakeParams {
     /// the room, without refining the rest of the room as finely. (At 6 the floor's leaves
     /// were as wide as the legs of an object standing on it, and its contact shadows came out
     /// faint and wide: spot's room 2.4% against a path tracer over the whole image, 1.7% at 7.)
-    /// Two levels deeper on the shadow edges of emitters, down to a sixteenth of the least
-    /// element area, took the umbra under suzanne's chin from 8.9% to 1.9% too bright, but drew
-    /// the thin shadow of Teatime's spoon as a row of dashes, and was taken out again
-    /// (BENCHMARKS.md, thirteenth round).
+    /// Where a light's shadow is narrower than a flat receiver of this level (an object
+    /// close above it: Teatime's spoon, the base of its teapot), two levels deeper, down to a
+    /// sixteenth of the least element area (`Ctx::narrow_shadow_splittable`).
     pub detail_level: u32,
     /// Jittered rays per link (and per element and light) for visibility; 0 disables
     /// occlusion. A link that brings a large share of its receiver's light takes up to four
-    /// times as many, so that their noise stays under 2% of the receiver's radiance. Default 8.
+    /// times as many (sixteen from a light to a receiver of `detail_level` or deeper), so that
+    /// their noise stays under 2% of the receiver's radiance. Default 8.
     pub visibility_rays: u32,
     /// Iterate gather and push-pull until the relative change of the solution drops below
     /// this. Default 1e-4.
@@ -389,6 +389,9 @@ struct Ctx<'a> {
     /// Distances to a plane below this count as lying in it (rounding of coplanar
     /// geometry), relative to the scene size.
     plane_eps: f32,
+    /// [`LIGHT_EMISSION`] times the scene's emission luminance averaged over all its area
+    /// ([`Ctx::lights`]).
+    light_floor: f32,
     /// Per root: what the rules judged by the geometry alone found for its elements, kept
     /// from pass to pass ([`Ctx::memo`]).
     memos: Vec<Mutex<GeometryMemo>>,
@@ -564,6 +567,79 @@ impl Ctx<'_> {
     /// ([`BakeParams::detail_level`]).
     fn detail_splittable(&self, k: ElemKey, area: f32) -> bool {
         k.level < self.params.detail_level.min(MAX_TREE_DEPTH) && area * 0.25 >= self.min_area_of(k)
+    }
+
+    /// Whether `src` is a light: an element emitting more than [`LIGHT_EMISSION`] times the
+    /// scene's mean emission over all its area (`light_floor`), so that its direct light and
+    /// its shadows are what the surfaces around it show most (a cluster holding an emitter is
+    /// always opened, so only elements are asked). In a closed furnace, where every surface
+    /// emits alike, none is.
+    fn lights(&self, src: Source) -> bool {
+        match src {
+            Source::Elem(sk) => lum(self.roots[sk.root as usize].emission) > self.light_floor,
+            Source::Cluster(_) => false,
+        }
+    }
+
+    /// Whether the shadow that a light `st` ([`Ctx::lights`]) casts across flat receiver `k`
+    /// (corners `rt`), which the link's rays found partly hidden, may be narrower than the
+    /// receiver, which then draws it blurred over its whole width: below
+    /// [`BakeParams::detail_level`] (down to [`NARROW_SHADOW_LEVELS`] more levels and a
+    /// sixteenth of the least area), a surface met between the receiver and the light nearer
+    /// than `s·D/W` (receiver size `s`, light distance `D` and width `W`), where its penumbra
+    /// is narrower than `s`. Judged by the geometry, from the receiver's centre and inset
+    /// corners towards the light's centre and corners, and with no threshold on the light the
+    /// link brings, so that the receivers along one shadow edge split alike. Split where that
+    /// light passed a threshold (the thirteenth round), a thin shadow (Teatime's spoon) was
+    /// drawn as dashes, sharp where a receiver passed and blurred between; kept to where the
+    /// light was a quarter to three quarters hidden, a contact shadow's outline was ragged
+    /// (BENCHMARKS.md, fourteenth round). `refine_root` takes the receiver's other links down
+    /// with the light's.
+    fn narrow_shadow_splittable(
+        &self,
+        k: ElemKey,
+        area: f32,
+        rt: [Vec3; 3],
+        st: [Vec3; 3],
+    ) -> bool {
+        let object = self.roots[k.root as usize].object;
+        if self.scene.objects[object].multires
+            || k.level >= (self.params.detail_level + NARROW_SHADOW_LEVELS).min(MAX_TREE_DEPTH)
+            || area * 0.25 * NARROW_SHADOW_AREA < self.min_area_of(k)
+        {
+            return false;
+        }
+        // Part of it shut in (under a block standing on it): the shadow's edge there is the
+        // footprint's, which the open fraction already draws ([`Ctx::shown`]).
+        if self.memo(k, |m| &mut m.open, || self.open_fraction(k)) < 1.0 {
+            return false;
+        }
+        let longest = |t: [Vec3; 3]| {
+            (0..3)
+                .map(|i| (t[(i + 1) % 3] - t[i]).length())
+                .fold(0.0, f32::max)
+        };
+        let rc = (rt[0] + rt[1] + rt[2]) / 3.0;
+        let sc = (st[0] + st[1] + st[2]) / 3.0;
+        let (size, width, dist) = (longest(rt), longest(st), (sc - rc).length());
+        if width <= 0.0 {
+            return false;
+        }
+        let reach = size * dist / width;
+        let n = self.roots[k.root as usize].normal;
+        let [c0, c1, c2] = inset_corners(rt);
+        [rc, c0, c1, c2].iter().any(|&p| {
+            [sc, st[0], st[1], st[2]].iter().any(|&q| {
+                let d = q - p;
+                let len = d.length();
+                len > 0.0
+                    && n.dot(d) > 0.0
+                    && self
+                        .occ
+                        .first_hit_from(p, n, d / len, reach.min(len * 0.99), |_| false)
+                        .is_some()
+            })
+        })
     }
 
     /// Whether the bend rule may split receiver `k` for source element `sk`: one level below
@@ -1188,6 +1264,92 @@ impl Ctx<'_> {
         // in the dark of the direct light has none, and every bend split it (the scaling
         // scene's ball, pass 1: 97,000 elements, of which the second pass kept 54,000).
         let bend_radiance = |recv: ElemKey| receiver_radiance(recv).max(dark_floor);
+        // A link's coefficients and visible fraction, with as many rays as what it brings asks
+        // (`est`, the power bound the rules judged; `share`, the radiance it brings its
+        // receiver).
+        let coefficients = |(recv, rt): (ElemKey, [Vec3; 3]),
+                            (src, st): (Source, [Vec3; 3]),
+                            est: f32,
+                            share: f32,
+                            known: KnownFactors| {
+            // All the rays where the link brings a visible share of the scene's power or of
+            // its receiver's light; a few where it brings little of either (the error it can
+            // add is a fraction of that). Judged by the scene's power alone, every link of a
+            // small leaf was faint and took two rays, and next to an object resting on a floor
+            // the noise of a dozen half-hidden links left leaves 8% off in a closed furnace.
+            let nv = self.params.visibility_rays;
+            let recv_l = receiver_radiance(recv);
+            // In the last pass, whose links make the file, a link that brings much of its
+            // receiver's light takes enough rays that their noise cannot move the receiver by
+            // more than `VISIBILITY_NOISE` of its radiance: n rays read a visible fraction to
+            // within 0.5/√n (one standard deviation), so n ≥ (share / 2τ)², up to
+            // `MAX_RAY_FACTOR` times the default. Chosen before any ray is cast, so the
+            // estimate stays unbiased (stopping or going on by what the rays found does not).
+            // Earlier passes only judge where to refine, and take the default.
+            // A light's link to a receiver as small as the shadow rule goes carries most of
+            // its light, and the shadow edges there are what the narrow shadow rule finds
+            // and draws: it may take more rays.
+            let r_area = root.area / 4f32.powi(recv.level as i32);
+            let ray_factor = if self.lights(src) && !self.detail_splittable(recv, r_area) {
+                EMITTER_RAY_FACTOR
+            } else {
+                MAX_RAY_FACTOR
+            };
+            let need = if last_pass {
+                (share / recv_l.max(f32::MIN_POSITIVE) / (2.0 * VISIBILITY_NOISE))
+                    .powi(2)
+                    .ceil()
+                    .min((nv * ray_factor) as f32) as u32
+            } else {
+                0
+            };
+            let rays = if need > nv {
+                need
+            } else if est >= 0.05 * eps_power || share >= FAINT_LINK * recv_l {
+                nv
+            } else {
+                nv.min(2)
+            };
+            // A previous pass's coefficients, where they took as many rays.
+            match cache.get(&(recv, src)) {
+                Some(&(at, visible)) if rays <= nv => (prev.k[at..at + link_len].to_vec(), visible),
+                _ => self.link_coefficients((recv, rt), (src, st), rays, known),
+            }
+        };
+        // The link from `src` (corners `st`) to `recv` (centre `rc`), its coefficients at
+        // `k_start`.
+        let make_link =
+            |recv: ElemKey, rc: Vec3, src: Source, st: [Vec3; 3], k_start: u32, visible: f32| {
+                let (aim, share, facing, depth) = match src {
+                    Source::Cluster(c) => (
+                        self.leaving(c, rc),
+                        self.cluster_share(trees, c, rc, root.normal),
+                        0,
+                        0,
+                    ),
+                    Source::Elem(sk) => {
+                        let (depth, foot) = self.footprint(rc, root.normal, sk, st);
+                        let aim = if depth > 0 {
+                            foot
+                        } else {
+                            self.kernel_centre(rc, root.normal, sk, st)
+                        };
+                        (aim, 0.0, self.facing_normal(sk, rc), depth)
+                    }
+                };
+                RawLink {
+                    recv,
+                    src,
+                    aim,
+                    share,
+                    facing,
+                    depth,
+                    k_start,
+                    visible,
+                }
+            };
+        // The receivers the narrow shadow rule split ([`Ctx::narrow_shadow_splittable`]).
+        let narrow: Mutex<HashSet<ElemKey>> = Default::default();
         // Refines the pairs on `stack` depth-first for at most `REFINE_STEPS` pairs; returns the
         // links, their coefficients and the pairs left.
         let run = |mut stack: Vec<Pair>| {
@@ -1471,43 +1633,8 @@ impl Ctx<'_> {
                     }
                 }
                 let k_start = ks.len() as u32;
-                // All the rays where the link brings a visible share of the scene's power or of
-                // its receiver's light; a few where it brings little of either (the error it can
-                // add is a fraction of that). Judged by the scene's power alone, every link of a
-                // small leaf was faint and took two rays, and next to an object resting on a floor
-                // the noise of a dozen half-hidden links left leaves 8% off in a closed furnace.
-                let nv = self.params.visibility_rays;
-                let recv_l = receiver_radiance(recv);
                 let share = est / (r_area * std::f32::consts::PI) * lum(self.reflectance(recv));
-                // In the last pass, whose links make the file, a link that brings much of its
-                // receiver's light takes enough rays that their noise cannot move the receiver by
-                // more than `VISIBILITY_NOISE` of its radiance: n rays read a visible fraction to
-                // within 0.5/√n (one standard deviation), so n ≥ (share / 2τ)², up to
-                // `MAX_RAY_FACTOR` times the default. Chosen before any ray is cast, so the
-                // estimate stays unbiased (stopping or going on by what the rays found does not).
-                // Earlier passes only judge where to refine, and take the default.
-                let need = if last_pass {
-                    (share / recv_l.max(f32::MIN_POSITIVE) / (2.0 * VISIBILITY_NOISE))
-                        .powi(2)
-                        .ceil()
-                        .min((nv * MAX_RAY_FACTOR) as f32) as u32
-                } else {
-                    0
-                };
-                let rays = if need > nv {
-                    need
-                } else if est >= 0.05 * eps_power || share >= FAINT_LINK * recv_l {
-                    nv
-                } else {
-                    nv.min(2)
-                };
-                // A previous pass's coefficients, where they took as many rays.
-                let (k, visible) = match cache.get(&(recv, src)) {
-                    Some(&(at, visible)) if rays <= nv => {
-                        (prev.k[at..at + link_len].to_vec(), visible)
-                    }
-                    _ => self.link_coefficients((recv, rt), (src, st), rays, known),
-                };
+                let (k, visible) = coefficients((recv, rt), (src, st), est, share, known);
                 if k.iter().all(|&v| v <= 0.0) {
                     continue;
                 }
@@ -1518,6 +1645,18 @@ impl Ctx<'_> {
                 // gets. Judged against the light this link brings as well as the receiver's own
                 // radiance, so that the first pass, before any light has arrived, resolves the
                 // shadows the emitters cast.
+                if visible > 0.0 && visible < 1.0 && !self.detail_splittable(recv, r_area) {
+                    if let Source::Elem(_) = src {
+                        if self.lights(src) && self.narrow_shadow_splittable(recv, r_area, rt, st) {
+                            narrow
+                                .lock()
+                                .unwrap_or_else(|e| e.into_inner())
+                                .insert(recv);
+                            split_receiver(&mut stack, recv, rt, src, st);
+                            continue;
+                        }
+                    }
+                }
                 if visible > 0.0 && visible < 1.0 && self.detail_splittable(recv, r_area) {
                     let gathered = lum(self.reflectance(recv))
                         * lum(self.src_radiance(trees, cl, src, rc))
@@ -1531,37 +1670,107 @@ impl Ctx<'_> {
                     }
                 }
                 ks.extend(k);
-                let (aim, share, facing, depth) = match src {
-                    Source::Cluster(c) => (
-                        self.leaving(c, rc),
-                        self.cluster_share(trees, c, rc, root.normal),
-                        0,
-                        0,
-                    ),
-                    Source::Elem(sk) => {
-                        let (depth, foot) = self.footprint(rc, root.normal, sk, st);
-                        let aim = if depth > 0 {
-                            foot
-                        } else {
-                            self.kernel_centre(rc, root.normal, sk, st)
-                        };
-                        (aim, 0.0, self.facing_normal(sk, rc), depth)
-                    }
-                };
-                links.push(RawLink {
-                    recv,
-                    src,
-                    aim,
-                    share,
-                    facing,
-                    depth,
-                    k_start,
-                    visible,
-                });
+                links.push(make_link(recv, rc, src, st, k_start, visible));
             }
             (links, ks, stack)
         };
-        refine_in_parallel(&run, stack)
+        let (links, ks) = refine_in_parallel(&run, stack);
+        let narrow = narrow.into_inner().unwrap_or_else(|e| e.into_inner());
+        if narrow.is_empty() {
+            return (links, ks);
+        }
+        // Every other link of a receiver the narrow shadow rule split goes down with the
+        // emitter's, to the same leaves: the links of one leaf sum to what it sees only at one
+        // resolution. In a closed furnace the walls' links, split beside an object resting on
+        // the floor, saw the object hide them leaf by leaf, while the object's own link, on
+        // the larger receiver, spread its share linearly, and the leaves at the point of
+        // contact read -13% to +10%.
+        // So does a link to a near source (the object casting the shadow) on a larger
+        // receiver above one of them: near the point of contact its form factor is far from
+        // linear over that receiver.
+        let mut above: HashSet<ElemKey> = HashSet::new();
+        for k in &narrow {
+            let mut k = k.parent();
+            while let Some(x) = k {
+                if !above.insert(x) {
+                    break;
+                }
+                k = x.parent();
+            }
+        }
+        let near = |recv: ElemKey, src: Source| match src {
+            Source::Elem(sk) => {
+                let (rt, st) = (self.elem_corners(recv), self.elem_corners(sk));
+                let d = (st[0] + st[1] + st[2] - rt[0] - rt[1] - rt[2]) / 3.0;
+                let r_area = root.area / 4f32.powi(recv.level as i32);
+                let s_area = self.roots[sk.root as usize].area / 4f32.powi(sk.level as i32);
+                d.length_squared() <= 36.0 * (r_area + s_area)
+            }
+            Source::Cluster(_) => false,
+        };
+        let goes_down = |recv: ElemKey, src: Source| {
+            narrow.contains(&recv) || above.contains(&recv) && near(recv, src)
+        };
+        let expand = |l: &RawLink| -> Option<Vec<(RawLink, Vec<f32>)>> {
+            if !goes_down(l.recv, l.src) {
+                return None;
+            }
+            let at = l.k_start as usize;
+            let k = &ks[at..at + link_len];
+            let lt = self.elem_corners(l.recv);
+            let share = lum(self.reflectance(l.recv))
+                * lum(self.src_radiance(trees, cl, l.src, (lt[0] + lt[1] + lt[2]) / 3.0))
+                * (k[0] + k[nn] + k[2 * nn])
+                / 3.0;
+            let st = corners_of(l.src);
+            let mut out = Vec::new();
+            let mut stack = vec![(l.recv, lt)];
+            while let Some((recv, rt)) = stack.pop() {
+                if goes_down(recv, l.src) {
+                    let children = split(rt);
+                    for c in (0..4).rev() {
+                        stack.push((recv.child(c), children[c as usize]));
+                    }
+                    continue;
+                }
+                let (k, visible) = coefficients(
+                    (recv, rt),
+                    (l.src, st),
+                    f32::INFINITY,
+                    share,
+                    KnownFactors::default(),
+                );
+                if k.iter().all(|&v| v <= 0.0) {
+                    continue;
+                }
+                let rc = (rt[0] + rt[1] + rt[2]) / 3.0;
+                out.push((make_link(recv, rc, l.src, st, 0, visible), k));
+            }
+            Some(out)
+        };
+        // Per link: the links it became, where it went down.
+        type Expanded = Option<Vec<(RawLink, Vec<f32>)>>;
+        let expanded: Vec<Expanded> = links.par_iter().map(expand).collect();
+        let mut out_links = Vec::with_capacity(links.len());
+        let mut out_ks = Vec::with_capacity(ks.len());
+        for (l, e) in links.into_iter().zip(expanded) {
+            match e {
+                None => {
+                    let at = l.k_start as usize;
+                    let k_start = out_ks.len() as u32;
+                    out_ks.extend_from_slice(&ks[at..at + link_len]);
+                    out_links.push(RawLink { k_start, ..l });
+                }
+                Some(v) => {
+                    for (mut nl, k) in v {
+                        nl.k_start = out_ks.len() as u32;
+                        out_ks.extend(k);
+                        out_links.push(nl);
+                    }
+                }
+            }
+        }
+        (out_links, out_ks)
     }
 
     /// Form factor times visibility from receiver `recv` to `src`, per receiver normal. A pair
@@ -2350,6 +2559,22 @@ const VISIBILITY_NOISE: f32 = 0.02;
 /// At most this many times `visibility_rays` for one link ([`VISIBILITY_NOISE`]).
 const MAX_RAY_FACTOR: u32 = 4;
 
+/// How many times the scene's mean emission an emitter sends to count as a light
+/// ([`Ctx::lights`]).
+const LIGHT_EMISSION: f32 = 2.0;
+
+/// [`MAX_RAY_FACTOR`] for a link from an emitter: in a penumbra its visibility is most of
+/// what its receiver gets.
+const EMITTER_RAY_FACTOR: u32 = 16;
+
+/// How many levels below [`BakeParams::detail_level`] an emitter's narrow shadow splits a
+/// flat receiver ([`Ctx::narrow_shadow_splittable`]).
+const NARROW_SHADOW_LEVELS: u32 = 2;
+
+/// The least area [`Ctx::narrow_shadow_splittable`] splits to, as a fraction of the object's
+/// least element area.
+const NARROW_SHADOW_AREA: f32 = 16.0;
+
 /// A link bringing less than this share of its receiver's radiance is faint: a few rays bound
 /// what its visibility can put wrong.
 const FAINT_LINK: f32 = 0.01;
@@ -2824,6 +3049,14 @@ pub fn bake_with_progress(
         },
         plane_eps,
         memos: roots.iter().map(|_| Mutex::default()).collect(),
+        light_floor: {
+            let (mut area, mut sent) = (0.0f64, 0.0f64);
+            for r in &roots {
+                area += f64::from(r.area);
+                sent += f64::from(r.area) * f64::from(lum(r.emission));
+            }
+            (f64::from(LIGHT_EMISSION) * sent / area.max(f64::MIN_POSITIVE)) as f32
+        },
         roots,
     };
     stats.coarse_triangles = ctx.roots.len();
