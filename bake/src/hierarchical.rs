@@ -1291,7 +1291,7 @@ impl Ctx<'_> {
             // and draws: it may take more rays.
             let r_area = root.area / 4f32.powi(recv.level as i32);
             let ray_factor = if self.lights(src) && !self.detail_splittable(recv, r_area) {
-                EMITTER_RAY_FACTOR
+                LIGHT_RAY_FACTOR
             } else {
                 MAX_RAY_FACTOR
             };
@@ -1427,7 +1427,7 @@ impl Ctx<'_> {
                         let sc = (st[0] + st[1] + st[2]) / 3.0;
                         let d2 = (sc - rc).length_squared();
                         let l = lum(self.src_radiance(trees, cl, src, rc));
-                        let far = d2 > 36.0 * (r_area + s_area);
+                        let far = !near_pair(d2, r_area, s_area);
                         let f_bound;
                         if far {
                             let w = (sc - rc) / d2.sqrt();
@@ -1645,17 +1645,18 @@ impl Ctx<'_> {
                 // gets. Judged against the light this link brings as well as the receiver's own
                 // radiance, so that the first pass, before any light has arrived, resolves the
                 // shadows the emitters cast.
-                if visible > 0.0 && visible < 1.0 && !self.detail_splittable(recv, r_area) {
-                    if let Source::Elem(_) = src {
-                        if self.lights(src) && self.narrow_shadow_splittable(recv, r_area, rt, st) {
-                            narrow
-                                .lock()
-                                .unwrap_or_else(|e| e.into_inner())
-                                .insert(recv);
-                            split_receiver(&mut stack, recv, rt, src, st);
-                            continue;
-                        }
-                    }
+                if visible > 0.0
+                    && visible < 1.0
+                    && !self.detail_splittable(recv, r_area)
+                    && self.lights(src)
+                    && self.narrow_shadow_splittable(recv, r_area, rt, st)
+                {
+                    narrow
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner())
+                        .insert(recv);
+                    split_receiver(&mut stack, recv, rt, src, st);
+                    continue;
                 }
                 if visible > 0.0 && visible < 1.0 && self.detail_splittable(recv, r_area) {
                     let gathered = lum(self.reflectance(recv))
@@ -1680,7 +1681,7 @@ impl Ctx<'_> {
             return (links, ks);
         }
         // Every other link of a receiver the narrow shadow rule split goes down with the
-        // emitter's, to the same leaves: the links of one leaf sum to what it sees only at one
+        // light's, to the same leaves: the links of one leaf sum to what it sees only at one
         // resolution. In a closed furnace the walls' links, split beside an object resting on
         // the floor, saw the object hide them leaf by leaf, while the object's own link, on
         // the larger receiver, spread its share linearly, and the leaves at the point of
@@ -1704,7 +1705,7 @@ impl Ctx<'_> {
                 let d = (st[0] + st[1] + st[2] - rt[0] - rt[1] - rt[2]) / 3.0;
                 let r_area = root.area / 4f32.powi(recv.level as i32);
                 let s_area = self.roots[sk.root as usize].area / 4f32.powi(sk.level as i32);
-                d.length_squared() <= 36.0 * (r_area + s_area)
+                near_pair(d.length_squared(), r_area, s_area)
             }
             Source::Cluster(_) => false,
         };
@@ -2563,9 +2564,9 @@ const MAX_RAY_FACTOR: u32 = 4;
 /// ([`Ctx::lights`]).
 const LIGHT_EMISSION: f32 = 2.0;
 
-/// [`MAX_RAY_FACTOR`] for a link from an emitter: in a penumbra its visibility is most of
-/// what its receiver gets.
-const EMITTER_RAY_FACTOR: u32 = 16;
+/// [`MAX_RAY_FACTOR`] for a link from a light ([`Ctx::lights`]) to a receiver of
+/// `detail_level` or deeper: in a penumbra its visibility is most of what its receiver gets.
+const LIGHT_RAY_FACTOR: u32 = 16;
 
 /// How many levels below [`BakeParams::detail_level`] an emitter's narrow shadow splits a
 /// flat receiver ([`Ctx::narrow_shadow_splittable`]).
@@ -2776,6 +2777,13 @@ fn refine_in_parallel(
         ks.extend(part_ks);
     }
     (links, ks)
+}
+
+/// Whether a receiver and a source element of areas `r_area` and `s_area`, their centres `d2`
+/// apart (squared), are near: within six times the root of their summed areas, where the
+/// form factor is bounded at points of the receiver, not by a disc from afar.
+fn near_pair(d2: f32, r_area: f32, s_area: f32) -> bool {
+    d2 <= 36.0 * (r_area + s_area)
 }
 
 /// Pushes the pairs of the four children of receiver `recv` (corners `rt`) with `src`.
