@@ -251,24 +251,19 @@ struct Tree {
     direct: Vec<Vec3>,
     links: Vec<Link>,
     k: Vec<f32>,
-    /// Per leaf (empty where the root has no refined surface): the form factor its links give
-    /// the refined surface's own normal at its points, pushed down to the leaves and averaged
-    /// over them (in a closed scene, one). A normal of the receiver's set turned away from the
-    /// surface's own sees, through the part of its hemisphere below the surface, the object's
-    /// neighbouring patches that the coarse scene does not have there; every form factor it
-    /// lacks against this one is filled with the mean radiance the geometric normal gathers,
-    /// so that a closed furnace stays exact for every normal.
-    closure: Vec<f32>,
     /// Per leaf and normal (`self_view[i * nn + j]`; empty where the root has no refined
     /// surface): the form factor from the leaf's centre on the refined surface to the rest of
     /// its own root's refined triangles, which it gathers its own radiance through
-    /// ([`Ctx::closure`]).
+    /// ([`Ctx::self_view`]).
     self_view: Vec<f32>,
     /// Radiance per node and normal.
     l: Vec<Vec3>,
     /// Fraction of each node's area that is open, not shut in under other geometry
     /// ([`Ctx::open_fraction`]; interior nodes average their children).
     open: Vec<f32>,
+    /// Per leaf: the part of its hemisphere that meets the front of a surface
+    /// ([`Ctx::enclosure`]), which its form factors sum to.
+    enclosed: Vec<f32>,
 }
 
 impl Tree {
@@ -406,6 +401,7 @@ struct GeometryMemo {
     near_shadow: HashMap<ElemKey, bool>,
     shade_varies: HashMap<ElemKey, bool>,
     open: HashMap<ElemKey, f32>,
+    enclosed: HashMap<ElemKey, f32>,
 }
 
 /// The point of the refined triangles `surface` over the coarse triangle `corners` (by path at
@@ -1199,14 +1195,8 @@ impl Ctx<'_> {
             last_pass,
         } = judge;
         let nn = self.nn(r);
-        // Per link: its coefficients, and on a refined surface those of the surface's own
-        // normal ([`Ctx::link_coefficients`]).
-        let link_len = CORNERS * nn
-            + if self.surface[r as usize].is_empty() {
-                0
-            } else {
-                CORNERS
-            };
+        // Per link: its coefficients ([`Ctx::link_coefficients`]).
+        let link_len = CORNERS * nn;
         // Coefficients are a pure function of the pair: reuse those of the previous pass.
         let prev = &trees[r as usize];
         let cache: std::collections::HashMap<(ElemKey, Source), (usize, f32)> = prev
@@ -1778,10 +1768,8 @@ impl Ctx<'_> {
     /// whose form factor is nowhere positive (a cluster whose box reaches above the receiver's
     /// plane while its triangles lie below it) is dropped by the caller, and casts no rays.
     ///
-    /// Returns the coefficients (`CORNERS × nn`, corner-major) and the visible fraction. For a
-    /// receiver on a refined surface (its points carried onto it, [`Ctx::on_surface`])
-    /// `CORNERS` more follow: the same for that surface's own normal at each point, what the
-    /// receiver's normals are filled against ([`Tree::closure`]).
+    /// Returns the coefficients (`CORNERS × nn`, corner-major) and the visible fraction. A
+    /// receiver on a refined surface has its points carried onto it ([`Ctx::on_surface`]).
     fn link_coefficients(
         &self,
         (recv, rt): (ElemKey, [Vec3; 3]),
@@ -1798,9 +1786,7 @@ impl Ctx<'_> {
             Source::Elem(k) => k.id(),
         };
         let mut k = vec![0.0f32; nn];
-        let lifted = !self.surface[recv.root as usize].is_empty();
-        let mut closure = 0.0f32;
-        let mut vis = vec![1.0f32; nn + usize::from(lifted)];
+        let mut vis = vec![1.0f32; nn];
         match src {
             Source::Elem(sk) => {
                 let sc = (st[0] + st[1] + st[2]) / 3.0;
@@ -1821,30 +1807,20 @@ impl Ctx<'_> {
                 let mut buf = [st; 4];
                 let polys = self.source_shape(sk, st, pts.len() > 1, &mut buf);
                 for p in &pts {
-                    let (p, pn) = self.on_surface(recv.root, *p);
+                    let (p, _) = self.on_surface(recv.root, *p);
                     for (kj, n) in k.iter_mut().zip(&root.normals) {
                         *kj += polys
                             .iter()
                             .map(|t| point_to_polygon(p, *n, t))
                             .sum::<f32>();
                     }
-                    if lifted {
-                        closure += polys
-                            .iter()
-                            .map(|t| point_to_polygon(p, pn, t))
-                            .sum::<f32>();
-                    }
                 }
                 let inv = 1.0 / pts.len() as f32;
                 k.iter_mut().for_each(|v| *v *= inv);
-                closure *= inv;
                 let at_corners = known.corners.unwrap_or_else(|| {
                     inset_corners(rt).map(|p| point_to_polygon(p, root.normal, &st))
                 });
                 k = linear_over_receiver(&k, at_corners);
-                if lifted {
-                    k.extend(linear_over_receiver(&[closure], at_corners));
-                }
                 if k.iter().all(|&v| v <= 0.0) {
                     return (k, 0.0);
                 }
@@ -1869,14 +1845,9 @@ impl Ctx<'_> {
                     _ => self.cluster_factors_over(c, recv, rt, root.normal),
                 };
                 k[0] = centre;
-                let (p, pn) = self.on_surface(recv.root, rc);
+                let (p, _) = self.on_surface(recv.root, rc);
                 self.cluster_form_factors(c, p, &root.normals[1..], &mut k[1..]);
                 k = linear_over_receiver(&k, at_corners);
-                if lifted {
-                    let mut f = [0.0f32];
-                    self.cluster_form_factors(c, p, &[pn], &mut f);
-                    k.extend(linear_over_receiver(&f, at_corners));
-                }
                 if k.iter().all(|&v| v <= 0.0) {
                     return (k, 0.0);
                 }
@@ -1900,12 +1871,8 @@ impl Ctx<'_> {
                 );
             }
         };
-        for row in k.chunks_mut(nn).take(CORNERS) {
+        for row in k.chunks_mut(nn) {
             row.iter_mut().zip(&vis).for_each(|(v, f)| *v *= f);
-        }
-        if lifted {
-            let f = vis[nn];
-            k[CORNERS * nn..].iter_mut().for_each(|v| *v *= f);
         }
         (k, vis[0])
     }
@@ -2053,11 +2020,8 @@ impl Ctx<'_> {
             if nb.dot(-d) <= self.plane_eps {
                 return None;
             }
-            // The refined surface's own normal follows the receiver's normals where `w` has
-            // a slot for it.
-            let own = [na];
             let mut any = false;
-            for (x, n) in w.iter_mut().zip(normals.iter().chain(&own)) {
+            for (x, n) in w.iter_mut().zip(normals) {
                 *x = (n.dot(d) > self.plane_eps).then(|| kernel(a, *n, b, nb, size));
                 any |= x.is_some();
             }
@@ -2087,7 +2051,7 @@ impl Ctx<'_> {
         let (mut lo, mut hi) = (u32::MAX, 0u32);
         for p in [rc, c0, c1, c2] {
             let (q, n) = self.on_surface(k.root, p);
-            let open = cosine_strata(n, SELF_SHADE_RINGS, SELF_SHADE_AZIMUTHS)
+            let open = cosine_strata(n, SELF_SHADE_RINGS, SELF_SHADE_AZIMUTHS, 0.0)
                 .filter(|&d| self.occ.first_hit_from(q, n, d, reach, |_| false).is_none())
                 .count() as u32;
             lo = lo.min(open);
@@ -2125,7 +2089,7 @@ impl Ctx<'_> {
         let object = self.roots[k.root as usize].object;
         let own = self.scene.objects[object].multires;
         let ignore = |t: usize| own && self.owner_object(t) == object;
-        for d in cosine_strata(n, 3, 4) {
+        for d in cosine_strata(n, 3, 4, 0.0) {
             let hits = pts.map(|p| self.occ.first_hit_from(p, n, d, reach, ignore));
             if hits.iter().all(Option::is_none) {
                 continue;
@@ -2174,26 +2138,9 @@ impl Ctx<'_> {
     /// can neither receive nor send light.
     fn open_fraction(&self, k: ElemKey) -> f32 {
         let tri = self.elem_corners(k);
-        let n = self.roots[k.root as usize].normal;
-        let a = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
-        let t = n.cross(a).normalize();
-        let b = n.cross(t);
-        let dirs = [
-            n,
-            (n + t * 1.7).normalize(),
-            (n - t * 1.7).normalize(),
-            (n + b * 1.7).normalize(),
-            (n - b * 1.7).normalize(),
-        ];
         let open_at = |level: u32| {
             let pts = stratified_points(tri, level);
-            let shut = pts
-                .iter()
-                .filter(|&&p| {
-                    let (a, _) = self.on_surface(k.root, p);
-                    dirs.iter().all(|&d| self.occ.first_hit_is_back(a, d))
-                })
-                .count();
+            let shut = pts.iter().filter(|&&p| self.shut_at(k.root, p)).count();
             1.0 - shut as f32 / pts.len() as f32
         };
         // Four points; sixteen where the four disagree (the edge of a block's footprint): the
@@ -2205,6 +2152,60 @@ impl Ctx<'_> {
         } else {
             o
         }
+    }
+
+    /// The part of element `k`'s hemisphere that meets the front of a surface, weighed by the
+    /// cosine: what the form factors of its links must sum to (one everywhere in a closed
+    /// room; less where the element sees out of an open scene or the back of a one-sided
+    /// surface, or lies shut in under a block). From [`ENCLOSURE_RINGS`] ×
+    /// [`ENCLOSURE_AZIMUTHS`] cosine-weighted directions at each of `4^level` stratified
+    /// points, turned from point to point, from the surface under the element and along its
+    /// normal there. `open` is the leaf's open fraction: a leaf partly shut in takes the
+    /// sixteen points [`Ctx::open_fraction`] judges it by, and those shut in meet nothing, so
+    /// that in a closed room the part it sums to is its open fraction exactly.
+    fn enclosure(&self, k: ElemKey, open: f32) -> f32 {
+        if open <= 0.0 {
+            return 0.0;
+        }
+        let partly = open < 1.0;
+        let pts = stratified_points(self.elem_corners(k), if partly { 2 } else { 1 });
+        let (mut met, mut all) = (0u32, 0u32);
+        for (s, &p) in pts.iter().enumerate() {
+            if partly && self.shut_at(k.root, p) {
+                all += ENCLOSURE_RINGS * ENCLOSURE_AZIMUTHS;
+                continue;
+            }
+            let (a, n) = self.on_surface(k.root, p);
+            // Turned by the golden ratio's fraction of a stratum from point to point: never
+            // a simple fraction, so that no set of rays lines up with a grid of faces and
+            // meets them along their shared edges.
+            let turn = (s as f32 + 0.5) * 0.618_034;
+            for d in cosine_strata(n, ENCLOSURE_RINGS, ENCLOSURE_AZIMUTHS, turn) {
+                all += 1;
+                met += u32::from(self.occ.meets_front_from(a, n, d));
+            }
+        }
+        met as f32 / all as f32
+    }
+
+    /// Whether point `p` of root `r` is shut in ([`Ctx::open_fraction`]): the first surface
+    /// met along the root's normal and along four directions 30 degrees above its plane is,
+    /// every time, the back of a triangle.
+    fn shut_at(&self, r: u32, p: Vec3) -> bool {
+        let n = self.roots[r as usize].normal;
+        let a = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+        let t = n.cross(a).normalize();
+        let b = n.cross(t);
+        let (p, _) = self.on_surface(r, p);
+        [
+            n,
+            (n + t * 1.7).normalize(),
+            (n - t * 1.7).normalize(),
+            (n + b * 1.7).normalize(),
+            (n - b * 1.7).normalize(),
+        ]
+        .iter()
+        .all(|&d| self.occ.first_hit_is_back(p, d))
     }
 
     /// Builds root `r`'s tree from the keys that must exist.
@@ -2240,10 +2241,10 @@ impl Ctx<'_> {
                 .collect(),
             rho: vec![Vec3::ZERO; n],
             open: vec![1.0; n],
+            enclosed: vec![1.0; n],
             direct: vec![Vec3::ZERO; n * nn],
             links: Vec::new(),
             k: Vec::new(),
-            closure: Vec::new(),
             self_view: Vec::new(),
             l: vec![Vec3::ZERO; n * nn],
             keys: all,
@@ -2260,6 +2261,8 @@ impl Ctx<'_> {
                 tree.rho[i] = self.reflectance(tree.keys[i]);
                 let k = tree.keys[i];
                 tree.open[i] = self.memo(k, |m| &mut m.open, || self.open_fraction(k));
+                let o = tree.open[i];
+                tree.enclosed[i] = self.memo(k, |m| &mut m.enclosed, || self.enclosure(k, o));
             }
         }
         for i in (0..n).rev() {
@@ -2278,45 +2281,28 @@ impl Ctx<'_> {
         tree
     }
 
-    /// [`Tree::closure`] and [`Tree::self_view`] of tree `t` (root `r`), from its links.
-    fn closure(&self, r: u32, t: &Tree) -> (Vec<f32>, Vec<f32>) {
+    /// [`Tree::self_view`] of tree `t` (root `r`). A refined patch sees itself where it curves
+    /// inwards, which no link carries (the coarse triangle under it is flat): from each leaf's
+    /// centre, the form factors of its own root's refined triangles, for its normals.
+    fn self_view(&self, r: u32, t: &Tree) -> Vec<f32> {
         if self.surface[r as usize].is_empty() {
-            return (Vec::new(), Vec::new());
+            return Vec::new();
         }
-        let block = CORNERS * self.nn(r);
-        let n = t.keys.len();
-        let mut f = vec![0.0f32; n * CORNERS];
-        for link in &t.links {
-            let at = link.k_start as usize + block;
-            for c in 0..CORNERS {
-                f[link.recv as usize * CORNERS + c] += t.k[at + c];
-            }
-        }
-        push_linear(t, &mut f, 1);
-        let mut closure: Vec<f32> = (0..n)
-            .map(|i| (f[i * CORNERS] + f[i * CORNERS + 1] + f[i * CORNERS + 2]) / 3.0)
-            .collect();
-        // A refined patch sees itself where it curves inwards, which no link carries (the
-        // coarse triangle under it is flat): from each leaf's centre, the form factors of its
-        // own root's refined triangles, for its normals and the surface's.
         let nn = self.nn(r);
         let surf = &self.surface[r as usize];
         let root = &self.roots[r as usize];
-        let mut view = vec![0.0f32; n * nn];
-        for i in (0..n).filter(|&i| t.child[i] == u32::MAX) {
+        let mut view = vec![0.0f32; t.keys.len() * nn];
+        for i in (0..t.keys.len()).filter(|&i| t.child[i] == u32::MAX) {
             let c = self.elem_corners(t.keys[i]);
-            let (p, pn) = self.on_surface(r, (c[0] + c[1] + c[2]) / 3.0);
-            let f = |n: Vec3| {
-                surf.iter()
-                    .map(|tri| point_to_polygon(p, n, tri))
-                    .sum::<f32>()
-            };
+            let (p, _) = self.on_surface(r, (c[0] + c[1] + c[2]) / 3.0);
             for (j, n) in root.normals.iter().enumerate() {
-                view[i * nn + j] = f(*n);
+                view[i * nn + j] = surf
+                    .iter()
+                    .map(|tri| point_to_polygon(p, *n, tri))
+                    .sum::<f32>();
             }
-            closure[i] += f(pn);
         }
-        (closure, view)
+        view
     }
 
     /// One gather + push-pull for root `r`; returns the new radiance array.
@@ -2327,7 +2313,10 @@ impl Ctx<'_> {
         // Direct light plus gathered radiance at each node's corners (the links are linear
         // over their receivers); beside it, the form factors the radiance was gathered through
         // and the gathered part alone for the geometric normal. Corner-major per node:
-        // `q[(i * CORNERS + c) * nn + j]`.
+        // `q[(i * CORNERS + c) * nn + j]`. Apart, what comes from the lights, directly or
+        // through links from their elements (`lit`, `ff_lit`), and what the geometric normal
+        // gathers from the rest (`g0_rest`): what the leaves' closure leaves alone and what it
+        // fills or scales.
         let mut q = vec![Vec3::ZERO; n * CORNERS * nn];
         for i in 0..n {
             for c in 0..CORNERS {
@@ -2335,8 +2324,11 @@ impl Ctx<'_> {
                 q[at..at + nn].copy_from_slice(&t.direct[i * nn..(i + 1) * nn]);
             }
         }
+        let mut lit = q.clone();
         let mut ff = vec![0.0f32; n * CORNERS * nn];
+        let mut ff_lit = vec![0.0f32; n * CORNERS * nn];
         let mut g0 = vec![Vec3::ZERO; n * CORNERS];
+        let mut g0_rest = vec![Vec3::ZERO; n * CORNERS];
         for link in &t.links {
             let ls = match link.src {
                 SrcIdx::Cluster(c) => self.cluster_seen(trees, cl, c, link.aim, link.share),
@@ -2354,13 +2346,32 @@ impl Ctx<'_> {
                 q[base + x] += ls * k;
                 ff[base + x] += k;
             }
+            let from_light = match link.src {
+                SrcIdx::Node { root, .. } => {
+                    lum(self.roots[root as usize].emission) > self.light_floor
+                }
+                SrcIdx::Cluster(_) => false,
+            };
+            if from_light {
+                for (x, &k) in ks.iter().enumerate() {
+                    lit[base + x] += ls * k;
+                    ff_lit[base + x] += k;
+                }
+            }
             for c in 0..CORNERS {
-                g0[link.recv as usize * CORNERS + c] += ls * ks[c * nn];
+                let g = ls * ks[c * nn];
+                g0[link.recv as usize * CORNERS + c] += g;
+                if !from_light {
+                    g0_rest[link.recv as usize * CORNERS + c] += g;
+                }
             }
         }
         push_linear(t, &mut q, nn);
+        push_linear(t, &mut lit, nn);
         push_linear(t, &mut ff, nn);
+        push_linear(t, &mut ff_lit, nn);
         push_linear(t, &mut g0, 1);
+        push_linear(t, &mut g0_rest, 1);
         // What each leaf gathers: the mean of its linear function, the value at its centroid.
         let mean = |v: &[Vec3], i: usize, j: usize, nn: usize| {
             (v[(i * CORNERS) * nn + j]
@@ -2376,42 +2387,56 @@ impl Ctx<'_> {
             for j in 0..nn {
                 q_leaf[i * nn + j] = mean(&q, i, j, nn);
             }
-            // Light from below the coarse plane. A normal turned away from the coarse one sees,
-            // through the part of its hemisphere below the element's plane, surface that the
-            // coarse scene does not have there (on the refined surface: the object's own
-            // neighbouring patches). Every form factor a tilted normal lacks against the
-            // geometric one is filled with the mean radiance the geometric normal gathers, so
-            // that a closed furnace stays exact for every normal (SPEC.md G.1).
-            // On a refined surface every normal, the geometric one too, is filled against the
-            // surface's own normal at the receiver's points ([`Tree::closure`]).
-            let closure = t.closure.get(i).copied();
-            if closure.is_some() {
+            // A refined patch gathers its own radiance where it sees itself.
+            if !t.self_view.is_empty() {
                 for j in 0..nn {
                     q_leaf[i * nn + j] += t.l[i * nn] * t.self_view[i * nn + j];
                 }
             }
-            if nn > 1 || closure.is_some() {
-                let ffm = |j: usize| {
-                    (ff[(i * CORNERS) * nn + j]
-                        + ff[(i * CORNERS + 1) * nn + j]
-                        + ff[(i * CORNERS + 2) * nn + j])
-                        / 3.0
-                };
-                let f0 = ffm(0);
-                if f0 <= 0.0 {
-                    continue;
-                }
-                let g = (g0[i * CORNERS] + g0[i * CORNERS + 1] + g0[i * CORNERS + 2]) / 3.0;
-                let m = g / f0;
-                let (full, first) = match closure {
-                    Some(f) => (f, 0),
-                    None => (f0, 1),
-                };
-                let view = |j: usize| t.self_view.get(i * nn + j).copied().unwrap_or(0.0);
-                for j in first..nn {
-                    let missing = (full - ffm(j) - view(j)).max(0.0);
-                    q_leaf[i * nn + j] += m * missing;
-                }
+            // The form factors a leaf gathers through sum to the part of its hemisphere that
+            // meets the front of a surface ([`Tree::enclosed`]), for every normal of its set.
+            // The lights' links are the most carefully found (analytic form factors, many
+            // rays), so they stay as they are; the rest take up the difference. What they
+            // lack is filled with the mean radiance the geometric normal gathers from them: a
+            // normal turned away from the geometric one sees, below the element's plane,
+            // surface that the coarse scene does not have there (on a refined surface, the
+            // object's own neighbouring patches). What they have too much (visibility from a
+            // few rays, a cluster's area from a bound, linear functions pushed down from
+            // coarser receivers) is taken off in proportion. So a closed furnace is exact at
+            // every leaf and for every normal (SPEC.md G.1). A leaf partly shut in sums to its
+            // open part, as its links see it and as [`Ctx::shown`] draws it.
+            let ffm = |v: &[f32], j: usize| {
+                (v[(i * CORNERS) * nn + j]
+                    + v[(i * CORNERS + 1) * nn + j]
+                    + v[(i * CORNERS + 2) * nn + j])
+                    / 3.0
+            };
+            let f0 = ffm(&ff, 0);
+            if f0 <= 0.0 {
+                continue;
+            }
+            let view = |j: usize| t.self_view.get(i * nn + j).copied().unwrap_or(0.0);
+            let rest0 = f0 - ffm(&ff_lit, 0);
+            let m_rest = if rest0 > 0.0 {
+                (g0_rest[i * CORNERS] + g0_rest[i * CORNERS + 1] + g0_rest[i * CORNERS + 2])
+                    / 3.0
+                    / rest0
+            } else {
+                (g0[i * CORNERS] + g0[i * CORNERS + 1] + g0[i * CORNERS + 2]) / 3.0 / f0
+            };
+            for j in 0..nn {
+                let at = i * nn + j;
+                let fixed = mean(&lit, i, j, nn);
+                let from_lights = ffm(&ff_lit, j);
+                let seen = ffm(&ff, j) - from_lights + view(j);
+                let due = (t.enclosed[i] - from_lights).max(0.0);
+                let rest = q_leaf[at] - fixed;
+                q_leaf[at] = fixed
+                    + if seen > due {
+                        rest * (due / seen)
+                    } else {
+                        rest + m_rest * (due - seen)
+                    };
             }
         }
         let q = q_leaf;
@@ -2593,11 +2618,16 @@ const CLUSTER_DISC_OPENING: f32 = 0.2;
 /// is steepest).
 const CORNER_INSET: f32 = 0.1;
 
+/// Cosine-weighted rings and azimuths of the directions [`Ctx::enclosure`] casts from each of
+/// a leaf's four points.
+const ENCLOSURE_RINGS: u32 = 8;
+const ENCLOSURE_AZIMUTHS: u32 = 8;
+
 /// Fixed directions over the hemisphere around unit normal `n`, `rings` × `azimuths` strata of
 /// equal cosine-weighted measure, ring by ring from the normal outwards: the sin² of each
 /// direction's angle from `n` is the middle of one of `rings` equal parts of [0, 1], and each
 /// ring's azimuths are turned half a step from the previous ring's.
-fn cosine_strata(n: Vec3, rings: u32, azimuths: u32) -> impl Iterator<Item = Vec3> {
+fn cosine_strata(n: Vec3, rings: u32, azimuths: u32, turn: f32) -> impl Iterator<Item = Vec3> {
     let a = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
     let tu = n.cross(a).normalize();
     let tv = n.cross(tu);
@@ -2605,7 +2635,8 @@ fn cosine_strata(n: Vec3, rings: u32, azimuths: u32) -> impl Iterator<Item = Vec
         let s2 = (2 * ring + 1) as f32 / (2 * rings) as f32;
         let (sin, cos) = (s2.sqrt(), (1.0 - s2).sqrt());
         (0..azimuths).map(move |az| {
-            let phi = std::f32::consts::TAU / azimuths as f32 * (az as f32 + 0.5 * ring as f32);
+            let phi =
+                std::f32::consts::TAU / azimuths as f32 * (az as f32 + 0.5 * ring as f32 + turn);
             tu * (sin * phi.cos()) + tv * (sin * phi.sin()) + n * cos
         })
     })
@@ -3177,7 +3208,7 @@ pub fn bake_with_progress(
                 .collect();
             new_trees[r].links = resolved;
             new_trees[r].k = ks;
-            (new_trees[r].closure, new_trees[r].self_view) = ctx.closure(r as u32, &new_trees[r]);
+            new_trees[r].self_view = ctx.self_view(r as u32, &new_trees[r]);
         }
         // Start from the previous solution where it exists so that the solve converges fast.
         for (nt, ot) in new_trees.iter_mut().zip(&trees) {

@@ -190,6 +190,34 @@ impl Occluders {
         .then_some(hit.t)
     }
 
+    /// Whether the ray that leaves `a`, on a surface of unit normal `na`, along unit `dir`
+    /// first meets the front of a triangle (the side its counter-clockwise winding faces):
+    /// false when it meets a back or nothing. The start is kept clear of `a`'s own surface as
+    /// in [`Occluders::first_hit_from`].
+    pub fn meets_front_from(&self, a: Vec3, na: Vec3, dir: Vec3) -> bool {
+        let Some(bvh) = &self.bvh else { return false };
+        let t0 = (self.eps / na.dot(dir).abs().max(1e-6)).max(self.eps);
+        let ray = bvh_ray(a.into(), dir.into(), t0, f32::INFINITY);
+        let mut hit = RayHit::none();
+        let front = |t: &Triangle| (t.v1 - t.v0).cross(t.v2 - t.v0).dot(Vec3A::from(dir)) < 0.0;
+        // A back met as near as a front is the edge where the two meet (a ray that grazes a
+        // convex object's silhouette): the front is what the ray sees there.
+        if !bvh.ray_traverse(ray, &mut hit, |r, id| {
+            let t = &self.tris[bvh.primitive_indices[id] as usize];
+            let (d, _) = intersect_sealed(t, r);
+            if front(t) {
+                d
+            } else {
+                d * (1.0 + SEAL)
+            }
+        }) {
+            return false;
+        }
+        // So is a back met at its edge, where the front beside it missed by a rounding.
+        let t = &self.tris[bvh.primitive_indices[hit.primitive_id as usize] as usize];
+        front(t) || intersect_sealed(t, &ray).1 < EDGE
+    }
+
     /// Whether the ray from `origin` along unit `dir` first meets the back of a triangle (the
     /// side its counter-clockwise winding does not face); false when it meets nothing.
     pub fn first_hit_is_back(&self, origin: Vec3, dir: Vec3) -> bool {
@@ -213,6 +241,44 @@ impl Occluders {
         bvh.ray_traverse_miss(ray, |r, id| {
             self.tris[bvh.primitive_indices[id] as usize].intersect(r)
         })
+    }
+}
+
+/// Barycentric slack of [`intersect_sealed`].
+const SEAL: f32 = 1e-5;
+
+/// How near an edge (barycentric) a back that [`Occluders::meets_front_from`] meets counts as
+/// the edge.
+const EDGE: f32 = 1e-3;
+
+/// The distance at which `ray` meets triangle `t` (Möller & Trumbore), infinite where it
+/// misses, and the least barycentric coordinate of the point met. Each edge is widened by
+/// [`SEAL`] of the triangle: a ray through the edge shared by two triangles meets one of them. The plain test (`Triangle::intersect`) lets such a ray
+/// through both where rounding puts it a hair outside each, and a room's grid of faces, met
+/// along its lines by a regular set of directions, then seemed to leak.
+fn intersect_sealed(t: &Triangle, ray: &Ray) -> (f32, f32) {
+    let e1 = t.v0 - t.v1;
+    let e2 = t.v2 - t.v0;
+    let n = e1.cross(e2);
+    let det = n.dot(ray.direction);
+    if det == 0.0 {
+        return (f32::INFINITY, 0.0);
+    }
+    let inv_det = 1.0 / det;
+    let c = t.v0 - ray.origin;
+    let r = ray.direction.cross(c);
+    let u = r.dot(e2) * inv_det;
+    let v = r.dot(e1) * inv_det;
+    let w = 1.0 - u - v;
+    let least = u.min(v).min(w);
+    if least < -SEAL {
+        return (f32::INFINITY, least);
+    }
+    let d = n.dot(c) * inv_det;
+    if d >= ray.tmin && d <= ray.tmax {
+        (d, least)
+    } else {
+        (f32::INFINITY, least)
     }
 }
 
