@@ -40,7 +40,7 @@
 //! ids, and every sum runs in a fixed order, so the result does not depend on the thread count.
 
 use std::collections::{HashMap, HashSet};
-use std::sync::Mutex;
+use std::sync::{Mutex, OnceLock};
 use std::time::Instant;
 
 use glam::Vec3;
@@ -380,6 +380,8 @@ struct Ctx<'a> {
     /// side of an object in a room), so that no link it receives needs rays
     /// ([`Occluders::shaft_clear`] over the whole scene, once per root instead of per link).
     unobstructed: Vec<bool>,
+    /// Whether the scene's outer boundary closes it ([`Ctx::boundary_closed`]), found once.
+    boundary_closed: OnceLock<bool>,
     /// Per cluster: the object all its triangles belong to, if one.
     cluster_object: Vec<Option<u32>>,
     /// Per scene object: its triangles form a convex surface ([`ClusterTree::is_convex`]), so
@@ -2221,17 +2223,31 @@ impl Ctx<'_> {
     /// point. In a closed room a root that sees no back (of a one-sided lamp, through a gap in
     /// an object) is closed; one that sees out of an open scene is not, and the first ray that
     /// shows it ends the search. A root with nothing but the scene's outer boundary in front
-    /// of it (the convex side of an object, `unobstructed`) sees the same boundary from every
-    /// point: its centroid's rays suffice.
+    /// of it (the convex side of an object, `unobstructed`) is closed where the boundary is.
     fn root_closed(&self, r: u32) -> bool {
         let corners = self.roots[r as usize].corners;
         if self.unobstructed[r as usize] {
-            return self.point_closed(r, (corners[0] + corners[1] + corners[2]) / 3.0, 0);
+            return *self.boundary_closed.get_or_init(|| self.boundary_closed());
         }
         stratified_points(corners, 1)
             .iter()
             .enumerate()
             .all(|(s, &p)| self.shut_at(r, p) || self.point_closed(r, p, s))
+    }
+
+    /// Whether the scene's outer boundary closes it: the rays of [`Ctx::root_closed`] from the
+    /// centroids of up to [`BOUNDARY_PROBES`] roots with nothing but the boundary in front of
+    /// them, spread over the scene's roots, all meet the front of a surface (which can only be
+    /// the boundary's). A room whose walls close it sees no sky from any point inside.
+    fn boundary_closed(&self) -> bool {
+        let inside: Vec<u32> = (0..self.roots.len() as u32)
+            .filter(|&r| self.unobstructed[r as usize])
+            .collect();
+        let step = inside.len().div_ceil(BOUNDARY_PROBES).max(1);
+        inside.iter().step_by(step).enumerate().all(|(s, &r)| {
+            let c = self.roots[r as usize].corners;
+            self.point_closed(r, (c[0] + c[1] + c[2]) / 3.0, s)
+        })
     }
 
     /// Whether every ray of [`Ctx::root_closed`]'s directions from point `p` of root `r` (the
@@ -2727,6 +2743,9 @@ const CORNER_INSET: f32 = 0.1;
 const ENCLOSURE_RINGS: u32 = 4;
 const ENCLOSURE_AZIMUTHS: u32 = 4;
 
+/// How many roots [`Ctx::boundary_closed`] casts its rays from.
+const BOUNDARY_PROBES: usize = 64;
+
 /// Fixed directions over the hemisphere around unit normal `n`, `rings` × `azimuths` strata of
 /// equal cosine-weighted measure, ring by ring from the normal outwards: the sin² of each
 /// direction's angle from `n` is the middle of one of `rings` equal parts of [0, 1], and each
@@ -3165,6 +3184,7 @@ pub fn bake_with_progress(
         convex,
         mixes_emitters,
         cluster_object,
+        boundary_closed: OnceLock::new(),
         unobstructed: roots
             .par_iter()
             .map(|r| occ.shaft_clear(r.corners, r.normal, Vec3::MIN, Vec3::MAX, None))
