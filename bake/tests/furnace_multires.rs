@@ -41,6 +41,9 @@ fn inward_cube() -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
     (p, tris)
 }
 
+/// A named mesh: positions and triangles.
+type Mesh<'a> = (&'a str, Vec<[f32; 3]>, Vec<[u32; 3]>);
+
 /// An outward octahedron of radius `r` centred at `c`: 6 corners, 8 triangles.
 fn octahedron(c: [f32; 3], r: f32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
     let axes = [
@@ -70,7 +73,7 @@ fn octahedron(c: [f32; 3], r: f32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
 
 /// A closed furnace scene of `meshes` (name, positions, triangles), every one emitting `E` and
 /// reflecting `ρ`, as a binary glTF at `path`.
-fn write_scene(path: &Path, meshes: &[(&str, Vec<[f32; 3]>, Vec<[u32; 3]>)]) {
+fn write_scene(path: &Path, meshes: &[Mesh]) {
     let mut bin: Vec<u8> = Vec::new();
     let (mut views, mut accessors, mut nodes, mut gltf_meshes) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
@@ -116,11 +119,7 @@ fn write_scene(path: &Path, meshes: &[(&str, Vec<[f32; 3]>, Vec<[u32; 3]>)]) {
 
 /// Bakes the furnace scene of `meshes` at `dir` through the pipeline, the objects named in
 /// `multires` multiresolution, and returns the baked objects.
-fn bake_furnace(
-    dir: &Path,
-    meshes: &[(&str, Vec<[f32; 3]>, Vec<[u32; 3]>)],
-    multires: &[&str],
-) -> Vec<Object> {
+fn bake_furnace(dir: &Path, meshes: &[Mesh], multires: &[&str]) -> Vec<Object> {
     let scene = dir.join("furnace.glb");
     write_scene(&scene, meshes);
     let options = PipelineOptions {
