@@ -583,9 +583,14 @@ impl Ctx<'_> {
     /// emits alike, none is.
     fn lights(&self, src: Source) -> bool {
         match src {
-            Source::Elem(sk) => lum(self.roots[sk.root as usize].emission) > self.light_floor,
+            Source::Elem(sk) => self.is_light(sk.root),
             Source::Cluster(_) => false,
         }
+    }
+
+    /// Whether root `r` is part of a light ([`Ctx::lights`]).
+    fn is_light(&self, r: u32) -> bool {
+        lum(self.roots[r as usize].emission) > self.light_floor
     }
 
     /// Whether the shadow that a light `st` ([`Ctx::lights`]) casts across flat receiver `k`
@@ -2448,9 +2453,7 @@ impl Ctx<'_> {
                 ff[base + x] += k;
             }
             let from_light = match link.src {
-                SrcIdx::Node { root, .. } => {
-                    lum(self.roots[root as usize].emission) > self.light_floor
-                }
+                SrcIdx::Node { root, .. } => self.is_light(root),
                 SrcIdx::Cluster(_) => false,
             };
             if from_light {
@@ -2749,7 +2752,7 @@ const BOUNDARY_PROBES: usize = 64;
 /// Fixed directions over the hemisphere around unit normal `n`, `rings` × `azimuths` strata of
 /// equal cosine-weighted measure, ring by ring from the normal outwards: the sin² of each
 /// direction's angle from `n` is the middle of one of `rings` equal parts of [0, 1], and each
-/// ring's azimuths are turned half a step from the previous ring's.
+/// ring's azimuths are turned half a step from the previous ring's, and all by `turn` steps.
 fn cosine_strata(n: Vec3, rings: u32, azimuths: u32, turn: f32) -> impl Iterator<Item = Vec3> {
     let a = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
     let tu = n.cross(a).normalize();
