@@ -218,6 +218,11 @@ struct RawLink {
     k_start: u32,
     /// Fraction of the visibility rays that were clear.
     visible: f32,
+    /// For a cluster source on a receiver that may split: how far its form factor bends over
+    /// the receiver, as the refinement judged it ([`Ctx::cluster_factors_over`]); NaN where it
+    /// was not judged. The geometry's alone, so the next pass reads it here and does not walk
+    /// the cluster again (a tenth of the scaling scene's bake).
+    bend: f32,
 }
 
 /// A resolved link inside a root's tree.
@@ -231,6 +236,7 @@ struct Link {
     depth: u8,
     k_start: u32,
     visible: f32,
+    bend: f32,
 }
 
 #[derive(Clone, Copy)]
@@ -1221,7 +1227,7 @@ impl Ctx<'_> {
             };
         // Coefficients are a pure function of the pair: reuse those of the previous pass.
         let prev = &trees[r as usize];
-        let cache: std::collections::HashMap<(ElemKey, Source), (usize, f32)> = prev
+        let cache: std::collections::HashMap<(ElemKey, Source), (usize, f32, f32)> = prev
             .links
             .iter()
             .map(|l| {
@@ -1233,7 +1239,7 @@ impl Ctx<'_> {
                 };
                 (
                     (prev.keys[l.recv as usize], src),
-                    (l.k_start as usize, l.visible),
+                    (l.k_start as usize, l.visible, l.bend),
                 )
             })
             .collect();
@@ -1252,6 +1258,7 @@ impl Ctx<'_> {
             self.roots[r as usize].corners,
             top,
             corners_of(top),
+            false,
         )];
         let root = &self.roots[r as usize];
         // Radius and area of the clusters of its own object holding this root, largest
@@ -1324,42 +1331,50 @@ impl Ctx<'_> {
             };
             // A previous pass's coefficients, where they took as many rays.
             match cache.get(&(recv, src)) {
-                Some(&(at, visible)) if rays <= nv => (prev.k[at..at + link_len].to_vec(), visible),
+                Some(&(at, visible, _)) if rays <= nv => {
+                    (prev.k[at..at + link_len].to_vec(), visible)
+                }
                 _ => self.link_coefficients((recv, rt), (src, st), rays, known),
             }
         };
         // The link from `src` (corners `st`) to `recv` (centre `rc`), its coefficients at
         // `k_start`.
-        let make_link =
-            |recv: ElemKey, rc: Vec3, src: Source, st: [Vec3; 3], k_start: u32, visible: f32| {
-                let (aim, share, facing, depth) = match src {
-                    Source::Cluster(c) => (
-                        self.leaving(c, rc),
-                        self.cluster_share(trees, c, rc, root.normal),
-                        0,
-                        0,
-                    ),
-                    Source::Elem(sk) => {
-                        let (depth, foot) = self.footprint(rc, root.normal, sk, st);
-                        let aim = if depth > 0 {
-                            foot
-                        } else {
-                            self.kernel_centre(rc, root.normal, sk, st)
-                        };
-                        (aim, 0.0, self.facing_normal(sk, rc), depth)
-                    }
-                };
-                RawLink {
-                    recv,
-                    src,
-                    aim,
-                    share,
-                    facing,
-                    depth,
-                    k_start,
-                    visible,
+        let make_link = |recv: ElemKey,
+                         rc: Vec3,
+                         src: Source,
+                         st: [Vec3; 3],
+                         k_start: u32,
+                         visible: f32,
+                         bend: f32| {
+            let (aim, share, facing, depth) = match src {
+                Source::Cluster(c) => (
+                    self.leaving(c, rc),
+                    self.cluster_share(trees, c, rc, root.normal),
+                    0,
+                    0,
+                ),
+                Source::Elem(sk) => {
+                    let (depth, foot) = self.footprint(rc, root.normal, sk, st);
+                    let aim = if depth > 0 {
+                        foot
+                    } else {
+                        self.kernel_centre(rc, root.normal, sk, st)
+                    };
+                    (aim, 0.0, self.facing_normal(sk, rc), depth)
                 }
             };
+            RawLink {
+                recv,
+                src,
+                aim,
+                share,
+                facing,
+                depth,
+                k_start,
+                visible,
+                bend,
+            }
+        };
         // The receivers the narrow shadow rule split ([`Ctx::narrow_shadow_splittable`]).
         let narrow: Mutex<HashSet<ElemKey>> = Default::default();
         // Refines the pairs on `stack` depth-first for at most `REFINE_STEPS` pairs; returns the
@@ -1368,20 +1383,22 @@ impl Ctx<'_> {
             let mut links = Vec::new();
             let mut ks = Vec::new();
             let mut steps = 0;
-            while let Some((recv, rt, src, st)) = stack.pop() {
+            while let Some((recv, rt, src, st, judged)) = stack.pop() {
                 if steps == REFINE_STEPS {
-                    stack.push((recv, rt, src, st));
+                    stack.push((recv, rt, src, st, judged));
                     break;
                 }
                 steps += 1;
                 let r_area = root.area / 4f32.powi(recv.level as i32);
-                if self.detail_splittable(recv, r_area)
+                if !judged
+                    && self.detail_splittable(recv, r_area)
                     && self.memo(recv, |m| &mut m.near_shadow, || self.near_shadow(recv))
                 {
                     split_receiver(&mut stack, recv, rt, src, st);
                     continue;
                 }
-                if self.self_shade_splittable(recv)
+                if !judged
+                    && self.self_shade_splittable(recv)
                     && self.memo(
                         recv,
                         |m| &mut m.shade_varies,
@@ -1398,7 +1415,7 @@ impl Ctx<'_> {
                             ClusterChild::Cluster(c) => Source::Cluster(c),
                             ClusterChild::Root(x) => Source::Elem(ElemKey::root(x)),
                         };
-                        stack.push((recv, rt, s, corners_of(s)));
+                        stack.push((recv, rt, s, corners_of(s), true));
                     }
                 };
                 let est;
@@ -1407,6 +1424,7 @@ impl Ctx<'_> {
                 // The geometric normal's form factors the split rules below computed, which the
                 // link's coefficients reuse.
                 let mut known = KnownFactors::default();
+                let mut link_bend = f32::NAN;
                 match src {
                     Source::Elem(sk) => {
                         if sk.root == r {
@@ -1610,13 +1628,21 @@ impl Ctx<'_> {
                         // As for near elements below: split a receiver over which the cluster's
                         // form factor bends more than a linear link follows.
                         if self.splittable(recv, r_area) {
-                            // With the geometric normal: the bend is the geometry's.
-                            let (centre, at) = self.cluster_factors_over(c, recv, rt, root.normal);
-                            known = KnownFactors {
-                                centre: Some(centre),
-                                corners: Some(at),
+                            // With the geometric normal: the bend is the geometry's, judged in
+                            // the previous pass where that made this link.
+                            let bend = match cache.get(&(recv, src)) {
+                                Some(&(_, _, bend)) if !bend.is_nan() => bend,
+                                _ => {
+                                    let (centre, at) =
+                                        self.cluster_factors_over(c, recv, rt, root.normal);
+                                    known = KnownFactors {
+                                        centre: Some(centre),
+                                        corners: Some(at),
+                                    };
+                                    (centre - (at[0] + at[1] + at[2]) / 3.0).abs()
+                                }
                             };
-                            let bend = (centre - (at[0] + at[1] + at[2]) / 3.0).abs();
+                            link_bend = bend;
                             let recv_l = bend_radiance(recv);
                             if bend * l * lum(self.reflectance(recv))
                                 > self.bend_tolerance(recv, src) * recv_l
@@ -1630,6 +1656,7 @@ impl Ctx<'_> {
                 if est > eps_power {
                     let r_split = self.splittable(recv, r_area);
                     let split_recv = r_split && (r_area >= s_area || !s_splittable);
+
                     if split_recv {
                         split_receiver(&mut stack, recv, rt, src, st);
                         continue;
@@ -1683,7 +1710,7 @@ impl Ctx<'_> {
                     }
                 }
                 ks.extend(k);
-                links.push(make_link(recv, rc, src, st, k_start, visible));
+                links.push(make_link(recv, rc, src, st, k_start, visible, link_bend));
             }
             (links, ks, stack)
         };
@@ -1757,7 +1784,7 @@ impl Ctx<'_> {
                     continue;
                 }
                 let rc = (rt[0] + rt[1] + rt[2]) / 3.0;
-                out.push((make_link(recv, rc, l.src, st, 0, visible), k));
+                out.push((make_link(recv, rc, l.src, st, 0, visible, f32::NAN), k));
             }
             Some(out)
         };
@@ -2412,17 +2439,63 @@ impl Ctx<'_> {
     }
 
     /// One gather + push-pull for root `r`; returns the new radiance array.
-    fn iterate_root(&self, r: u32, trees: &[Tree], cl: &[ClusterLight]) -> Vec<Vec3> {
+    /// Per node and normal of root `r`'s tree (`out[i * nn + j]`), the sum of the form factors
+    /// its links give it, pushed down from every receiver above it and averaged over its
+    /// corners ([`push_linear`]): of all its links, and of those from the lights'
+    /// ([`Ctx::is_light`]) elements alone. They depend on the links alone, so every iteration
+    /// of a solve reads them ([`Ctx::iterate_root`]).
+    fn form_factor_sums(&self, r: u32, t: &Tree) -> Vec<[f32; 2]> {
+        let nn = self.nn(r);
+        let n = t.keys.len();
+        let mut ff = vec![0.0f32; n * CORNERS * nn];
+        let mut ff_lit = vec![0.0f32; n * CORNERS * nn];
+        for link in &t.links {
+            let base = link.recv as usize * CORNERS * nn;
+            let ks = &t.k[link.k_start as usize..link.k_start as usize + CORNERS * nn];
+            for (x, &k) in ks.iter().enumerate() {
+                ff[base + x] += k;
+            }
+            if matches!(link.src, SrcIdx::Node { root, .. } if self.is_light(root)) {
+                for (x, &k) in ks.iter().enumerate() {
+                    ff_lit[base + x] += k;
+                }
+            }
+        }
+        push_linear(t, &mut ff, nn);
+        push_linear(t, &mut ff_lit, nn);
+        let mean = |v: &[f32], i: usize, j: usize| {
+            (v[(i * CORNERS) * nn + j]
+                + v[(i * CORNERS + 1) * nn + j]
+                + v[(i * CORNERS + 2) * nn + j])
+                / 3.0
+        };
+        (0..n * nn)
+            .map(|x| {
+                let (i, j) = (x / nn, x % nn);
+                [mean(&ff, i, j), mean(&ff_lit, i, j)]
+            })
+            .collect()
+    }
+
+    /// One Jacobi step for root `r`: its nodes' new radiance from what its links gather from
+    /// `trees` and `cl`; `sums` are its [`Ctx::form_factor_sums`].
+    fn iterate_root(
+        &self,
+        r: u32,
+        trees: &[Tree],
+        cl: &[ClusterLight],
+        sums: &[[f32; 2]],
+    ) -> Vec<Vec3> {
         let t = &trees[r as usize];
         let nn = self.nn(r);
         let n = t.keys.len();
         // Direct light plus gathered radiance at each node's corners (the links are linear
-        // over their receivers); beside it, the form factors the radiance was gathered through
-        // and the gathered part alone for the geometric normal. Corner-major per node:
-        // `q[(i * CORNERS + c) * nn + j]`. Apart, what comes from the lights, directly or
-        // through links from their elements (`lit`, `ff_lit`), and what the geometric normal
-        // gathers from the rest (`g0_rest`): what a closed leaf's sum leaves alone and what it
-        // fills or scales.
+        // over their receivers), and the gathered part alone for the geometric normal.
+        // Corner-major per node: `q[(i * CORNERS + c) * nn + j]`. Apart, what comes from the
+        // lights, directly or through links from their elements (`lit`), and what the
+        // geometric normal gathers from the rest (`g0_rest`): what a closed leaf's sum leaves
+        // alone and what it fills or scales. The form factors they were gathered through are
+        // in `sums`.
         let mut q = vec![Vec3::ZERO; n * CORNERS * nn];
         for i in 0..n {
             for c in 0..CORNERS {
@@ -2431,8 +2504,6 @@ impl Ctx<'_> {
             }
         }
         let mut lit = q.clone();
-        let mut ff = vec![0.0f32; n * CORNERS * nn];
-        let mut ff_lit = vec![0.0f32; n * CORNERS * nn];
         let mut g0 = vec![Vec3::ZERO; n * CORNERS];
         let mut g0_rest = vec![Vec3::ZERO; n * CORNERS];
         for link in &t.links {
@@ -2450,7 +2521,6 @@ impl Ctx<'_> {
             let ks = &t.k[link.k_start as usize..link.k_start as usize + CORNERS * nn];
             for (x, &k) in ks.iter().enumerate() {
                 q[base + x] += ls * k;
-                ff[base + x] += k;
             }
             let from_light = match link.src {
                 SrcIdx::Node { root, .. } => self.is_light(root),
@@ -2459,7 +2529,6 @@ impl Ctx<'_> {
             if from_light {
                 for (x, &k) in ks.iter().enumerate() {
                     lit[base + x] += ls * k;
-                    ff_lit[base + x] += k;
                 }
             }
             for c in 0..CORNERS {
@@ -2472,8 +2541,6 @@ impl Ctx<'_> {
         }
         push_linear(t, &mut q, nn);
         push_linear(t, &mut lit, nn);
-        push_linear(t, &mut ff, nn);
-        push_linear(t, &mut ff_lit, nn);
         push_linear(t, &mut g0, 1);
         push_linear(t, &mut g0_rest, 1);
         // What each leaf gathers: the mean of its linear function, the value at its centroid.
@@ -2498,13 +2565,10 @@ impl Ctx<'_> {
                     q_leaf[i * nn + j] += t.l[i * nn] * t.self_view[i * nn + j];
                 }
             }
-            let ffm = |v: &[f32], j: usize| {
-                (v[(i * CORNERS) * nn + j]
-                    + v[(i * CORNERS + 1) * nn + j]
-                    + v[(i * CORNERS + 2) * nn + j])
-                    / 3.0
-            };
-            let f0 = ffm(&ff, 0);
+            // The form factors of all the leaf's links, and of the lights' alone.
+            let ff = |j: usize| sums[i * nn + j][0];
+            let ff_lit = |j: usize| sums[i * nn + j][1];
+            let f0 = ff(0);
             if f0 <= 0.0 {
                 continue;
             }
@@ -2526,7 +2590,7 @@ impl Ctx<'_> {
                 // bound, linear functions pushed down from coarser receivers, up to 3% and 6%
                 // off in a closed furnace) is taken off in proportion. So a closed furnace is
                 // exact at every leaf and for every normal (SPEC.md G.1).
-                let rest0 = f0 - ffm(&ff_lit, 0);
+                let rest0 = f0 - ff_lit(0);
                 let m_rest = if rest0 > 0.0 {
                     mean_of(&g0_rest, rest0)
                 } else {
@@ -2535,8 +2599,8 @@ impl Ctx<'_> {
                 for j in 0..nn {
                     let at = i * nn + j;
                     let fixed = mean(&lit, i, j, nn);
-                    let from_lights = ffm(&ff_lit, j);
-                    let seen = ffm(&ff, j) - from_lights + view(j);
+                    let from_lights = ff_lit(j);
+                    let seen = ff(j) - from_lights + view(j);
                     let due = (enclosed - from_lights).max(0.0);
                     let rest = q_leaf[at] - fixed;
                     q_leaf[at] = fixed
@@ -2557,7 +2621,7 @@ impl Ctx<'_> {
                     None => (f0, 1),
                 };
                 for j in first..nn {
-                    let missing = (full - ffm(&ff, j) - view(j)).max(0.0);
+                    let missing = (full - ff(j) - view(j)).max(0.0);
                     q_leaf[i * nn + j] += m * missing;
                 }
             }
@@ -2630,12 +2694,16 @@ impl Ctx<'_> {
     ) -> (u32, f32) {
         let mut change = f32::INFINITY;
         let mut it = 0;
+        let sums: Vec<Vec<[f32; 2]>> = (0..trees.len() as u32)
+            .into_par_iter()
+            .map(|r| self.form_factor_sums(r, &trees[r as usize]))
+            .collect();
         while it < max_iterations {
             it += 1;
             report(it as usize);
             let new: Vec<Vec<Vec3>> = (0..trees.len() as u32)
                 .into_par_iter()
-                .map(|r| self.iterate_root(r, trees, cl))
+                .map(|r| self.iterate_root(r, trees, cl, &sums[r as usize]))
                 .collect();
             let (mut num, mut den) = (0.0f64, 0.0f64);
             for (t, l) in trees.iter_mut().zip(new) {
@@ -2865,7 +2933,10 @@ struct Judge {
 
 /// A receiver and a source that may exchange light, with the corners of the receiver and of the
 /// source (when an element).
-type Pair = (ElemKey, [Vec3; 3], Source, [Vec3; 3]);
+/// A receiver (its key and corners), a source (with its corners, for an element), and whether
+/// the receiver's own rules (`near_shadow`, `self_shade_varies`) are known to leave it whole:
+/// so a pair that splits or opens its source, keeping the receiver, does not ask again.
+type Pair = (ElemKey, [Vec3; 3], Source, [Vec3; 3], bool);
 
 /// The child of a split triangle (Top, Left, Center, Right: [`split`]) holding the point of
 /// barycentric coordinates `b`, and the point's coordinates over that child.
@@ -2947,7 +3018,7 @@ fn near_pair(d2: f32, r_area: f32, s_area: f32) -> bool {
 fn split_receiver(stack: &mut Vec<Pair>, recv: ElemKey, rt: [Vec3; 3], src: Source, st: [Vec3; 3]) {
     let children = split(rt);
     for c in (0..4).rev() {
-        stack.push((recv.child(c), children[c as usize], src, st));
+        stack.push((recv.child(c), children[c as usize], src, st, false));
     }
 }
 
@@ -2955,7 +3026,13 @@ fn split_receiver(stack: &mut Vec<Pair>, recv: ElemKey, rt: [Vec3; 3], src: Sour
 fn split_source(stack: &mut Vec<Pair>, recv: ElemKey, rt: [Vec3; 3], sk: ElemKey, st: [Vec3; 3]) {
     let children = split(st);
     for c in (0..4).rev() {
-        stack.push((recv, rt, Source::Elem(sk.child(c)), children[c as usize]));
+        stack.push((
+            recv,
+            rt,
+            Source::Elem(sk.child(c)),
+            children[c as usize],
+            true,
+        ));
     }
 }
 
@@ -3331,6 +3408,7 @@ pub fn bake_with_progress(
                     depth: l.depth,
                     k_start: l.k_start,
                     visible: l.visible,
+                    bend: l.bend,
                 })
                 .collect();
             new_trees[r].links = resolved;
