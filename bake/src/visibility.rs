@@ -45,10 +45,12 @@ impl Occluders {
         } else {
             (hi - lo).length()
         };
+        // The slower build (triangles split before building, finer sorting) traces the bake's
+        // rays faster: 5-8% of the scaling scene's bake, for a build of milliseconds.
         let bvh = (!tris.is_empty()).then(|| {
             build_cwbvh_from_tris(
                 &tris,
-                BvhBuildParams::medium_build(),
+                BvhBuildParams::slow_build(),
                 &mut Duration::default(),
             )
         });
