@@ -206,9 +206,12 @@ struct RawLink {
     /// receiver; for an element source, the barycentric coordinates over the source of the
     /// centre of the receiver's view of it ([`Ctx::kernel_centre`]).
     aim: Vec3,
-    /// For a cluster source, the share of its first child in what the receiver sees of it
+    /// For a cluster source, the share of each of its parts in what the receiver sees of it
     /// ([`Ctx::cluster_share`]); unused for an element source.
-    share: f32,
+    share: [f32; READ_PARTS],
+    /// For a cluster source: whether its parts are its [`READ_DEPTH`]-level descendants
+    /// ([`Ctx::reads_deep`]) rather than its two children.
+    deep: bool,
     /// For an element source: which of its normals' radiance it sends towards the receiver
     /// ([`Ctx::facing_normal`]); 0 for a cluster.
     facing: u8,
@@ -231,7 +234,8 @@ struct Link {
     src: SrcIdx,
     /// As in [`RawLink`].
     aim: Vec3,
-    share: f32,
+    share: [f32; READ_PARTS],
+    deep: bool,
     facing: u8,
     depth: u8,
     k_start: u32,
@@ -382,6 +386,9 @@ struct Ctx<'a> {
     /// cluster, and a room lit by a panel under its ceiling came out 2-6% darker than a path
     /// tracer shows it, one wall darker than its mirror image (`tests/objects_reference.rs`).
     mixes_emitters: Vec<bool>,
+    /// Per cluster: the parts a link to it reads apart when it reads deep ([`read_parts`]),
+    /// found once rather than walked for every link in every iteration.
+    read_parts: Vec<([ClusterChild; READ_PARTS], u8)>,
     /// Per root: nothing but the scene's outer boundary lies in front of its plane (the convex
     /// side of an object in a room), so that no link it receives needs rays
     /// ([`Occluders::shaft_clear`] over the whole scene, once per root instead of per link).
@@ -954,10 +961,18 @@ impl Ctx<'_> {
         )
     }
 
-    /// How much of what a receiver at `p` with normal `n` sees of cluster `c` is its first
-    /// child's: each child as a disc of its front-facing open area at its centre
-    /// (`cos A / (π d² + A)`), for [`Ctx::cluster_seen`]. A half where it sees neither.
-    fn cluster_share(&self, trees: &[Tree], c: u32, p: Vec3, n: Vec3) -> f32 {
+    /// How much of what a receiver at `p` with normal `n` sees of cluster `c` is each of its
+    /// parts' ([`Ctx::cluster_parts`]; `deep`, as [`Ctx::reads_deep`] says): each part as a
+    /// disc of its front-facing open area at its centre (`cos A / (π d² + A)`), for
+    /// [`Ctx::cluster_seen`]. Alike where it sees none.
+    fn cluster_share(
+        &self,
+        trees: &[Tree],
+        c: u32,
+        p: Vec3,
+        n: Vec3,
+        deep: bool,
+    ) -> [f32; READ_PARTS] {
         let weigh = |ch: ClusterChild| {
             let (centre, area) = match ch {
                 ClusterChild::Cluster(x) => {
@@ -977,18 +992,53 @@ impl Ctx<'_> {
             let d2 = v.length_squared().max(1e-20);
             n.dot(v / d2.sqrt()).max(0.0) * area / (std::f32::consts::PI * d2 + area)
         };
-        let [a, b] = self.clusters.clusters[c as usize].children;
-        let (wa, wb) = (weigh(a), weigh(b));
-        if wa + wb > 0.0 {
-            wa / (wa + wb)
+        let (parts, count) = self.cluster_parts(c, deep);
+        let mut w = [0.0f32; READ_PARTS];
+        for (x, part) in w.iter_mut().zip(&parts[..count]) {
+            *x = weigh(*part);
+        }
+        let sum: f32 = w.iter().sum();
+        if sum > 0.0 {
+            w.map(|x| x / sum)
         } else {
-            0.5
+            let mut even = [0.0f32; READ_PARTS];
+            even[..count].fill(1.0 / count as f32);
+            even
         }
     }
 
-    /// The radiance (normal 0) a link gathers from cluster `c` in direction `w`: its two
-    /// children's ([`ClusterLight::toward`], a root triangle's own), each by its `share` of
-    /// the receiver's view ([`Ctx::cluster_share`]). The cluster's own average weighs its
+    /// The parts of cluster `c` a link reads apart, and how many there are: its
+    /// [`READ_DEPTH`]-level descendants where it reads `deep` ([`read_parts`]), else its two
+    /// children.
+    fn cluster_parts(&self, c: u32, deep: bool) -> ([ClusterChild; READ_PARTS], usize) {
+        if deep {
+            let (parts, count) = self.read_parts[c as usize];
+            (parts, usize::from(count))
+        } else {
+            let [a, b] = self.clusters.clusters[c as usize].children;
+            let mut parts = [a; READ_PARTS];
+            parts[1] = b;
+            (parts, 2)
+        }
+    }
+
+    /// Whether a link from cluster `c` to a receiver centred at `p` reads the cluster in its
+    /// [`READ_DEPTH`]-level parts rather than its two children: a cluster near enough for its
+    /// radius to be [`DEEP_READ`] of its distance or more. Linked whole up to
+    /// `cluster_opening` (a half), it read its two children's mean where the receiver sees one
+    /// part of them most: a closed room lit from the middle of its ceiling is brightest in
+    /// the middle of its floor, which the ceiling's middle sees square on, and the power the
+    /// room's surfaces sent through their links fell 0.6% short of what they reflect (walls
+    /// and ceiling 0.7% dark against a path tracer; read by parts, 0.35%: BENCHMARKS.md,
+    /// sixteenth round).
+    fn reads_deep(&self, c: u32, p: Vec3) -> bool {
+        let cluster = &self.clusters.clusters[c as usize];
+        cluster.radius() >= DEEP_READ * (cluster.centre - p).length()
+    }
+
+    /// The radiance (normal 0) a link gathers from cluster `c` in direction `w`: its parts'
+    /// ([`Ctx::cluster_parts`]; [`ClusterLight::toward`], a root triangle's own), each by its
+    /// `share` of the receiver's view ([`Ctx::cluster_share`]). The cluster's own average weighs its
     /// triangles by their areas turned towards `w` alone, which is right from afar; from a
     /// receiver that sees one child closer, or square on, the other edge-on, that child
     /// brings more (a lit room's walls and ceiling gathered 0.3% too little from clusters of
@@ -999,14 +1049,18 @@ impl Ctx<'_> {
         cl: &[ClusterLight],
         c: u32,
         w: Vec3,
-        share: f32,
+        share: &[f32; READ_PARTS],
+        deep: bool,
     ) -> Vec3 {
         let radiance = |ch: ClusterChild| match ch {
             ClusterChild::Cluster(x) => cl[x as usize].toward(w),
             ClusterChild::Root(x) => self.source_radiance(x, &trees[x as usize], 0),
         };
-        let [a, b] = self.clusters.clusters[c as usize].children;
-        radiance(a) * share + radiance(b) * (1.0 - share)
+        let (parts, count) = self.cluster_parts(c, deep);
+        parts[..count]
+            .iter()
+            .zip(share)
+            .fold(Vec3::ZERO, |sum, (part, s)| sum + radiance(*part) * *s)
     }
 
     /// The radiance (normal 0) a link gathers from node `i` of root `r`'s tree, looking at the
@@ -1346,10 +1400,14 @@ impl Ctx<'_> {
                          k_start: u32,
                          visible: f32,
                          bend: f32| {
+            // The last pass's links read near clusters by their deeper parts
+            // ([`Ctx::reads_deep`]): an earlier pass's solve only judges where to refine, and
+            // reading them in every solve cost 15-20% of the scaling scene's bake.
+            let deep = last_pass && matches!(src, Source::Cluster(c) if self.reads_deep(c, rc));
             let (aim, share, facing, depth) = match src {
                 Source::Cluster(c) => (
                     self.leaving(c, rc),
-                    self.cluster_share(trees, c, rc, root.normal),
+                    self.cluster_share(trees, c, rc, root.normal, deep),
                     0,
                     0,
                 ),
@@ -1360,7 +1418,7 @@ impl Ctx<'_> {
                     } else {
                         self.kernel_centre(rc, root.normal, sk, st)
                     };
-                    (aim, 0.0, self.facing_normal(sk, rc), depth)
+                    (aim, [0.0; READ_PARTS], self.facing_normal(sk, rc), depth)
                 }
             };
             RawLink {
@@ -1368,6 +1426,7 @@ impl Ctx<'_> {
                 src,
                 aim,
                 share,
+                deep,
                 facing,
                 depth,
                 k_start,
@@ -2508,7 +2567,9 @@ impl Ctx<'_> {
         let mut g0_rest = vec![Vec3::ZERO; n * CORNERS];
         for link in &t.links {
             let ls = match link.src {
-                SrcIdx::Cluster(c) => self.cluster_seen(trees, cl, c, link.aim, link.share),
+                SrcIdx::Cluster(c) => {
+                    self.cluster_seen(trees, cl, c, link.aim, &link.share, link.deep)
+                }
                 SrcIdx::Node { root, node } => self.seen_radiance(
                     root,
                     &trees[root as usize],
@@ -2804,6 +2865,15 @@ const DIRECT_EDGE: f32 = 0.25;
 /// its distance ([`Ctx::cluster_form_factor`]).
 const CLUSTER_DISC_OPENING: f32 = 0.2;
 
+/// How many levels below a linked cluster its radiance is read apart ([`Ctx::cluster_seen`]),
+/// and so into how many parts at most.
+const READ_DEPTH: u32 = 2;
+const READ_PARTS: usize = 1 << READ_DEPTH;
+
+/// A cluster whose radius is at least this fraction of its distance from the receiver is read
+/// in parts ([`Ctx::reads_deep`]).
+const DEEP_READ: f32 = 0.25;
+
 /// Where a receiver's form factor is sampled for its slope: its corners moved a tenth of the
 /// way towards the centroid (a corner on an edge shared with the source sits where the kernel
 /// is steepest).
@@ -2816,6 +2886,35 @@ const ENCLOSURE_AZIMUTHS: u32 = 4;
 
 /// How many roots [`Ctx::boundary_closed`] casts its rays from.
 const BOUNDARY_PROBES: usize = 64;
+
+/// The parts of cluster `c` that a link to it reads apart ([`Ctx::cluster_seen`]): its
+/// descendants [`READ_DEPTH`] levels down, a root triangle met on the way standing for
+/// itself; and how many there are.
+fn read_parts(clusters: &ClusterTree, c: u32) -> ([ClusterChild; READ_PARTS], u8) {
+    let mut parts = [ClusterChild::Cluster(c); READ_PARTS];
+    let mut count = 1;
+    for _ in 0..READ_DEPTH {
+        let mut next = parts;
+        let mut n = 0;
+        for part in &parts[..count] {
+            match *part {
+                ClusterChild::Cluster(x) => {
+                    for ch in clusters.clusters[x as usize].children {
+                        next[n] = ch;
+                        n += 1;
+                    }
+                }
+                root => {
+                    next[n] = root;
+                    n += 1;
+                }
+            }
+        }
+        parts = next;
+        count = n;
+    }
+    (parts, count as u8)
+}
 
 /// Fixed directions over the hemisphere around unit normal `n`, `rings` × `azimuths` strata of
 /// equal cosine-weighted measure, ring by ring from the normal outwards: the sin² of each
@@ -3190,6 +3289,9 @@ pub fn bake_with_progress(
             e > 0 && e < ts.len()
         })
         .collect();
+    let read_parts = (0..clusters.clusters.len() as u32)
+        .map(|c| read_parts(&clusters, c))
+        .collect();
     // What casts shadows: every root, but a multiresolution object with an occluder of its
     // own ([`SolverObject::occluder`]) by that; each occluder triangle with its root.
     let (occ_tris, occ_owner, surface) = {
@@ -3263,6 +3365,7 @@ pub fn bake_with_progress(
         object_clusters,
         convex,
         mixes_emitters,
+        read_parts,
         cluster_object,
         boundary_closed: OnceLock::new(),
         unobstructed: roots
@@ -3404,6 +3507,7 @@ pub fn bake_with_progress(
                     },
                     aim: l.aim,
                     share: l.share,
+                    deep: l.deep,
                     facing: l.facing,
                     depth: l.depth,
                     k_start: l.k_start,

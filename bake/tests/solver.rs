@@ -630,12 +630,12 @@ fn progress_reports_every_phase_without_changing_the_result() {
 /// its ceiling, with an open-bottomed block on the floor, against the path tracer surface by
 /// surface (2^18 paths each, standard error under 0.15%). Every leaf of the room is closed in,
 /// so its form factors sum to one; what is left is the discretisation of the interreflected
-/// light at the default refinement, about 0.7% dark on the walls and ceiling (within 0.3% with
-/// `bf_epsilon` 3e-5 or `cluster_opening` 0.25). It is a cluster link reading its cluster's
-/// mean radiance where the receiver sees its brighter part most: the power the surfaces send
-/// through their links falls 0.6% short of what they reflect (BENCHMARKS.md, fifteenth and
-/// sixteenth rounds). The bound holds what the solver achieves, so that a leak of light or a
-/// double count (the ceiling behind the lamp) shows.
+/// light at the default refinement: 0.7% dark on the walls and ceiling while a cluster link
+/// read its cluster's mean radiance where the receiver sees its brighter part most, about
+/// 0.4% now that near clusters are read by parts (within 0.3% with `bf_epsilon` 3e-5 or
+/// `cluster_opening` 0.25; BENCHMARKS.md, fifteenth and sixteenth rounds). The bound holds
+/// what the solver achieves, so that a leak of light or a double count (the ceiling behind
+/// the lamp) shows.
 #[test]
 fn a_lit_closed_room_agrees_with_the_path_tracer() {
     let size = Vec3::new(6.0, 3.0, 6.0);
@@ -703,6 +703,6 @@ fn a_lit_closed_room_agrees_with_the_path_tracer() {
             sum / area,
             100.0 * err
         );
-        assert!(err.abs() < 0.015, "{}: {:+.2}% off", o.name, 100.0 * err);
+        assert!(err.abs() < 0.01, "{}: {:+.2}% off", o.name, 100.0 * err);
     }
 }
