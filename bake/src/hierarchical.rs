@@ -2514,7 +2514,7 @@ impl Ctx<'_> {
             for (x, &k) in ks.iter().enumerate() {
                 ff[base + x] += k;
             }
-            if matches!(link.src, SrcIdx::Node { root, .. } if self.is_light(root)) {
+            if self.brings_light(link) {
                 for (x, &k) in ks.iter().enumerate() {
                     ff_lit[base + x] += k;
                 }
@@ -2522,18 +2522,18 @@ impl Ctx<'_> {
         }
         push_linear(t, &mut ff, nn);
         push_linear(t, &mut ff_lit, nn);
-        let mean = |v: &[f32], i: usize, j: usize| {
-            (v[(i * CORNERS) * nn + j]
-                + v[(i * CORNERS + 1) * nn + j]
-                + v[(i * CORNERS + 2) * nn + j])
-                / 3.0
-        };
         (0..n * nn)
             .map(|x| {
                 let (i, j) = (x / nn, x % nn);
-                [mean(&ff, i, j), mean(&ff_lit, i, j)]
+                [corner_mean(&ff, i, j, nn), corner_mean(&ff_lit, i, j, nn)]
             })
             .collect()
+    }
+
+    /// Whether `link` brings a light's own light: its source is an element of a light
+    /// ([`Ctx::is_light`]).
+    fn brings_light(&self, link: &Link) -> bool {
+        matches!(link.src, SrcIdx::Node { root, .. } if self.is_light(root))
     }
 
     /// One Jacobi step for root `r`: its nodes' new radiance from what its links gather from
@@ -2583,10 +2583,7 @@ impl Ctx<'_> {
             for (x, &k) in ks.iter().enumerate() {
                 q[base + x] += ls * k;
             }
-            let from_light = match link.src {
-                SrcIdx::Node { root, .. } => self.is_light(root),
-                SrcIdx::Cluster(_) => false,
-            };
+            let from_light = self.brings_light(link);
             if from_light {
                 for (x, &k) in ks.iter().enumerate() {
                     lit[base + x] += ls * k;
@@ -2605,19 +2602,13 @@ impl Ctx<'_> {
         push_linear(t, &mut g0, 1);
         push_linear(t, &mut g0_rest, 1);
         // What each leaf gathers: the mean of its linear function, the value at its centroid.
-        let mean = |v: &[Vec3], i: usize, j: usize, nn: usize| {
-            (v[(i * CORNERS) * nn + j]
-                + v[(i * CORNERS + 1) * nn + j]
-                + v[(i * CORNERS + 2) * nn + j])
-                / 3.0
-        };
         let mut q_leaf = vec![Vec3::ZERO; n * nn];
         for i in 0..n {
             if t.child[i] != u32::MAX {
                 continue;
             }
             for j in 0..nn {
-                q_leaf[i * nn + j] = mean(&q, i, j, nn);
+                q_leaf[i * nn + j] = corner_mean(&q, i, j, nn);
             }
             // A refined patch gathers its own radiance where it sees itself.
             let closure = t.closure.get(i).copied();
@@ -2659,7 +2650,7 @@ impl Ctx<'_> {
                 };
                 for j in 0..nn {
                     let at = i * nn + j;
-                    let fixed = mean(&lit, i, j, nn);
+                    let fixed = corner_mean(&lit, i, j, nn);
                     let from_lights = ff_lit(j);
                     let seen = ff(j) - from_lights + view(j);
                     let due = (enclosed - from_lights).max(0.0);
@@ -2966,6 +2957,19 @@ fn linear_over_receiver(mean: &[f32], at: [f32; CORNERS]) -> Vec<f32> {
         }
     }
     out
+}
+
+/// The mean over node `i`'s corners of value `j` of `v`, which holds `width` values per corner
+/// of every node, corner-major (`v[(i * CORNERS + corner) * width + j]`): what a leaf gathers
+/// from a linear function, its value at the centroid.
+fn corner_mean<T>(v: &[T], i: usize, j: usize, width: usize) -> T
+where
+    T: Copy + std::ops::Add<Output = T> + std::ops::Div<f32, Output = T>,
+{
+    (v[(i * CORNERS) * width + j]
+        + v[(i * CORNERS + 1) * width + j]
+        + v[(i * CORNERS + 2) * width + j])
+        / 3.0
 }
 
 /// Push: every node of `t` receives what its ancestors gathered (breadth-first order puts
