@@ -10,7 +10,7 @@
 //! * Padrón et al. Hierarchical radiosity for multiresolution systems based on normal tests,
 //!   2010 (the representative normals whose colours are fitted).
 //!
-//! Two steps, both linear in the stored colours:
+//! Three steps, the first two linear in the stored colours:
 //!
 //! * **A fit over normals at every leaf corner**, per object: the `n` colours `B_j` of a tree
 //!   node, stored for its coarse triangle's representative normals `n_j` (Padrón et al.,
@@ -33,6 +33,15 @@
 //!   interpolated along that edge, so the field is continuous everywhere (Cohen & Wallace,
 //!   "Radiosity and Realistic Image Synthesis", 1993, section 9.2: nodal averaging and
 //!   T-vertices).
+//! * **One correction towards the leaves' colours**: a leaf's colour is the mean of the light
+//!   over its area, and the fit at a point a mean of such means, so the interpolated field is
+//!   blurred over about two leaves (a penumbra as wide as the leaves drawn twice as wide, a
+//!   room's corner taking the mean of leaves whose centres lie on one side). Every point's
+//!   constant term moves by the weighted mean of its leaves' residuals (a leaf's colour less
+//!   the mean of its corners' models), kept between the colours around it; the T-vertices are
+//!   then resolved again. It is the first step of van Cittert's iterative deconvolution
+//!   (P. H. van Cittert, Zeitschrift für Physik, 1931), limited as slope limiters are: where the fit already reproduces the field, constant (a closed furnace) or linear inside
+//!   a regular grid of leaves, the residuals are zero.
 //!
 //! A refined vertex with unit normal `n` at lattice point `p` of coarse triangle `t` then gets
 //! `max(0, c(p) + G(p) n)`, evaluated per channel. The corner models are computed once per
@@ -284,7 +293,14 @@ struct Leaf {
     /// Index of the leaf's first corner point in the point list (three consecutive slots of
     /// `corner_points`).
     corners: [usize; 3],
+    /// Its samples' weight (its area weight over their count) and where they start in the
+    /// table's sample list, and how many it has (G.3).
+    sample_weight: f64,
+    samples: (usize, usize),
 }
+
+/// One sample of a leaf (G.3): a normal and the colour stored for it, in `f64`.
+type Sample = ([f64; 3], [f64; 3]);
 
 impl LightingTable {
     /// Builds the table of `object` (SPEC.md G.2 to G.4).
@@ -304,6 +320,7 @@ impl LightingTable {
         let mut point_index: HashMap<PointKey, usize> = HashMap::new();
         let mut moments: Vec<Moments> = Vec::new();
         let mut leaves: Vec<Leaf> = Vec::new();
+        let mut samples_of: Vec<Sample> = Vec::new();
         let mut node_start = Vec::with_capacity(object.triangles.len());
         let mut nodes: Vec<u32> = Vec::new();
         let too_large = |t: usize, what: &str| LightingError::Record {
@@ -343,6 +360,7 @@ impl LightingTable {
                     continue;
                 }
                 let w = area / (1u64 << (2 * info.depth)) as f64;
+                let samples = if gouraud { 1 } else { nc };
                 let mut corners = [0usize; 3];
                 for (slot, p) in corners.iter_mut().zip(cell.corners()) {
                     let key = surface.key(t, p[0], p[1]);
@@ -350,10 +368,16 @@ impl LightingTable {
                         moments.push(Moments::default());
                         moments.len() - 1
                     });
-                    let samples = if gouraud { 1 } else { nc };
                     moments[i].add(w, &normals[..samples], &colours[k * nc..k * nc + samples]);
                     *slot = i;
                 }
+                let first_sample = samples_of.len();
+                samples_of.extend((0..samples).map(|j| {
+                    (
+                        normals[j].map(f64::from),
+                        rgb9e5::decode(colours[k * nc + j]).map(f64::from),
+                    )
+                }));
                 nodes.push(
                     LEAF | u32::try_from(leaves.len())
                         .ok()
@@ -365,29 +389,20 @@ impl LightingTable {
                     depth: info.depth,
                     cell,
                     corners,
+                    sample_weight: w / samples as f64,
+                    samples: (first_sample, samples),
                 });
             }
         }
         let flat = gouraud || object.kind == ObjectKind::Flat;
         let mut values: Vec<[f64; MODEL_FLOATS]> = moments.iter().map(|m| m.fit(flat)).collect();
-        // T-vertices: from the largest leaves down, a corner of smaller leaves inside a leaf's
-        // edge takes the value interpolated along that edge.
         let mut order: Vec<usize> = (0..leaves.len()).collect();
         order.sort_by_key(|&i| leaves[i].depth);
-        for &i in &order {
-            let leaf = &leaves[i];
-            let pts = leaf.cell.corners();
-            for e in 0..3 {
-                let (a, b) = (e, (e + 1) % 3);
-                resolve_edge(
-                    &surface,
-                    &point_index,
-                    &mut values,
-                    leaf.triangle as usize,
-                    (pts[a], leaf.corners[a]),
-                    (pts[b], leaf.corners[b]),
-                );
-            }
+        resolve_t_vertices(&surface, &point_index, &leaves, &order, &mut values);
+        // Gouraud, classic radiosity shading for comparison, keeps the corner means.
+        if !gouraud {
+            correct(&leaves, &samples_of, &moments, &mut values);
+            resolve_t_vertices(&surface, &point_index, &leaves, &order, &mut values);
         }
         let too_many = |what: &str| LightingError::Record {
             object: object.name.clone(),
@@ -475,6 +490,84 @@ fn eval_model(m: &[f32], n: [f32; 3]) -> [f32; 3] {
 
 /// Gives the corners of smaller leaves that lie inside the segment from `a` to `b` (a leaf edge
 /// of triangle `t`) the values interpolated along it.
+/// The T-vertex step of G.3: from the largest leaves down (`order`), a corner of smaller leaves
+/// inside a leaf's edge takes the model interpolated along that edge.
+fn resolve_t_vertices(
+    surface: &Surface,
+    index: &HashMap<PointKey, usize>,
+    leaves: &[Leaf],
+    order: &[usize],
+    values: &mut [[f64; MODEL_FLOATS]],
+) {
+    for &i in order {
+        let leaf = &leaves[i];
+        let pts = leaf.cell.corners();
+        for e in 0..3 {
+            let (a, b) = (e, (e + 1) % 3);
+            resolve_edge(
+                surface,
+                index,
+                values,
+                leaf.triangle as usize,
+                (pts[a], leaf.corners[a]),
+                (pts[b], leaf.corners[b]),
+            );
+        }
+    }
+}
+
+/// Model `v`'s channel `ch` for normal `n`, `c + ((g.x n.x + g.y n.y) + g.z n.z)` in `f64`.
+fn model_at(v: &[f64; MODEL_FLOATS], n: [f64; 3], ch: usize) -> f64 {
+    let g = &v[3 + 3 * ch..6 + 3 * ch];
+    v[ch] + ((g[0] * n[0] + g[1] * n[1]) + g[2] * n[2])
+}
+
+/// The correction step of G.3: every point's constant term moves by the weighted mean of its
+/// leaves' residuals (a sample's colour less the mean of its leaf's corner models for its
+/// normal), limited so that the point's model at its mean normal stays between the least and
+/// greatest colour of its samples. The fit is a mean of area means, so a field drawn from it is
+/// blurred over about two leaves: a penumbra as wide as the leaves came out twice as wide (the
+/// floor under a teapot 2.3 times as bright as a path tracer's in its umbra, in direct light
+/// alone), and a point on a room's corner took the mean of leaves whose centres lie on one side
+/// (BENCHMARKS.md, seventeenth round). All residuals are found before any model moves.
+fn correct(
+    leaves: &[Leaf],
+    samples: &[Sample],
+    moments: &[Moments],
+    values: &mut [[f64; MODEL_FLOATS]],
+) {
+    let n = values.len();
+    let mut sum = vec![[0.0f64; 3]; n];
+    let mut lo = vec![[f64::INFINITY; 3]; n];
+    let mut hi = vec![[f64::NEG_INFINITY; 3]; n];
+    for leaf in leaves {
+        let (first, count) = leaf.samples;
+        for &(normal, colour) in &samples[first..first + count] {
+            for ch in 0..3 {
+                let [m0, m1, m2] = leaf.corners.map(|c| model_at(&values[c], normal, ch));
+                let residual = colour[ch] - (m0 + m1 + m2) / 3.0;
+                for &c in &leaf.corners {
+                    sum[c][ch] += leaf.sample_weight * residual;
+                    lo[c][ch] = lo[c][ch].min(colour[ch]);
+                    hi[c][ch] = hi[c][ch].max(colour[ch]);
+                }
+            }
+        }
+    }
+    for (p, value) in values.iter_mut().enumerate() {
+        let w = moments[p].w;
+        if w <= 0.0 {
+            continue;
+        }
+        let nbar = moments[p].n.map(|x| x / w);
+        for ch in 0..3 {
+            let v = model_at(value, nbar, ch);
+            let delta = (sum[p][ch] / w).clamp(lo[p][ch] - v, hi[p][ch] - v);
+            value[ch] += delta;
+        }
+    }
+}
+
 fn resolve_edge(
     surface: &Surface,
     index: &HashMap<PointKey, usize>,

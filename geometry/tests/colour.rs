@@ -217,13 +217,15 @@ fn vertex_at(r: &Refined, p: [f32; 2]) -> usize {
 fn smooth_field_averages_leaf_corners_and_interpolates_t_vertices() {
     // The Appendix D tree on the unit right triangle (v0 at the origin, v1 = (1,0), v2 = (0,1)):
     // Top, Left, Right leaves of depth 1 (nodes 1, 2, 4); Center split into leaves 5..8. One
-    // normal per triangle, so the field is the nodal average of the red channel k / 8.
+    // normal per triangle, so the fit is the nodal average of the red channel k / 8, which the
+    // correction (G.3) then moves by the mean of its leaves' residuals.
     let c = example::single_triangle();
     let o = &c.objects[0];
     assert_eq!(o.triangles[0].normal_count, 1);
     let red = |k: f64| k / 8.0;
     let (big, small) = (0.25, 0.0625);
-    // Corner points: the coarse corners lie in one leaf each.
+    // Corner points: the coarse corners lie in one leaf each, whose residual the limit to
+    // the colours there (that leaf's alone) takes away.
     let v0 = red(1.0);
     let v1 = red(2.0);
     let v2 = red(4.0);
@@ -231,6 +233,27 @@ fn smooth_field_averages_leaf_corners_and_interpolates_t_vertices() {
     let m01 = (big * red(1.0) + big * red(2.0) + small * red(8.0)) / (2.0 * big + small);
     let m12 = (big * red(2.0) + big * red(4.0) + small * red(5.0)) / (2.0 * big + small);
     let m20 = (big * red(1.0) + big * red(4.0) + small * red(6.0)) / (2.0 * big + small);
+    // The T-vertices inside the big leaves' inner edges (Top's, Left's, Right's).
+    let (tt, tl, tr) = (0.5 * (m01 + m20), 0.5 * (m01 + m12), 0.5 * (m20 + m12));
+    // Each leaf's residual: its colour less the mean of its corners' models.
+    let r1 = red(1.0) - (v0 + m01 + m20) / 3.0;
+    let r2 = red(2.0) - (m01 + v1 + m12) / 3.0;
+    let r4 = red(4.0) - (m20 + m12 + v2) / 3.0;
+    let r5 = red(5.0) - (m12 + tr + tl) / 3.0;
+    let r6 = red(6.0) - (tr + m20 + tt) / 3.0;
+    let r8 = red(8.0) - (tl + tt + m01) / 3.0;
+    // A point moves by the weighted mean of its leaves' residuals, kept between their colours.
+    let moved = |v: f64, r: [f64; 3], k: [f64; 3]| {
+        let mean = (big * r[0] + big * r[1] + small * r[2]) / (2.0 * big + small);
+        let (lo, hi) = (
+            k.iter().copied().map(red).fold(1.0, f64::min),
+            k.iter().copied().map(red).fold(0.0, f64::max),
+        );
+        v + mean.clamp(lo - v, hi - v)
+    };
+    let m01 = moved(m01, [r1, r2, r8], [1.0, 2.0, 8.0]);
+    let m12 = moved(m12, [r2, r4, r5], [2.0, 4.0, 5.0]);
+    let m20 = moved(m20, [r1, r4, r6], [1.0, 4.0, 6.0]);
     for level in 1..=4 {
         let r = subdivide(&o.mesh, level).unwrap();
         let rgb = apply_baked_colours(o, &r, level).unwrap();
@@ -385,4 +408,100 @@ fn gouraud_draws_the_geometric_normals_colours_without_slopes() {
     }
     assert_ne!(gouraud, apply_baked_colours(o, &r, 2).unwrap());
     assert_eq!("gouraud".parse(), Ok(Reconstruction::Gouraud));
+}
+
+#[test]
+fn correction_sharpens_a_penumbra_and_stays_within_the_colours_around() {
+    // A full tree of depth 4 on the unit right triangle, its leaves holding the mean over their
+    // area of a penumbra: bright left of x = 0.3, dim right of x = 0.45, linear between (about
+    // two leaves wide). The fit alone is the mean of the leaves at each corner; the correction
+    // (G.3) must bring every leaf's drawn mean (the mean of its corners' values: the field is
+    // linear over it) closer to its colour, and draw nothing brighter or darker than the leaves
+    // around a point.
+    use hce_format::ObjectKind;
+    use hce_geometry::lattice::LatticeTriangle;
+    use std::collections::HashMap;
+    const DEPTH: u32 = 4;
+    let (bright, dim) = (1.0f32, 0.125f32);
+    for kind in [ObjectKind::Flat, ObjectKind::Multiresolution] {
+        let mut c = example::single_triangle();
+        let o = &mut c.objects[0];
+        o.kind = kind;
+        let mut flags = Vec::new();
+        let mut cells = vec![LatticeTriangle::root(4096)];
+        let mut leaves = Vec::new();
+        for d in 0..=DEPTH {
+            let mut next = Vec::new();
+            for &cell in &cells {
+                flags.push(d < DEPTH);
+                if d < DEPTH {
+                    next.extend((0..4).map(|c| cell.child(c)));
+                } else {
+                    leaves.push(cell);
+                }
+            }
+            if d < DEPTH {
+                cells = next;
+            }
+        }
+        let (bits, bit_len) = encode_tree(&flags).unwrap();
+        o.bits = bits;
+        o.bit_len = bit_len;
+        let light = |x: f32| {
+            let t = ((x / 4096.0 - 0.3) / 0.15).clamp(0.0, 1.0);
+            bright + (dim - bright) * t
+        };
+        // The mean over the leaf, from a barycentric grid of 45 points.
+        let colour_of = |cell: &LatticeTriangle| {
+            let [a, b, c] = cell.corners().map(|p| p[0] as f32);
+            let mut sum = 0.0;
+            let mut count = 0.0;
+            for i in 0..9 {
+                for j in 0..9 - i {
+                    let (u, v) = ((i as f32 + 1.0 / 3.0) / 9.0, (j as f32 + 1.0 / 3.0) / 9.0);
+                    sum += light(a + (b - a) * u + (c - a) * v);
+                    count += 1.0;
+                }
+            }
+            sum / count
+        };
+        let inner = flags.len() - leaves.len();
+        o.colours = (0..inner)
+            .map(|_| rgb9e5::encode([0.5, 0.5, 0.5]))
+            .chain(leaves.iter().map(|l| rgb9e5::encode([colour_of(l); 3])))
+            .collect();
+        let table = LightingTable::build(o).unwrap();
+        let normal = o.normals[0];
+        let drawn = |p: [i32; 2]| table.evaluate(0, p[0] as u32 * 16, p[1] as u32 * 16, normal)[0];
+        // The fit alone: every leaf has the same area, so a corner's value is its leaves' mean.
+        let mut around: HashMap<[i32; 2], Vec<f32>> = HashMap::new();
+        for l in &leaves {
+            for p in l.corners() {
+                around.entry(p).or_default().push(colour_of(l));
+            }
+        }
+        let fitted = |p: [i32; 2]| around[&p].iter().sum::<f32>() / around[&p].len() as f32;
+        let (mut before, mut after) = (0.0f64, 0.0f64);
+        for l in &leaves {
+            let mean =
+                |f: &dyn Fn([i32; 2]) -> f32| l.corners().iter().map(|&p| f(p)).sum::<f32>() / 3.0;
+            before += f64::from(mean(&fitted) - colour_of(l)).powi(2);
+            after += f64::from(mean(&drawn) - colour_of(l)).powi(2);
+        }
+        assert!(before > 0.0, "{kind:?}: the penumbra must blur");
+        assert!(
+            after < 0.5 * before,
+            "{kind:?}: drawn leaf means {after:.5} from their colours, the fit alone {before:.5}"
+        );
+        for (p, colours) in &around {
+            let (lo, hi) = colours
+                .iter()
+                .fold((f32::MAX, f32::MIN), |(a, b), &c| (a.min(c), b.max(c)));
+            let v = drawn(*p);
+            assert!(
+                v >= lo * (1.0 - 1e-5) && v <= hi * (1.0 + 1e-5),
+                "{kind:?}: point {p:?} draws {v}, its leaves hold {lo} to {hi}"
+            );
+        }
+    }
 }

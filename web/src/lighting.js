@@ -1,8 +1,8 @@
 // The lighting table of the smooth reconstruction (SPEC.md Appendix G), a port of
 // geometry/src/lighting.rs `LightingTable::build_with` and `to_words`: per leaf corner point
 // one linear model of colour over normals, fitted to the samples of every leaf meeting there,
-// T-vertices resolved, in the word layout `hce_light.wgsl` reads. Fits in f64, rounded once to
-// f32, as G.3 says.
+// T-vertices resolved, corrected once towards the leaves' colours, T-vertices resolved again,
+// in the word layout `hce_light.wgsl` reads. Fits in f64, rounded once to f32, as G.3 says.
 import { coarseNormalArea, cornerGroups, joinedSides } from './topology.js';
 
 /** @typedef {import('./container.js').HceObject} HceObject */
@@ -153,6 +153,54 @@ function child(cell, c) {
 }
 
 /**
+ * Model `v`'s channel `ch` for normal `n` (lighting.rs `model_at`).
+ * @param {number[]} v @param {number[]} n @param {number} ch
+ */
+const modelAt = (v, n, ch) => v[ch] + ((v[3 + 3 * ch] * n[0] + v[4 + 3 * ch] * n[1]) + v[5 + 3 * ch] * n[2]);
+
+/**
+ * The correction step of G.3 (lighting.rs `correct`): every point's constant term moves by the
+ * weighted mean of its leaves' residuals, limited so that its model at its mean normal stays
+ * between the least and greatest colour of its samples; all residuals found first.
+ * @param {{ corners: number[], sampleWeight: number, sampleAt: number, sampleCount: number }[]} leaves
+ * @param {number[]} normals three per sample
+ * @param {number[]} colours three per sample
+ * @param {Moments[]} moments
+ * @param {number[][]} values
+ */
+function correct(leaves, normals, colours, moments, values) {
+  const n = values.length;
+  const sum = new Float64Array(3 * n);
+  const lo = new Float64Array(3 * n).fill(Infinity);
+  const hi = new Float64Array(3 * n).fill(-Infinity);
+  for (const leaf of leaves) {
+    for (let j = leaf.sampleAt; j < leaf.sampleAt + leaf.sampleCount; j++) {
+      const normal = normals.slice(3 * j, 3 * j + 3);
+      const colour = colours.slice(3 * j, 3 * j + 3);
+      for (let ch = 0; ch < 3; ch++) {
+        const [m0, m1, m2] = leaf.corners.map((c) => modelAt(values[c], normal, ch));
+        const residual = colour[ch] - (m0 + m1 + m2) / 3;
+        for (const c of leaf.corners) {
+          sum[3 * c + ch] += leaf.sampleWeight * residual;
+          lo[3 * c + ch] = Math.min(lo[3 * c + ch], colour[ch]);
+          hi[3 * c + ch] = Math.max(hi[3 * c + ch], colour[ch]);
+        }
+      }
+    }
+  }
+  for (let p = 0; p < n; p++) {
+    const w = moments[p].w;
+    if (!(w > 0)) continue;
+    const nbar = moments[p].n.map((x) => x / w);
+    for (let ch = 0; ch < 3; ch++) {
+      const v = modelAt(values[p], nbar, ch);
+      const delta = Math.min(Math.max(sum[3 * p + ch] / w, lo[3 * p + ch] - v), hi[3 * p + ch] - v);
+      values[p][ch] += delta;
+    }
+  }
+}
+
+/**
  * The `hce_light` words of `hce_light.wgsl` for `object` (`LightingTable::build_with` then
  * `to_words`). `gouraud` builds the table of the geometric normals' colours without slopes.
  * @param {HceObject} o an object that passed tables.js
@@ -166,8 +214,13 @@ export function lightingWords(o, options = {}) {
   const pointIndex = new Map();
   /** @type {Moments[]} */
   const moments = [];
-  /** @type {{ triangle: number, depth: number, cell: number[], corners: number[] }[]} */
+  /** @type {{ triangle: number, depth: number, cell: number[], corners: number[], sampleWeight: number, sampleAt: number, sampleCount: number }[]} */
   const leaves = [];
+  // Every leaf's samples (G.3), three numbers each: the normals and the decoded colours.
+  /** @type {number[]} */
+  const sampleNormals = [];
+  /** @type {number[]} */
+  const sampleColours = [];
   const F = o.records.length / 4;
   const nodeStart = new Uint32Array(F);
   /** @type {number[]} */
@@ -218,7 +271,12 @@ export function lightingWords(o, options = {}) {
         slots.push(index);
       }
       nodes.push((LEAF | leaves.length) >>> 0);
-      leaves.push({ triangle: t, depth, cell, corners: slots });
+      const sampleAt = sampleNormals.length / 3;
+      for (let j = 0; j < samples; j++) {
+        sampleNormals.push(normals[3 * j], normals[3 * j + 1], normals[3 * j + 2]);
+        sampleColours.push(...rgb9e5(colours[j]));
+      }
+      leaves.push({ triangle: t, depth, cell, corners: slots, sampleWeight: w / samples, sampleAt, sampleCount: samples });
     }
   }
   const flat = gouraud || o.kind === 'flat';
@@ -241,13 +299,21 @@ export function lightingWords(o, options = {}) {
     resolve(t, pa, ia, pm, im);
     resolve(t, pm, im, pb, ib);
   };
-  for (const i of order) {
-    const leaf = leaves[i];
-    const pts = corners(leaf.cell);
-    for (let e = 0; e < 3; e++) {
-      const b = (e + 1) % 3;
-      resolve(leaf.triangle, pts[e], leaf.corners[e], pts[b], leaf.corners[b]);
+  const resolveTVertices = () => {
+    for (const i of order) {
+      const leaf = leaves[i];
+      const pts = corners(leaf.cell);
+      for (let e = 0; e < 3; e++) {
+        const b = (e + 1) % 3;
+        resolve(leaf.triangle, pts[e], leaf.corners[e], pts[b], leaf.corners[b]);
+      }
     }
+  };
+  resolveTVertices();
+  // Gouraud, classic radiosity shading for comparison, keeps the corner means.
+  if (!gouraud) {
+    correct(leaves, sampleNormals, sampleColours, moments, values);
+    resolveTVertices();
   }
   const nodesAt = 2 + F;
   const pointsAt = nodesAt + nodes.length;
