@@ -174,16 +174,17 @@ function correct(leaves, normals, colours, moments, values) {
   const lo = new Float64Array(3 * n).fill(Infinity);
   const hi = new Float64Array(3 * n).fill(-Infinity);
   for (const leaf of leaves) {
+    const [c0, c1, c2] = leaf.corners;
     for (let j = leaf.sampleAt; j < leaf.sampleAt + leaf.sampleCount; j++) {
       const normal = normals.slice(3 * j, 3 * j + 3);
-      const colour = colours.slice(3 * j, 3 * j + 3);
       for (let ch = 0; ch < 3; ch++) {
-        const [m0, m1, m2] = leaf.corners.map((c) => modelAt(values[c], normal, ch));
-        const residual = colour[ch] - (m0 + m1 + m2) / 3;
+        const colour = colours[3 * j + ch];
+        const m = modelAt(values[c0], normal, ch) + modelAt(values[c1], normal, ch) + modelAt(values[c2], normal, ch);
+        const residual = colour - m / 3;
         for (const c of leaf.corners) {
           sum[3 * c + ch] += leaf.sampleWeight * residual;
-          lo[3 * c + ch] = Math.min(lo[3 * c + ch], colour[ch]);
-          hi[3 * c + ch] = Math.max(hi[3 * c + ch], colour[ch]);
+          lo[3 * c + ch] = Math.min(lo[3 * c + ch], colour);
+          hi[3 * c + ch] = Math.max(hi[3 * c + ch], colour);
         }
       }
     }
