@@ -40,8 +40,9 @@
 //!   constant term moves by the weighted mean of its leaves' residuals (a leaf's colour less
 //!   the mean of its corners' models), kept between the colours around it; the T-vertices are
 //!   then resolved again. It is the first step of van Cittert's iterative deconvolution
-//!   (P. H. van Cittert, Zeitschrift für Physik, 1931), limited as slope limiters are: where the fit already reproduces the field, constant (a closed furnace) or linear inside
-//!   a regular grid of leaves, the residuals are zero.
+//!   (P. H. van Cittert, Zeitschrift für Physik, 1931), limited as slope limiters are: where
+//!   the fit already reproduces the field, constant (a closed furnace) or linear inside a
+//!   regular grid of leaves, the residuals are zero.
 //!
 //! A refined vertex with unit normal `n` at lattice point `p` of coarse triangle `t` then gets
 //! `max(0, c(p) + G(p) n)`, evaluated per channel. The corner models are computed once per
@@ -361,16 +362,6 @@ impl LightingTable {
                 }
                 let w = area / (1u64 << (2 * info.depth)) as f64;
                 let samples = if gouraud { 1 } else { nc };
-                let mut corners = [0usize; 3];
-                for (slot, p) in corners.iter_mut().zip(cell.corners()) {
-                    let key = surface.key(t, p[0], p[1]);
-                    let i = *point_index.entry(key).or_insert_with(|| {
-                        moments.push(Moments::default());
-                        moments.len() - 1
-                    });
-                    moments[i].add(w, &normals[..samples], &colours[k * nc..k * nc + samples]);
-                    *slot = i;
-                }
                 let first_sample = samples_of.len();
                 samples_of.extend((0..samples).map(|j| {
                     (
@@ -378,6 +369,17 @@ impl LightingTable {
                         rgb9e5::decode(colours[k * nc + j]).map(f64::from),
                     )
                 }));
+                let own = &samples_of[first_sample..];
+                let mut corners = [0usize; 3];
+                for (slot, p) in corners.iter_mut().zip(cell.corners()) {
+                    let key = surface.key(t, p[0], p[1]);
+                    let i = *point_index.entry(key).or_insert_with(|| {
+                        moments.push(Moments::default());
+                        moments.len() - 1
+                    });
+                    moments[i].add(w, own);
+                    *slot = i;
+                }
                 nodes.push(
                     LEAF | u32::try_from(leaves.len())
                         .ok()
@@ -488,8 +490,6 @@ fn eval_model(m: &[f32], n: [f32; 3]) -> [f32; 3] {
     })
 }
 
-/// Gives the corners of smaller leaves that lie inside the segment from `a` to `b` (a leaf edge
-/// of triangle `t`) the values interpolated along it.
 /// The T-vertex step of G.3: from the largest leaves down (`order`), a corner of smaller leaves
 /// inside a leaf's edge takes the model interpolated along that edge.
 fn resolve_t_vertices(
@@ -568,6 +568,8 @@ fn correct(
     }
 }
 
+/// Gives the corners of smaller leaves that lie inside the segment from `a` to `b` (a leaf edge
+/// of triangle `t`) the values interpolated along it.
 fn resolve_edge(
     surface: &Surface,
     index: &HashMap<PointKey, usize>,
@@ -602,13 +604,12 @@ struct Moments {
 }
 
 impl Moments {
-    /// Adds a leaf of area weight `w` with one colour per normal of its triangle's set: each
-    /// sample weighs `w / normals.len()`, so a leaf counts by its area alone.
-    fn add(&mut self, w: f64, normals: &[[f32; 3]], colours: &[u32]) {
-        let ws = w / normals.len() as f64;
-        for (n, &packed) in normals.iter().zip(colours) {
-            let n = n.map(f64::from);
-            let rgb = rgb9e5::decode(packed).map(f64::from);
+    /// Adds a leaf of area weight `w` with its samples, one colour per normal of its
+    /// triangle's set: each sample weighs `w / samples.len()`, so a leaf counts by its area
+    /// alone.
+    fn add(&mut self, w: f64, samples: &[Sample]) {
+        let ws = w / samples.len() as f64;
+        for &(n, rgb) in samples {
             self.w += ws;
             for a in 0..3 {
                 self.n[a] += ws * n[a];

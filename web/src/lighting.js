@@ -75,16 +75,19 @@ class Moments {
   }
 
   /**
+   * Adds a leaf of area weight `w` with its samples (lighting.rs `Moments::add`): each weighs
+   * `w / count`, so a leaf counts by its area alone.
    * @param {number} w the leaf's area weight
-   * @param {Float32Array} normals x, y, z per normal
-   * @param {Uint32Array} colours one per normal
-   * @param {number} samples how many of them
+   * @param {number[]} normals x, y, z per sample
+   * @param {number[]} colours decoded r, g, b per sample
+   * @param {number} at the leaf's first sample
+   * @param {number} count how many it has
    */
-  add(w, normals, colours, samples, all = samples) {
-    const ws = w / all;
-    for (let j = 0; j < samples; j++) {
+  add(w, normals, colours, at, count) {
+    const ws = w / count;
+    for (let j = at; j < at + count; j++) {
       const n = [normals[3 * j], normals[3 * j + 1], normals[3 * j + 2]];
-      const rgb = rgb9e5(colours[j]);
+      const rgb = [colours[3 * j], colours[3 * j + 1], colours[3 * j + 2]];
       this.w += ws;
       for (let a = 0; a < 3; a++) {
         this.n[a] += ws * n[a];
@@ -260,6 +263,11 @@ export function lightingWords(o, options = {}) {
       const slots = [];
       const samples = gouraud ? 1 : nc;
       const colours = o.colours.subarray(colourStart + k * nc, colourStart + k * nc + nc);
+      const sampleAt = sampleNormals.length / 3;
+      for (let j = 0; j < samples; j++) {
+        sampleNormals.push(normals[3 * j], normals[3 * j + 1], normals[3 * j + 2]);
+        sampleColours.push(...rgb9e5(colours[j]));
+      }
       for (const p of corners(cell)) {
         const id = key(t, p[0], p[1]);
         let index = pointIndex.get(id);
@@ -268,15 +276,10 @@ export function lightingWords(o, options = {}) {
           pointIndex.set(id, index);
           moments.push(new Moments());
         }
-        moments[index].add(w, normals, colours, samples);
+        moments[index].add(w, sampleNormals, sampleColours, sampleAt, samples);
         slots.push(index);
       }
       nodes.push((LEAF | leaves.length) >>> 0);
-      const sampleAt = sampleNormals.length / 3;
-      for (let j = 0; j < samples; j++) {
-        sampleNormals.push(normals[3 * j], normals[3 * j + 1], normals[3 * j + 2]);
-        sampleColours.push(...rgb9e5(colours[j]));
-      }
       leaves.push({ triangle: t, depth, cell, corners: slots, sampleWeight: w / samples, sampleAt, sampleCount: samples });
     }
   }
