@@ -301,7 +301,12 @@ mod gpu {
             .iter()
             .position(|o| o.kind() == ObjectKind::Flat)
             .unwrap();
-        let depth = asset.objects[flat].tree_depth.min(options.flat_max_level);
+        let depth = hce_runtime::gpu::flat_level(
+            asset.objects[flat].tree_depth,
+            asset.objects[flat].object.triangles.len() as u64,
+            options.flat_max_level,
+            options.flat_max_triangles,
+        );
         let levels = scene
             .refine_all(ctx, &hce_runtime::gpu::LevelChoice::Fixed(1))
             .unwrap();

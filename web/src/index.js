@@ -7,7 +7,7 @@ export { lightingWords, rgb9e5 } from './lighting.js';
 export { fetchWgsl, KernelSources, WgShape, WGSL_FILES } from './wgsl.js';
 export { everyKernel } from './pipelines.js';
 export { Kernels, destroyRefined, destroyUploaded } from './kernels.js';
-export { HceScene, Renderer, FLAT_MAX_LEVEL } from './scene.js';
+export { HceScene, Renderer, FLAT_MAX_LEVEL, FLAT_MAX_TRIANGLES, flatLevel } from './scene.js';
 export { chooseLevel, objectLevel, resolveCamera, autoCamera, autoSceneCamera, viewProjection, assetBounds, DEFAULT_LOD } from './view.js';
 export { requestDevice } from './device.js';
 

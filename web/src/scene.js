@@ -6,6 +6,7 @@
 import { destroyRefined, destroyUploaded } from './kernels.js';
 import { multiply } from './math.js';
 import { DEFAULT_LOD, objectLevel, viewProjection } from './view.js';
+import { MAX_PATH_LEVEL } from './tables.js';
 
 /**
  * @typedef {import('./kernels.js').Kernels} Kernels
@@ -14,8 +15,24 @@ import { DEFAULT_LOD, objectLevel, viewProjection } from './view.js';
  * @typedef {import('./view.js').Camera} Camera
  */
 
-/** The deepest level flat objects are split to (scene.rs `SceneOptions::flat_max_level`). */
+/** Flat objects are split to their tree depth up to this level whatever their size (scene.rs `SceneOptions::flat_max_level`). */
 export const FLAT_MAX_LEVEL = 7;
+/** ... and deeper while they stay within this many fine triangles (scene.rs `SceneOptions::flat_max_triangles`). */
+export const FLAT_MAX_TRIANGLES = 2 ** 19;
+
+/**
+ * The level a flat object is drawn at, whatever level the view asks for: its tree depth, up to
+ * FLAT_MAX_LEVEL always and deeper only while the object stays within FLAT_MAX_TRIANGLES fine
+ * triangles. The twin of scene.rs `flat_level`, which says why.
+ * @param {number} treeDepth the depth of the object's deepest leaf
+ * @param {number} coarseTriangles
+ * @returns {number}
+ */
+export function flatLevel(treeDepth, coarseTriangles) {
+  let level = Math.min(treeDepth, FLAT_MAX_LEVEL);
+  while (level < treeDepth && level < MAX_PATH_LEVEL && coarseTriangles * 4 ** (level + 1) <= FLAT_MAX_TRIANGLES) level++;
+  return level;
+}
 /** `hce render`'s default triangle budget. */
 export const DEFAULT_TRIANGLE_BUDGET = 16_000_000;
 
@@ -76,7 +93,7 @@ export class HceScene {
   levelsFor(camera, viewportHeight, lod = DEFAULT_LOD) {
     const levels = this.objects.map((o) => {
       if (o.source.instances.length === 0) return -1;
-      if (o.source.object.kind === 'flat') return Math.min(o.uploaded?.treeDepth ?? 0, FLAT_MAX_LEVEL);
+      if (o.source.object.kind === 'flat') return flatLevel(o.uploaded?.treeDepth ?? 0, o.source.object.records.length / 4);
       return o.forced ?? objectLevel(o.source, camera, viewportHeight, lod);
     });
     const tris = (/** @type {number} */ i, /** @type {number} */ l) => (this.objects[i].source.object.records.length / 4) * 4 ** l * this.objects[i].source.instances.length;

@@ -1,8 +1,9 @@
-// The level-of-detail rule and the automatic camera against the values of the Rust unit tests
-// (runtime/src/gpu/lod.rs, framing.rs), in node.
+// The level-of-detail rule, flat objects' level and the automatic camera against the values of
+// the Rust unit tests (runtime/src/gpu/lod.rs, scene.rs, framing.rs), in node.
 import test from 'node:test';
 import assert from 'node:assert/strict';
 import { chooseLevel, DEFAULT_LOD, autoCamera, viewProjection } from '../src/view.js';
+import { flatLevel } from '../src/scene.js';
 
 const cameraAt = (/** @type {number} */ z) => ({ eye: [0, 0, z], target: [0, 0, 0], fovYDegrees: 90 });
 /** @type {import('../src/math.js').Bounds} */
@@ -17,6 +18,14 @@ test('the level follows choose_level and drops with distance', () => {
   const far = chooseLevel(cube, 0.5, cameraAt(1000), 1000);
   assert.ok(near > expected && far === 0, `near ${near} far ${far}`);
   assert.equal(chooseLevel(cube, 0.5, cameraAt(0.5), 1000), DEFAULT_LOD.maxLevel);
+});
+
+test('flat objects go to their tree depth within the triangle bound, as scene.rs flat_level', () => {
+  for (const [depth, coarse, level] of [
+    [0, 2, 0], [5, 2, 5], [7, 10000, 7], // shallow trees: the tree depth, whatever the size
+    [9, 2, 9], [12, 2, 9], [12, 1, 9], [8, 3, 8], // a room's floor split along a contact shadow
+    [8, 44, 7], // Teatime's table stays at level 7
+  ]) assert.equal(flatLevel(depth, coarse), level, `depth ${depth}, ${coarse} triangles`);
 });
 
 test('the automatic camera frames the bounds and projects the centre to the middle', () => {

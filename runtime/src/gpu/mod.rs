@@ -58,9 +58,9 @@ pub use render::{
     view_projection, Framing, GpuMesh, MeshDraw, MeshPipeline, RenderParams, RenderedImage,
 };
 pub use scene::{
-    render_asset, resolve_camera, AssetRender, AssetRenderOptions, BatchReport, CameraChoice,
-    CameraSource, GpuScene, LevelChoice, MultiresPath, ObjectBuffers, ObjectMesh, SceneDraw,
-    SceneOptions,
+    flat_level, render_asset, resolve_camera, AssetRender, AssetRenderOptions, BatchReport,
+    CameraChoice, CameraSource, GpuScene, LevelChoice, MultiresPath, ObjectBuffers, ObjectMesh,
+    SceneDraw, SceneOptions,
 };
 pub use util::PassTimer;
 

@@ -14,9 +14,9 @@
 //!
 //! * **Flat** objects ([`ObjectKind::Flat`]) by the [`FlatKernel`]: linear 1-to-4 split, colours
 //!   from their HCE trees, no smoothing. They are refined to their tree depth (the level at
-//!   which every radiosity element has its own triangles), capped by
-//!   [`SceneOptions::flat_max_level`], whatever level the view asks for: a coarser level would
-//!   blur the baked lighting and a finer one adds nothing. The small ones that
+//!   which every radiosity element has its own triangles), whatever level the view asks for: a
+//!   coarser level would blur the baked lighting and a finer one adds nothing. [`flat_level`]
+//!   bounds it by the object's size. The small ones that
 //!   [`GpuScene::refine_batch`] refines whole in one call are refined together, one dispatch
 //!   per step of the kernel for all of them ([`SceneOptions::flat_batch`]), into the same bytes.
 //! * **Multiresolution** objects by the [`LoopKernel`] ([`MultiresPath::Gpu`], the default):
@@ -91,9 +91,15 @@ pub enum MultiresPath {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SceneOptions {
     pub multires: MultiresPath,
-    /// Highest level a flat object is refined to; below it, its tree depth. Default 7
+    /// A flat object is refined to its tree depth up to this level whatever its size, and
+    /// deeper only within [`SceneOptions::flat_max_triangles`] ([`flat_level`]). Default 7
     /// (16 384 fine triangles per coarse one).
     pub flat_max_level: u32,
+    /// A flat object deeper than [`SceneOptions::flat_max_level`] is refined further, to its
+    /// tree depth, while it stays within this many fine triangles ([`flat_level`]). Default
+    /// 2^19: a floor or a wall of two coarse triangles to level 9, where the bake splits
+    /// elements along contact shadows.
+    pub flat_max_triangles: u64,
     /// How baked colours become vertex colours (SPEC.md, Appendix G). Default: smooth.
     pub reconstruction: Reconstruction,
     /// Refine the small flat objects that [`GpuScene::refine_batch`] refines whole in one call
@@ -111,6 +117,7 @@ impl Default for SceneOptions {
         Self {
             multires: MultiresPath::default(),
             flat_max_level: 7,
+            flat_max_triangles: 1 << 19,
             reconstruction: Reconstruction::default(),
             flat_batch: true,
             flat_batch_fine: BATCH_MAX_FINE,
@@ -171,6 +178,37 @@ enum Refiner {
         scratch: Refined,
         out: Option<CpuOutput>,
     },
+}
+
+/// The level a flat object of `coarse_triangles` triangles whose deepest leaf is at
+/// `tree_depth` is drawn at, whatever level the view asks for: its tree depth, where every
+/// leaf of its bake has its own fine triangles and the light is drawn as the baker found it,
+/// up to `max_level` (the [`SceneOptions::flat_max_level`]) always, and deeper only while the
+/// object stays within `max_triangles` fine triangles
+/// ([`SceneOptions::flat_max_triangles`]).
+///
+/// The baker splits elements below its detail level along the edges of contact shadows
+/// (levels 8 and 9 of a room's floor): drawn at level 7, each fine triangle blurred them over
+/// four leaves, and under a teapot resting on the floor the umbra took twice the path
+/// tracer's direct light (BENCHMARKS.md, "Eighteenth round"). The triangle bound keeps an
+/// object of many coarse triangles, each refined alike, at the level it had (a table of 44
+/// triangles at level 7 is 720 896 fine triangles already).
+///
+/// `web/src/scene.js` (`flatLevel`) is its twin.
+pub fn flat_level(
+    tree_depth: u32,
+    coarse_triangles: u64,
+    max_level: u32,
+    max_triangles: u64,
+) -> u32 {
+    let mut level = tree_depth.min(max_level);
+    while level < tree_depth
+        && level < hce_geometry::decode::MAX_PATH_LEVEL
+        && coarse_triangles.saturating_mul(1 << (2 * (level + 1))) <= max_triangles
+    {
+        level += 1;
+    }
+    level
 }
 
 /// One object of the scene on the GPU: what the level choice needs, its instances and its
@@ -236,6 +274,7 @@ pub struct GpuScene {
     flat_pool: Option<FlatPool>,
     loop_kernel: Option<LoopKernel>,
     flat_max_level: u32,
+    flat_max_triangles: u64,
     bounds: Option<Bounds>,
 }
 
@@ -349,6 +388,7 @@ impl GpuScene {
             flat_pool,
             loop_kernel,
             flat_max_level: options.flat_max_level,
+            flat_max_triangles: options.flat_max_triangles,
             bounds: asset.bounds(),
         })
     }
@@ -375,11 +415,16 @@ impl GpuScene {
         self.objects.get(object).map_or(0, |o| o.instances.len())
     }
 
-    /// The level `choice` gives `object` (flat objects: their capped tree depth).
+    /// The level `choice` gives `object` (flat objects: [`flat_level`], whatever `choice`).
     pub fn level_for(&self, object: usize, choice: &LevelChoice) -> Option<u32> {
         let o = self.objects.get(object)?;
         if o.kind == ObjectKind::Flat {
-            return Some(o.tree_depth.min(self.flat_max_level));
+            return Some(flat_level(
+                o.tree_depth,
+                o.coarse_triangles,
+                self.flat_max_level,
+                self.flat_max_triangles,
+            ));
         }
         Some(match choice {
             LevelChoice::Fixed(level) => *level,
@@ -1227,4 +1272,30 @@ pub fn render_asset(
         triangles: scene.drawn_triangles(),
         notes,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::flat_level;
+
+    #[test]
+    fn flat_objects_go_to_their_tree_depth_within_the_triangle_bound() {
+        let (max_level, max_triangles) = (7, 1 << 19);
+        // Shallow trees: the tree depth, whatever the size.
+        assert_eq!(flat_level(0, 2, max_level, max_triangles), 0);
+        assert_eq!(flat_level(5, 2, max_level, max_triangles), 5);
+        assert_eq!(flat_level(7, 10_000, max_level, max_triangles), 7);
+        // A room's floor of two triangles, split to level 9 along a contact shadow: level 9
+        // (2 · 4^9 = 2^19 fine triangles), and no deeper for a deeper tree.
+        assert_eq!(flat_level(9, 2, max_level, max_triangles), 9);
+        assert_eq!(flat_level(12, 2, max_level, max_triangles), 9);
+        assert_eq!(flat_level(12, 1, max_level, max_triangles), 9);
+        assert_eq!(flat_level(8, 3, max_level, max_triangles), 8);
+        // Teatime's table (44 triangles, depth 8) stays at level 7: 44 · 4^8 > 2^19.
+        assert_eq!(flat_level(8, 44, max_level, max_triangles), 7);
+        // No overflow and no level past what a path can name, however large the bound.
+        assert_eq!(flat_level(15, u64::MAX, max_level, u64::MAX), 15);
+        assert_eq!(flat_level(40, 1, max_level, u64::MAX), 15);
+        assert_eq!(flat_level(9, 2, 9, 0), 9);
+    }
 }

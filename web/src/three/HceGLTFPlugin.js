@@ -12,7 +12,7 @@ import { readContainer } from '../container.js';
 import { checkObject } from '../tables.js';
 import { fetchWgsl, KernelSources } from '../wgsl.js';
 import { Kernels, destroyRefined, destroyUploaded } from '../kernels.js';
-import { FLAT_MAX_LEVEL } from '../scene.js';
+import { flatLevel } from '../scene.js';
 
 const EXT = 'EXT_hce_baked_lighting';
 
@@ -79,7 +79,7 @@ export class HceGLTFPlugin {
       if (!p) {
         p = (async () => {
           const level = object.kind === 'flat'
-            ? Math.min(checkObject(object).treeDepth, FLAT_MAX_LEVEL)
+            ? flatLevel(checkObject(object).treeDepth, object.records.length / 4)
             : typeof this.options.level === 'function' ? this.options.level(object) : this.options.level ?? 3;
           const uploaded = this.kernels.upload(object, this.options.reconstruction ?? 'smooth');
           const buffers = this.kernels.refine(uploaded, level);
