@@ -18,7 +18,7 @@ import { MAX_PATH_LEVEL } from './tables.js';
 /** Flat objects are split to their tree depth up to this level whatever their size (scene.rs `SceneOptions::flat_max_level`). */
 export const FLAT_MAX_LEVEL = 7;
 /** ... and deeper while they stay within this many fine triangles (scene.rs `SceneOptions::flat_max_triangles`). */
-export const FLAT_MAX_TRIANGLES = 2 ** 19;
+export const FLAT_MAX_TRIANGLES = 2 ** 22;
 
 /**
  * The level a flat object is drawn at, whatever level the view asks for: its tree depth, up to

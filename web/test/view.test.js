@@ -23,8 +23,9 @@ test('the level follows choose_level and drops with distance', () => {
 test('flat objects go to their tree depth within the triangle bound, as scene.rs flat_level', () => {
   for (const [depth, coarse, level] of [
     [0, 2, 0], [5, 2, 5], [7, 10000, 7], // shallow trees: the tree depth, whatever the size
-    [9, 2, 9], [12, 2, 9], [12, 1, 9], [8, 3, 8], // a room's floor split along a contact shadow
-    [8, 44, 7], // Teatime's table stays at level 7
+    [9, 2, 9], [12, 2, 10], [12, 1, 11], [8, 3, 8], // a room's floor split along a contact shadow
+    [8, 44, 8], [9, 44, 8], // Teatime's table
+    [9, 300, 7], // many triangles: level 7, no deeper
   ]) assert.equal(flatLevel(depth, coarse), level, `depth ${depth}, ${coarse} triangles`);
 });
 

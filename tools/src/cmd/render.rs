@@ -34,7 +34,7 @@ pub struct RenderArgs {
     /// Refine every multiresolution object to this level (0 = coarse mesh; at most 6 for
     /// multiresolution objects, 15 for a plain mesh's preview); flat objects of a baked asset
     /// are always refined to their tree depth (up to 7, and deeper while an object stays within
-    /// 2^19 fine triangles).
+    /// 2^22 fine triangles).
     #[arg(long, conflicts_with = "auto", value_parser = level_parser())]
     pub level: Option<u32>,
     /// Choose the level from the view (the default): edges of about 8 pixels.
