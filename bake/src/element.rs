@@ -119,6 +119,21 @@ impl Rng {
     }
 }
 
+/// The barycentric coordinates of point `p` (in the plane of triangle `t`) with respect to
+/// `t`'s corners; a third each for a degenerate triangle.
+pub fn barycentric_of(t: [Vec3; 3], p: Vec3) -> [f32; 3] {
+    let (e1, e2, d) = (t[1] - t[0], t[2] - t[0], p - t[0]);
+    let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (d20, d21) = (d.dot(e1), d.dot(e2));
+    let den = d00 * d11 - d01 * d01;
+    if den.is_nan() || den <= 0.0 {
+        return [1.0 / 3.0; 3];
+    }
+    let b1 = (d11 * d20 - d01 * d21) / den;
+    let b2 = (d00 * d21 - d01 * d20) / den;
+    [1.0 - b1 - b2, b1, b2]
+}
+
 /// Point `i` of `n` stratified jittered points on triangle `t`: the triangle is split into
 /// `4^k >= n` congruent subtriangles and point `i` is a uniform random point in subtriangle
 /// `i * 4^k / n`.

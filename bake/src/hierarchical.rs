@@ -48,7 +48,7 @@ use hce_format::MAX_TREE_DEPTH;
 use rayon::prelude::*;
 
 use crate::cluster::{ClusterChild, ClusterTree};
-use crate::element::{jittered_point, split, ElemKey, Rng};
+use crate::element::{barycentric_of, jittered_point, split, ElemKey, Rng};
 use crate::formfactor::{disc_estimate, point_to_polygon, stratified_points};
 use crate::scene::{LightKind, Scene};
 use crate::visibility::Occluders;
@@ -1899,6 +1899,8 @@ impl Ctx<'_> {
         let lifted = !self.surface[recv.root as usize].is_empty();
         let mut closure = 0.0f32;
         let mut vis = vec![1.0f32; nn + usize::from(lifted)];
+        // Per slot of `vis`, the visible fraction at each corner (`[j * CORNERS + c]`).
+        let mut at_corner = vec![1.0f32; vis.len() * CORNERS];
         match src {
             Source::Elem(sk) => {
                 let sc = (st[0] + st[1] + st[2]) / 3.0;
@@ -1956,7 +1958,7 @@ impl Ctx<'_> {
                     src_id,
                     r_size + s_size,
                     nv,
-                    &mut vis,
+                    (&mut vis, &mut at_corner),
                     |i, rng| (sk.root, jittered_point(st, i, nv, rng)),
                 );
             }
@@ -1987,7 +1989,7 @@ impl Ctx<'_> {
                     src_id,
                     r_size + c_size,
                     nv,
-                    &mut vis,
+                    (&mut vis, &mut at_corner),
                     |i, rng| {
                         // Stratified over the cluster's area as the receiver point is over
                         // the receiver.
@@ -1998,12 +2000,19 @@ impl Ctx<'_> {
                 );
             }
         };
-        for row in k.chunks_mut(nn).take(CORNERS) {
-            row.iter_mut().zip(&vis).for_each(|(v, f)| *v *= f);
+        // The visible fraction is linear over the receiver, as the form factor is: a soft
+        // shadow's gradient across a link's receiver reaches its leaves, where one fraction
+        // for the whole receiver left a step at every receiver's edge (the Cornell box's floor
+        // beside the short block, blotchy where the path tracer's penumbra is smooth).
+        for (c, row) in k.chunks_mut(nn).take(CORNERS).enumerate() {
+            for (j, v) in row.iter_mut().enumerate() {
+                *v *= at_corner[j * CORNERS + c];
+            }
         }
         if lifted {
-            let f = vis[nn];
-            k[CORNERS * nn..].iter_mut().for_each(|v| *v *= f);
+            for c in 0..CORNERS {
+                k[CORNERS * nn + c] *= at_corner[nn * CORNERS + c];
+            }
         }
         (k, vis[0])
     }
@@ -2137,13 +2146,14 @@ impl Ctx<'_> {
         src_id: u64,
         size: f32,
         nv: u32,
-        vis: &mut [f32],
+        (vis, at_corner): (&mut [f32], &mut [f32]),
         source: impl Fn(u32, &mut Rng) -> (u32, Vec3),
     ) {
         let normals = &self.roots[recv.root as usize].normals;
-        visible_fractions(nv, vis, |i, w| {
+        visible_fractions(nv, vis, at_corner, |i, w| {
             let mut rng = Rng::new(recv.id(), src_id, u64::from(i));
             let p = jittered_point(rt, i, nv, &mut rng);
+            let at = barycentric_of(rt, p);
             let (t, q) = source(i, &mut rng);
             let (a, na) = self.on_surface(recv.root, p);
             let (b, nb) = self.on_surface(t, q);
@@ -2159,7 +2169,7 @@ impl Ctx<'_> {
                 *x = (n.dot(d) > self.plane_eps).then(|| kernel(a, *n, b, nb, size));
                 any |= x.is_some();
             }
-            any.then(|| self.occ.segment_clear_between(a, na, b, nb))
+            any.then(|| (self.occ.segment_clear_between(a, na, b, nb), at))
         });
     }
 
@@ -3149,9 +3159,12 @@ struct KnownFactors {
 }
 
 /// The kernel-weighted fraction of `n` rays that are clear, for each receiver normal (and the
-/// refined surface's own normal after them) into `vis`. `ray(i, w)` fills `w` with ray `i`'s
-/// weight per normal (`None` where that normal's plane hides its source point: it does not
-/// count) and casts it, or returns `None` when no normal counts it.
+/// refined surface's own normal after them) into `vis`, and the same fraction as a linear
+/// function over the receiver, its value at each corner, into `at_corner` (`[j * CORNERS + c]`
+/// for slot `j` of `vis`). `ray(i, w)` fills `w` with ray `i`'s weight per normal (`None`
+/// where that normal's plane hides its source point: it does not count) and casts it,
+/// returning whether it is clear and the barycentric coordinates of its receiver point, or
+/// returns `None` when no normal counts it.
 ///
 /// Each normal weighs the rays by its own kernel and counts only those its plane lets through.
 /// One fraction for all, the geometric normal's, left a tilted normal with the visibility of
@@ -3166,33 +3179,51 @@ struct KnownFactors {
 /// straight above the receiver no heavier than the part at its horizon: next to an object
 /// resting on a floor, which hides the first, floor leaves in a closed furnace summed form
 /// factors to 1.07 (issue 20).
+///
+/// The linear function: the rays weighed also by their point's barycentric coordinate of
+/// corner `c` read, for rays spread evenly over the receiver, a linear visibility at the point
+/// a quarter of the way from the centroid to corner `c` (`∫ b_c V / ∫ b_c`), so the value at
+/// the corner is the mean plus four times that reading's difference from the mean of the
+/// three readings: the least-squares linear fit. Its mean is the fraction in `vis`, and a
+/// slope that would take a corner outside [0, 1] is flattened until it does not, keeping the
+/// mean (BENCHMARKS.md, "Eighteenth round").
 fn visible_fractions(
     n: u32,
     vis: &mut [f32],
-    mut ray: impl FnMut(u32, &mut [Option<f32>]) -> Option<bool>,
+    at_corner: &mut [f32],
+    mut ray: impl FnMut(u32, &mut [Option<f32>]) -> Option<(bool, [f32; CORNERS])>,
 ) {
     let m = vis.len();
-    // Per normal: clear weight, total weight, clear rays, rays.
+    debug_assert_eq!(at_corner.len(), m * CORNERS);
+    // Per normal: clear weight, total weight, clear rays, rays; and per normal and corner the
+    // clear and total weights times the barycentric coordinate.
     let mut acc = vec![(0.0f64, 0.0f64, 0u32, 0u32); m];
+    let mut by_corner = vec![(0.0f64, 0.0f64); m * CORNERS];
     let (mut cast, mut clear_rays) = (0u32, 0u32);
     let mut w = vec![None; m];
     for i in 0..n {
-        let Some(clear) = ray(i, &mut w) else {
+        let Some((clear, at)) = ray(i, &mut w) else {
             continue;
         };
         cast += 1;
         clear_rays += u32::from(clear);
-        for (a, x) in acc.iter_mut().zip(&w) {
+        for (j, (a, x)) in acc.iter_mut().zip(&w).enumerate() {
             if let Some(x) = *x {
                 let x = f64::from(x);
                 a.0 += if clear { x } else { 0.0 };
                 a.1 += x;
                 a.2 += u32::from(clear);
                 a.3 += 1;
+                for (c, b) in at.iter().enumerate() {
+                    let e = &mut by_corner[j * CORNERS + c];
+                    let xb = x * f64::from(b.clamp(0.0, 1.0));
+                    e.0 += if clear { xb } else { 0.0 };
+                    e.1 += xb;
+                }
             }
         }
     }
-    for (v, a) in vis.iter_mut().zip(&acc) {
+    for (j, (v, a)) in vis.iter_mut().zip(&acc).enumerate() {
         *v = if a.1 > 0.0 {
             (a.0 / a.1) as f32
         } else if a.3 > 0 {
@@ -3202,6 +3233,27 @@ fn visible_fractions(
         } else {
             1.0
         };
+        let reading: [f32; CORNERS] = std::array::from_fn(|c| {
+            let e = by_corner[j * CORNERS + c];
+            if a.1 > 0.0 && e.1 > 0.0 {
+                (e.0 / e.1) as f32
+            } else {
+                *v
+            }
+        });
+        let mean = (reading[0] + reading[1] + reading[2]) / 3.0;
+        let slope = reading.map(|r| 4.0 * (r - mean));
+        let mut scale = 1.0f32;
+        for d in slope {
+            if *v + d > 1.0 {
+                scale = scale.min((1.0 - *v) / d);
+            } else if *v + d < 0.0 {
+                scale = scale.min(*v / -d);
+            }
+        }
+        for (c, d) in slope.iter().enumerate() {
+            at_corner[j * CORNERS + c] = (*v + d * scale.max(0.0)).clamp(0.0, 1.0);
+        }
     }
 }
 
@@ -3583,27 +3635,96 @@ mod tests {
         // Rays 0-3 reach a source point above the geometric normal's plane and are clear;
         // rays 4-7 reach one only a tilted normal sees, and are hidden; the third slot (a
         // normal no ray reaches) takes the fraction of all rays cast.
+        let mid = [1.0 / 3.0; CORNERS];
         let mut vis = [0.5f32; 3];
-        visible_fractions(8, &mut vis, |i, w| {
+        let mut at = [0.5f32; 9];
+        visible_fractions(8, &mut vis, &mut at, |i, w| {
             w[0] = (i < 4).then_some(1.0);
             w[1] = Some(if i < 4 { 1.0 } else { 3.0 });
             w[2] = None;
-            Some(i < 4)
+            Some((i < 4, mid))
         });
         assert_eq!(vis[0], 1.0);
         assert!((vis[1] - 4.0 / 16.0).abs() < 1e-6, "{}", vis[1]);
         assert_eq!(vis[2], 0.5);
+        // Every ray at the centroid: no slope, each corner the mean.
+        for j in 0..3 {
+            for c in 0..CORNERS {
+                assert!(
+                    (at[j * CORNERS + c] - vis[j]).abs() < 1e-6,
+                    "{j} {c} {at:?}"
+                );
+            }
+        }
         // No ray any normal counts: nothing hides the source.
         let mut vis = [0.0f32; 2];
-        visible_fractions(8, &mut vis, |_, w| {
+        let mut at = [0.0f32; 6];
+        visible_fractions(8, &mut vis, &mut at, |_, w| {
             w.iter_mut().for_each(|x| *x = None);
             None
         });
         assert_eq!(vis, [1.0, 1.0]);
+        assert_eq!(at, [1.0; 6]);
         // No rays at all (occlusion off).
         let mut vis = [0.0f32; 2];
-        visible_fractions(0, &mut vis, |_, _| unreachable!());
+        let mut at = [0.0f32; 6];
+        visible_fractions(0, &mut vis, &mut at, |_, _| unreachable!());
         assert_eq!(vis, [1.0, 1.0]);
+        assert_eq!(at, [1.0; 6]);
+    }
+
+    #[test]
+    fn a_soft_shadow_across_a_receiver_is_linear_over_it() {
+        // A visibility linear over the receiver, 1 at corner 0 and 0.2 at corners 1 and 2,
+        // sampled by many rays spread evenly over it (each ray clear with that probability,
+        // a fixed pattern): the corners come back to within the sampling's noise, and their
+        // mean is the fraction of clear rays.
+        let n = 4096u32;
+        let truth = |b: [f32; 3]| b[0] * 1.0 + (b[1] + b[2]) * 0.2;
+        let mut rng = Rng::new(1, 2, 3);
+        let rays: Vec<([f32; 3], bool)> = (0..n)
+            .map(|i| {
+                let p = jittered_point([Vec3::ZERO, Vec3::X, Vec3::Y], i, n, &mut rng);
+                let b = barycentric_of([Vec3::ZERO, Vec3::X, Vec3::Y], p);
+                (b, rng.next_f32() < truth(b))
+            })
+            .collect();
+        let mut vis = [0.0f32];
+        let mut at = [0.0f32; 3];
+        visible_fractions(n, &mut vis, &mut at, |i, w| {
+            w[0] = Some(1.0);
+            let (b, clear) = rays[i as usize];
+            Some((clear, b))
+        });
+        let clear = rays.iter().filter(|r| r.1).count() as f32 / n as f32;
+        assert!((vis[0] - clear).abs() < 1e-6);
+        assert!(
+            ((at[0] + at[1] + at[2]) / 3.0 - vis[0]).abs() < 1e-5,
+            "{at:?}"
+        );
+        assert!((at[0] - 1.0).abs() < 0.06, "{at:?}");
+        assert!(
+            (at[1] - 0.2).abs() < 0.06 && (at[2] - 0.2).abs() < 0.06,
+            "{at:?}"
+        );
+        // A step: clear only where corner 0's coordinate is over a half. The slope that
+        // would take corner 0 above 1 is flattened, the mean kept, every corner in [0, 1].
+        let mut vis = [0.0f32];
+        let mut at = [0.0f32; 3];
+        visible_fractions(n, &mut vis, &mut at, |i, w| {
+            w[0] = Some(1.0);
+            let b = rays[i as usize].0;
+            Some((b[0] > 0.5, b))
+        });
+        assert!(at.iter().all(|v| (0.0..=1.0).contains(v)), "{at:?}");
+        assert!(
+            ((at[0] + at[1] + at[2]) / 3.0 - vis[0]).abs() < 1e-5,
+            "{at:?}"
+        );
+        assert!(
+            at[0] > 0.5 && at[1] < vis[0] && at[2] < vis[0],
+            "{at:?} {vis:?}"
+        );
     }
 
     /// The level-`level` surface over `corners` whose lattice point `(b, c)` is at
