@@ -90,6 +90,45 @@ impl ElemKey {
         let c = self.corners([Vec3::X, Vec3::Y, Vec3::Z]);
         c.map(|v| v.to_array())
     }
+
+    /// The element of level `level` of root `root` that holds the point of barycentric
+    /// coordinates `b` in the root, or `None` for a point outside it. A point on a border
+    /// between two elements goes to the first of Top, Left, Right that holds it, else Center.
+    pub fn containing(root: u32, level: u32, b: [f32; 3]) -> Option<Self> {
+        if b.iter().any(|&x| x < 0.0) {
+            return None;
+        }
+        let mut b = b;
+        let mut k = ElemKey::root(root);
+        for _ in 0..level {
+            let (c, nb) = if b[0] >= 0.5 {
+                (0, [2.0 * b[0] - 1.0, 2.0 * b[1], 2.0 * b[2]])
+            } else if b[1] >= 0.5 {
+                (1, [2.0 * b[0], 2.0 * b[1] - 1.0, 2.0 * b[2]])
+            } else if b[2] >= 0.5 {
+                (3, [2.0 * b[0], 2.0 * b[1], 2.0 * b[2] - 1.0])
+            } else {
+                (2, [1.0 - 2.0 * b[0], 1.0 - 2.0 * b[1], 1.0 - 2.0 * b[2]])
+            };
+            k = k.child(c);
+            b = nb;
+        }
+        Some(k)
+    }
+
+    /// The elements of the same level that share an edge with this one inside its root (none
+    /// across the root's own edges): up to three.
+    pub fn edge_neighbours(self) -> impl Iterator<Item = Self> {
+        let t = self.barycentric().map(Vec3::from_array);
+        let c = (t[0] + t[1] + t[2]) / 3.0;
+        [(0, 1), (1, 2), (2, 0)]
+            .into_iter()
+            .filter_map(move |(i, j)| {
+                // Just across the edge's midpoint, a twelfth of the element's height beyond it.
+                let m = (t[i] + t[j]) * 0.5;
+                Self::containing(self.root, self.level, (m + (m - c) * 0.25).to_array())
+            })
+    }
 }
 
 /// SplitMix64 finaliser: a good 64-bit mixing function.
@@ -159,6 +198,41 @@ pub fn jittered_point(t: [Vec3; 3], i: u32, n: u32, rng: &mut Rng) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn edge_neighbours_are_the_elements_across_each_edge_within_the_root() {
+        let top = ElemKey::root(3).child(0);
+        let centre = ElemKey::root(3).child(2);
+        assert_eq!(top.edge_neighbours().collect::<Vec<_>>(), vec![centre]);
+        let mut around: Vec<_> = centre.edge_neighbours().collect();
+        around.sort();
+        assert_eq!(
+            around,
+            vec![top, ElemKey::root(3).child(1), ElemKey::root(3).child(3)]
+        );
+        // At level 4: every neighbour shares an edge (two corners) and has this one among
+        // its own neighbours; an element away from the root's border has three.
+        for path in 0..256u32 {
+            let k = ElemKey {
+                root: 3,
+                level: 4,
+                path,
+            };
+            let c = k.barycentric();
+            let near: Vec<_> = k.edge_neighbours().collect();
+            // On the root's edge opposite corner e: two corners with no weight of e.
+            let on_border = (0..3).any(|e| (0..3).filter(|&v| c[v][e] == 0.0).count() >= 2);
+            assert!(on_border || near.len() == 3, "{k:?} {near:?}");
+            for n in near {
+                assert_eq!(n.level, 4);
+                let d = n.barycentric();
+                let shared = c.iter().filter(|p| d.contains(p)).count();
+                assert_eq!(shared, 2, "{k:?} {n:?}");
+                assert!(n.edge_neighbours().any(|x| x == k), "{k:?} {n:?}");
+            }
+        }
+        assert_eq!(ElemKey::containing(3, 2, [-0.1, 0.6, 0.5]), None);
+    }
 
     #[test]
     fn keys_navigate_like_the_model_paths() {

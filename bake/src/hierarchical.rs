@@ -1797,6 +1797,25 @@ impl Ctx<'_> {
                 k = x.parent();
             }
         }
+        // Graded along a narrow shadow's edge: the elements beside a receiver the rule split
+        // exist at its level, their links taken down with it, so that the dark side of the
+        // edge is as fine as the lit side. Otherwise the leaves just inside the umbra, whose
+        // light link every ray found hidden and which no rule splits, stayed two or three levels
+        // larger than the split ones beside them, and the field drawn along the edge followed
+        // their sides: a serrated outline, and the lit leaves' corners pulled dark at the
+        // T-vertices on those sides (BENCHMARKS.md, seventeenth and eighteenth rounds).
+        let mut graded: HashSet<ElemKey> = HashSet::new();
+        for k in &narrow {
+            for beside in k.edge_neighbours() {
+                let mut x = beside.parent();
+                while let Some(a) = x {
+                    if !graded.insert(a) {
+                        break;
+                    }
+                    x = a.parent();
+                }
+            }
+        }
         let near = |recv: ElemKey, src: Source| match src {
             Source::Elem(sk) => {
                 let (rt, st) = (self.elem_corners(recv), self.elem_corners(sk));
@@ -1808,7 +1827,9 @@ impl Ctx<'_> {
             Source::Cluster(_) => false,
         };
         let goes_down = |recv: ElemKey, src: Source| {
-            narrow.contains(&recv) || above.contains(&recv) && near(recv, src)
+            narrow.contains(&recv)
+                || graded.contains(&recv)
+                || above.contains(&recv) && near(recv, src)
         };
         let expand = |l: &RawLink| -> Option<Vec<(RawLink, Vec<f32>)>> {
             if !goes_down(l.recv, l.src) {
