@@ -340,3 +340,34 @@ fn cameras_look_at_their_targets() {
     );
     assert!((q.y.abs() - 1.0).abs() < 1e-12 && q.x.abs() < 1e-12 && q.z.abs() < 1e-12);
 }
+
+#[test]
+fn usage_errors_exit_2_with_the_usage_and_no_backtrace() {
+    let run = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_gen-samples"))
+            .args(args)
+            .env("RUST_BACKTRACE", "1")
+            .output()
+            .unwrap()
+    };
+    for args in [
+        &["room", "--bogus"][..],
+        &["room", "--turn"],
+        &["room", "--mesh", "x.obj", "--triangles", "2", "-o", "x.glb"],
+        &["room", "--mesh", "x.obj"],
+    ] {
+        let out = run(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.starts_with("error: ") && err.contains("usage: gen-samples room"),
+            "{err}"
+        );
+        assert!(!err.contains("backtrace"), "{err}");
+    }
+    // A file that cannot be read is not a usage error.
+    let missing = std::env::temp_dir().join("hce-gen-samples-no-such-mesh.obj");
+    let out = run(&["room", "--mesh", missing.to_str().unwrap(), "-o", "x.glb"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read"));
+}

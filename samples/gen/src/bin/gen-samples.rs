@@ -19,6 +19,23 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
+/// A usage error (a bad or missing argument): printed without a backtrace, exit status 2 as
+/// `hce`'s are; any other error exits with 1.
+#[derive(Debug)]
+struct Usage(String);
+
+impl std::fmt::Display for Usage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Usage {}
+
+fn usage_error(message: String) -> anyhow::Error {
+    anyhow::Error::new(Usage(message))
+}
+
 /// Writes `bytes` to `path` through a temporary file in the same folder and a rename, so that a
 /// reader never sees a half-written sample. (The one atomic writer of the tools is
 /// `hce_meshio::write_atomic`; this crate keeps its own because it depends on no hce crate: the
@@ -64,7 +81,7 @@ fn room(args: &[String]) -> Result<()> {
         }
         let value = it
             .next()
-            .with_context(|| format!("{a} needs a value; {usage}"));
+            .ok_or_else(|| usage_error(format!("{a} needs a value; {usage}")));
         match a.as_str() {
             "--mesh" => mesh = Some(PathBuf::from(value?)),
             "-o" | "--output" => out = Some(PathBuf::from(value?)),
@@ -74,7 +91,7 @@ fn room(args: &[String]) -> Result<()> {
                     .parse::<f64>()
                     .ok()
                     .filter(|t| t.is_finite())
-                    .with_context(|| format!("--turn takes degrees; {usage}"))?
+                    .ok_or_else(|| usage_error(format!("--turn takes degrees; {usage}")))?
             }
             "--triangles" => {
                 triangles = Some(
@@ -82,17 +99,17 @@ fn room(args: &[String]) -> Result<()> {
                         .parse::<usize>()
                         .ok()
                         .filter(|&n| n >= 4)
-                        .with_context(|| {
-                            format!("--triangles takes a count of 4 or more; {usage}")
+                        .ok_or_else(|| {
+                            usage_error(format!("--triangles takes a count of 4 or more; {usage}"))
                         })?,
                 )
             }
-            _ => anyhow::bail!("unknown argument {a:?}; {usage}"),
+            _ => return Err(usage_error(format!("unknown argument {a:?}; {usage}"))),
         }
     }
     let (mesh_path, out) = match (mesh, out) {
         (Some(m), Some(o)) => (m, o),
-        _ => anyhow::bail!("{usage}"),
+        _ => return Err(usage_error(usage.to_string())),
     };
     let name = name.unwrap_or_else(|| {
         mesh_path
@@ -132,7 +149,17 @@ fn room(args: &[String]) -> Result<()> {
     Ok(())
 }
 
-fn main() -> Result<()> {
+fn main() -> std::process::ExitCode {
+    match run() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::from(if e.is::<Usage>() { 2 } else { 1 })
+        }
+    }
+}
+
+fn run() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     if args.first().map(String::as_str) == Some("room") {
         return room(&args[1..]);
