@@ -2203,7 +2203,7 @@ impl Ctx<'_> {
     ///
     /// A fold, a crease, the rim of an eye socket, the junction of a spout with its body: one
     /// side of the element looks out into the room, the other into the object itself. No link
-    /// sees that (a link's visibility is one fraction for its whole receiver, and
+    /// sees that (a link's visibility is at most linear over its receiver, and
     /// [`Ctx::near_shadow`] leaves the object's own surface out), and the element's area
     /// average, drawn at its corners, is too bright at the bottom of the fold and too dark at
     /// its rim. Judged here by the geometry alone, and so the same in every pass.
@@ -2231,10 +2231,11 @@ impl Ctx<'_> {
     /// [`NEAR_SHADOW_REACH`] times the receiver's radius, each point checks that it sees what
     /// every other point sees along it (the end of that point's ray). A wall or a room corner
     /// next to the receiver is seen alike from all its points; an object standing on it, or
-    /// the overhang of a fold, hides from one point what another sees. Every link's visibility
-    /// is one number over its receiver, so near such an occluder each link spreads its
-    /// shadow evenly and the errors of all of them add up with one sign (in a closed furnace,
-    /// floor leaves next to a resting object summed form factors to 1.12).
+    /// the overhang of a fold, hides from one point what another sees. A link's visibility is
+    /// at most linear over its receiver (it was one number when this rule was made), so near
+    /// such an occluder each link spreads its shadow's edge over the receiver and the errors of
+    /// all of them add up with one sign (in a closed furnace, floor leaves next to a resting
+    /// object summed form factors to 1.12).
     fn near_shadow(&self, k: ElemKey) -> bool {
         // Nothing but the scene's outer boundary in front: nothing there hides one source
         // from part of the receiver (the convex side of an object in a room).
