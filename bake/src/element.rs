@@ -94,23 +94,15 @@ impl ElemKey {
     /// The element of level `level` of root `root` that holds the point of barycentric
     /// coordinates `b` in the root, or `None` for a point outside it. A point on a border
     /// between two elements goes to the first of Top, Left, Right that holds it, else Center.
-    pub fn containing(root: u32, level: u32, b: [f32; 3]) -> Option<Self> {
-        if b.iter().any(|&x| x < 0.0) {
+    pub fn containing(root: u32, level: u32, b: Vec3) -> Option<Self> {
+        if b.min_element() < 0.0 {
             return None;
         }
         let mut b = b;
         let mut k = ElemKey::root(root);
         for _ in 0..level {
-            let (c, nb) = if b[0] >= 0.5 {
-                (0, [2.0 * b[0] - 1.0, 2.0 * b[1], 2.0 * b[2]])
-            } else if b[1] >= 0.5 {
-                (1, [2.0 * b[0], 2.0 * b[1] - 1.0, 2.0 * b[2]])
-            } else if b[2] >= 0.5 {
-                (3, [2.0 * b[0], 2.0 * b[1], 2.0 * b[2] - 1.0])
-            } else {
-                (2, [1.0 - 2.0 * b[0], 1.0 - 2.0 * b[1], 1.0 - 2.0 * b[2]])
-            };
-            k = k.child(c);
+            let (c, nb) = child_toward(b);
+            k = k.child(c as u32);
             b = nb;
         }
         Some(k)
@@ -126,7 +118,7 @@ impl ElemKey {
             .filter_map(move |(i, j)| {
                 // Just across the edge's midpoint, a twelfth of the element's height beyond it.
                 let m = (t[i] + t[j]) * 0.5;
-                Self::containing(self.root, self.level, (m + (m - c) * 0.25).to_array())
+                Self::containing(self.root, self.level, m + (m - c) * 0.25)
             })
     }
 }
@@ -155,6 +147,23 @@ impl Rng {
     /// Uniform in `[0, 1)`.
     pub fn next_f32(&mut self) -> f32 {
         (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+    }
+}
+
+/// The child of a split triangle (Top, Left, Center, Right: [`split`]) holding the point of
+/// barycentric coordinates `b`, and the point's coordinates over that child.
+pub fn child_toward(b: Vec3) -> (usize, Vec3) {
+    if b.x >= 0.5 {
+        (0, Vec3::new(2.0 * b.x - 1.0, 2.0 * b.y, 2.0 * b.z))
+    } else if b.y >= 0.5 {
+        (1, Vec3::new(2.0 * b.x, 2.0 * b.y - 1.0, 2.0 * b.z))
+    } else if b.z >= 0.5 {
+        (3, Vec3::new(2.0 * b.x, 2.0 * b.y, 2.0 * b.z - 1.0))
+    } else {
+        (
+            2,
+            Vec3::new(1.0 - 2.0 * b.x, 1.0 - 2.0 * b.y, 1.0 - 2.0 * b.z),
+        )
     }
 }
 
@@ -231,7 +240,7 @@ mod tests {
                 assert!(n.edge_neighbours().any(|x| x == k), "{k:?} {n:?}");
             }
         }
-        assert_eq!(ElemKey::containing(3, 2, [-0.1, 0.6, 0.5]), None);
+        assert_eq!(ElemKey::containing(3, 2, Vec3::new(-0.1, 0.6, 0.5)), None);
     }
 
     #[test]

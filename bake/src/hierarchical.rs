@@ -48,7 +48,7 @@ use hce_format::MAX_TREE_DEPTH;
 use rayon::prelude::*;
 
 use crate::cluster::{ClusterChild, ClusterTree};
-use crate::element::{barycentric_of, jittered_point, split, ElemKey, Rng};
+use crate::element::{barycentric_of, child_toward, jittered_point, split, ElemKey, Rng};
 use crate::formfactor::{disc_estimate, point_to_polygon, stratified_points};
 use crate::scene::{LightKind, Scene};
 use crate::visibility::Occluders;
@@ -3072,23 +3072,6 @@ struct Judge {
 /// the receiver's own rules (`near_shadow`, `self_shade_varies`) are known to leave it whole:
 /// so a pair that splits or opens its source, keeping the receiver, does not ask again.
 type Pair = (ElemKey, [Vec3; 3], Source, [Vec3; 3], bool);
-
-/// The child of a split triangle (Top, Left, Center, Right: [`split`]) holding the point of
-/// barycentric coordinates `b`, and the point's coordinates over that child.
-fn child_toward(b: Vec3) -> (usize, Vec3) {
-    if b.x >= 0.5 {
-        (0, Vec3::new(2.0 * b.x - 1.0, 2.0 * b.y, 2.0 * b.z))
-    } else if b.y >= 0.5 {
-        (1, Vec3::new(2.0 * b.x, 2.0 * b.y - 1.0, 2.0 * b.z))
-    } else if b.z >= 0.5 {
-        (3, Vec3::new(2.0 * b.x, 2.0 * b.y, 2.0 * b.z - 1.0))
-    } else {
-        (
-            2,
-            Vec3::new(1.0 - 2.0 * b.x, 1.0 - 2.0 * b.y, 1.0 - 2.0 * b.z),
-        )
-    }
-}
 
 /// Pairs one part of a root's refinement takes before it hands the pairs left on its stack
 /// to parts that run in parallel ([`refine_in_parallel`]).
