@@ -1,6 +1,6 @@
 //! Errors of the reader and writer. Each variant cites the SPEC.md section it enforces.
 
-use crate::layout::SectionType;
+use crate::section::SectionType;
 
 /// Why bytes are not a readable container.
 #[derive(Debug, thiserror::Error, Clone, PartialEq, Eq)]

@@ -1,8 +1,8 @@
-//! The fixed parts of the container (SPEC.md, Appendix A): file identifier, header, section
-//! directory and section types, and the bounds-checked parsing of header and directory.
+//! The fixed parts of the container (SPEC.md, Appendix A): file identifier, header and section
+//! directory, and the bounds-checked parsing of header and directory.
 
 use crate::error::ReadError;
-use std::fmt;
+use crate::section::SectionType;
 
 /// The 8-byte file identifier (SPEC.md A.2), built like PNG's to catch 7-bit and text-mode
 /// transfer corruption.
@@ -21,79 +21,6 @@ pub const SECTION_ALIGNMENT: u64 = 256;
 pub const FILE_LEVEL: u32 = u32::MAX;
 /// Object record size written by version 1.0; readers accept larger records (SPEC.md A.7).
 pub const OBJECT_RECORD_LEN: u32 = 64;
-
-/// A section type: four ASCII bytes (SPEC.md A.5).
-#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct SectionType(pub [u8; 4]);
-
-impl SectionType {
-    pub const META: Self = Self(*b"META");
-    pub const OBJS: Self = Self(*b"OBJS");
-    pub const POSN: Self = Self(*b"POSN");
-    pub const TRIS: Self = Self(*b"TRIS");
-    pub const ROFS: Self = Self(*b"ROFS");
-    pub const RING: Self = Self(*b"RING");
-    pub const VFLG: Self = Self(*b"VFLG");
-    pub const SFLG: Self = Self(*b"SFLG");
-    pub const CSPK: Self = Self(*b"CSPK");
-    pub const NBRS: Self = Self(*b"NBRS");
-    pub const EDGE: Self = Self(*b"EDGE");
-    pub const TREC: Self = Self(*b"TREC");
-    pub const NRML: Self = Self(*b"NRML");
-    pub const BITS: Self = Self(*b"BITS");
-    pub const COLR: Self = Self(*b"COLR");
-
-    /// The per-object sections, in the order the writer emits them.
-    pub const PER_OBJECT: [Self; 13] = [
-        Self::POSN,
-        Self::TRIS,
-        Self::ROFS,
-        Self::RING,
-        Self::VFLG,
-        Self::SFLG,
-        Self::CSPK,
-        Self::NBRS,
-        Self::EDGE,
-        Self::TREC,
-        Self::NRML,
-        Self::BITS,
-        Self::COLR,
-    ];
-
-    pub fn from_u32(v: u32) -> Self {
-        Self(v.to_le_bytes())
-    }
-
-    pub fn to_u32(self) -> u32 {
-        u32::from_le_bytes(self.0)
-    }
-
-    /// True for the types this version of the specification defines.
-    pub fn is_known(self) -> bool {
-        self == Self::META || self == Self::OBJS || Self::PER_OBJECT.contains(&self)
-    }
-
-    /// True for types that belong to an object rather than to the file.
-    pub fn is_per_object(self) -> bool {
-        Self::PER_OBJECT.contains(&self)
-    }
-}
-
-impl fmt::Display for SectionType {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.0.iter().all(|b| b.is_ascii_graphic() || *b == b' ') {
-            f.write_str(std::str::from_utf8(&self.0).unwrap_or("????"))
-        } else {
-            write!(f, "0x{:08x}", self.to_u32())
-        }
-    }
-}
-
-impl fmt::Debug for SectionType {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "SectionType({self})")
-    }
-}
 
 /// The header fields (SPEC.md A.3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

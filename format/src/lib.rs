@@ -20,8 +20,10 @@ pub mod example;
 mod gltf;
 mod layout;
 mod model;
+mod problem;
 mod read;
 pub mod rules;
+mod section;
 mod tree;
 mod validate;
 mod write;
@@ -34,20 +36,22 @@ pub use gltf::{
     LinkNext, LinkSink, PrimitiveLink, RootLink, EXTENSION_NAME,
 };
 pub use layout::{
-    read_layout, Header, Layout, SectionEntry, SectionType, DIRECTORY_ENTRY_LEN, FILE_LEVEL,
-    HEADER_LEN, IDENTIFIER, MAJOR_VERSION, MINOR_VERSION, OBJECT_RECORD_LEN, SECTION_ALIGNMENT,
+    read_layout, Header, Layout, SectionEntry, DIRECTORY_ENTRY_LEN, FILE_LEVEL, HEADER_LEN,
+    IDENTIFIER, MAJOR_VERSION, MINOR_VERSION, OBJECT_RECORD_LEN, SECTION_ALIGNMENT,
 };
 pub use model::{
     geometry_hash, rgb9e5, Container, ControlMesh, Metadata, Object, ObjectKind, TriangleRecord,
     NO_NEIGHBOUR, RULE_CORNER, RULE_CREASE, RULE_SMOOTH, SPOKE_BOUNDARY, SPOKE_SHARP,
     VERTEX_BOUNDARY, VERTEX_RULE_MASK, VERTEX_RULE_SHIFT,
 };
+pub use problem::Problem;
 pub use read::{
     expected_length, read, read_metadata, read_object_table, read_with, ObjectRecord, ReadOptions,
 };
+pub use section::SectionType;
 pub use tree::{
     check_flags, decode_shape, encode_tree, triangle_trees, BitWriter, NodeInfo, Tree, TreeError,
     TreeShape, MAX_NODES, MAX_TREE_DEPTH,
 };
-pub use validate::{read_validated, validate, validate_bytes, Problem, MAX_PROBLEMS};
+pub use validate::{read_validated, validate, validate_bytes, MAX_PROBLEMS};
 pub use write::write;

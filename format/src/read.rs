@@ -8,6 +8,7 @@
 use crate::error::ReadError;
 use crate::layout::*;
 use crate::model::{Container, ControlMesh, Metadata, Object, ObjectKind, TriangleRecord};
+use crate::section::SectionType;
 use std::collections::BTreeMap;
 
 /// What the reader checks beyond structure.

@@ -13,8 +13,8 @@
 //! spoke pairs, unit normals, the geometry hash) stay in `validate.rs`.
 
 use crate::model::*;
+use crate::problem::Problem;
 use crate::tree::{TreeError, TreeShape};
-use crate::validate::Problem;
 
 /// What a sink returns to end a check: the rule returns at once, and so does its caller.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -4,26 +4,12 @@
 
 use crate::layout::*;
 use crate::model::*;
+use crate::problem::Problem;
 use crate::read::{read_from_layout, ReadOptions};
 use crate::rules::{self, ring_range, Flow, Sink, Stop, Table};
-use std::fmt;
 
 /// Problems stored before the rest are only counted.
 pub const MAX_PROBLEMS: usize = 1000;
-
-/// One rule violation: where and what.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Problem {
-    /// A path such as `objects[2].triangles[517]` or `sections[4]`.
-    pub location: String,
-    pub message: String,
-}
-
-impl fmt::Display for Problem {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: {}", self.location, self.message)
-    }
-}
 
 #[derive(Default)]
 pub(crate) struct Problems {

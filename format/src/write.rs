@@ -4,6 +4,7 @@
 use crate::error::WriteError;
 use crate::layout::*;
 use crate::model::{Container, Object, ObjectKind};
+use crate::section::SectionType;
 
 fn shape(object: usize, field: &'static str, reason: String) -> WriteError {
     WriteError::Shape {
