@@ -10,12 +10,15 @@
 //!   ids (every refinement), rings and neighbours (Loop), records and trees (colouring).
 //! * [`lattice`]: the 1-to-4 lattice of a refined triangle and its vertex numbering.
 //! * [`subdivide`](mod@subdivide): Loop subdivision, the CPU reference of the GPU Loop kernel.
+//! * [`incidence`]: the triangles around each edge and vertex ([`flat::FlatTopology`]), which
+//!   flat refinement and the split read.
 //! * [`flat`]: flat (linear) refinement, the CPU reference of the GPU flat kernel.
 //! * [`split`]: a multiresolution object's refined vertices split at sharp edges (SPEC.md F.5).
 //! * [`decode`]: the paper's per-subtriangle colour (tree walk, nearest representative normal).
 //! * [`lighting`], [`colour`]: the reconstruction of baked lighting on a refined mesh
 //!   (SPEC.md, Appendix G).
 //! * [`refine`]: one object refined as the runtime draws it (Loop or flat, coloured).
+//! * [`normal`]: triangle normals (area-weighted, and unit for glTF).
 //!
 //! No `unsafe` outside `os` (one `madvise` hint, argued there): the crate denies `unsafe_code`
 //! and every other module forbids it.
@@ -28,9 +31,13 @@ pub mod decode;
 #[forbid(unsafe_code)]
 pub mod flat;
 #[forbid(unsafe_code)]
+pub mod incidence;
+#[forbid(unsafe_code)]
 pub mod lattice;
 #[forbid(unsafe_code)]
 pub mod lighting;
+#[forbid(unsafe_code)]
+pub mod normal;
 mod os;
 #[forbid(unsafe_code)]
 pub mod refine;

@@ -9,7 +9,9 @@
 use hce_format::{ControlMesh, Object, ObjectKind};
 
 use crate::colour::ColourError;
-use crate::flat::{refine_flat_cpu, FlatTopology};
+use crate::flat::refine_flat_cpu;
+use crate::incidence::FlatTopology;
+use crate::normal::{face_normal, unit_or_up};
 use crate::split::{SplitError, SplitTables};
 use crate::subdivide::{subdivide, Refined, SubdivError};
 use crate::tables::InvalidObject;
@@ -107,25 +109,4 @@ fn refine_linear(object: &Object, level: u32) -> Result<Refined, RefineError> {
         coarse_edges: topo.edge_count as usize,
         coarse_triangles: topo.triangle_count as usize,
     })
-}
-
-/// Area-weighted (unnormalised) normal of a triangle.
-pub fn face_normal(p: [[f32; 3]; 3]) -> [f32; 3] {
-    let u = [0, 1, 2].map(|k| p[1][k] - p[0][k]);
-    let w = [0, 1, 2].map(|k| p[2][k] - p[0][k]);
-    [
-        u[1] * w[2] - u[2] * w[1],
-        u[2] * w[0] - u[0] * w[2],
-        u[0] * w[1] - u[1] * w[0],
-    ]
-}
-
-/// `n` normalised, or +Y when it has no direction (glTF requires unit normals).
-pub fn unit_or_up(n: [f32; 3]) -> [f32; 3] {
-    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-    if len > 0.0 && len.is_finite() {
-        n.map(|x| x / len)
-    } else {
-        [0.0, 1.0, 0.0]
-    }
 }

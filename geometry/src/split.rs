@@ -20,7 +20,7 @@
 
 use hce_format::{ControlMesh, ObjectKind, NO_NEIGHBOUR, SPOKE_SHARP};
 
-use crate::flat::FlatTopology;
+use crate::incidence::FlatTopology;
 use crate::lattice::{corner_point, edge_point, incident_paths};
 use crate::subdivide::Refined;
 use crate::tables::InvalidObject;
@@ -460,7 +460,7 @@ fn region_normal(r: &Refined, points: &[(usize, [i32; 2])]) -> [f32; 3] {
     for &(t, [b, c]) in points {
         for path in incident_paths(r.level, b, c) {
             let tri = r.indices[t * per + path as usize].map(|i| r.positions[i as usize]);
-            let n = crate::refine::face_normal(tri);
+            let n = crate::normal::face_normal(tri);
             s = Some(match s {
                 None => n,
                 Some(s) => [s[0] + n[0], s[1] + n[1], s[2] + n[2]],

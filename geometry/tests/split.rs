@@ -29,8 +29,8 @@ fn cube(creases: Creases) -> ControlMesh {
 /// The outward unit normal of the cube face coarse triangle `t` lies on.
 fn face_normal(mesh: &ControlMesh, t: usize) -> [f32; 3] {
     let p = mesh.triangle(t).map(|v| mesh.position(v));
-    let n = hce_geometry::refine::face_normal(p);
-    hce_geometry::refine::unit_or_up(n)
+    let n = hce_geometry::normal::face_normal(p);
+    hce_geometry::normal::unit_or_up(n)
 }
 
 #[test]

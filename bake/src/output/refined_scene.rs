@@ -30,7 +30,8 @@ use hce_format::{hash_hex, write_glb, PrimitiveLink};
 use hce_format::{Object, ObjectKind};
 use serde_json::{json, Map, Value};
 
-use hce_geometry::refine::{face_normal, unit_or_up, RefinedObject};
+use hce_geometry::normal::{face_normal, unit_or_up};
+use hce_geometry::refine::RefinedObject;
 use hce_meshio::export::base64;
 use hce_meshio::{write_atomic, FileWriteError};
 
