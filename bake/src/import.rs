@@ -1,8 +1,5 @@
 //! Scene input for the baker: the scene importer of [`hce_meshio::scene`] (glTF and OBJ through
-//! hce's one guarded reader and scene-graph walk), re-exported here, and [`ToSolver`], which
+//! hce's one guarded reader and scene-graph walk), re-exported here with [`ToSolver`], which
 //! turns an imported scene into the solver's world-space [`Scene`](crate::scene::Scene).
 
-mod solver;
-
 pub use hce_meshio::scene::*;
-pub use solver::ToSolver;

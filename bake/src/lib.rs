@@ -16,7 +16,6 @@ pub mod import;
 pub mod normal_sets;
 pub mod output;
 pub mod pipeline;
-pub mod reference;
 pub mod scene;
 pub mod visibility;
 
@@ -24,23 +23,16 @@ pub use hierarchical::{
     bake, bake_with_progress, BakeParams, BakeResult, BakeStats, ObjectSolution, Progress,
     TriangleSolution,
 };
-pub use scene::{LightKind, PunctualLight, Scene, SolverObject};
-
-/// Most normals a triangle's set may hold (n0 included).
-pub const MAX_NORMALS_PER_TRIANGLE: usize = 64;
+pub use scene::{
+    LightKind, PunctualLight, Scene, SceneError, SolverObject, MAX_NORMALS_PER_TRIANGLE,
+};
 
 /// Everything that can go wrong while baking.
 #[derive(Debug, thiserror::Error)]
 pub enum BakeError {
-    #[error("{object}: {reason}")]
-    InvalidScene { object: String, reason: String },
-    #[error("{light}: {reason}")]
-    InvalidLight { light: String, reason: String },
-    #[error(
-        "the scene has no light source: add a punctual light (KHR_lights_punctual) or an \
-         emissive material"
-    )]
-    NoLight,
+    /// The scene fails [`Scene::validate`].
+    #[error(transparent)]
+    Scene(#[from] SceneError),
     #[error("invalid bake parameter: {0}")]
     InvalidParameter(String),
     #[error("object '{object}' triangle {triangle}: {reason}")]

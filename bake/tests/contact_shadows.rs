@@ -1,4 +1,4 @@
-//! Contact shadows against the independent path tracer ([`hce_bake::reference`]): a slab
+//! Contact shadows against the independent path tracer ([`hce_reference`]): a slab
 //! floating just above the floor of a closed room lit by a panel under its ceiling, and a
 //! block standing on the floor beside it. The floor is a fine grid of its own, so that bands
 //! of floor triangles under and around each object can be compared, as area averages, with the
@@ -14,8 +14,8 @@
 mod common;
 
 use glam::Vec3;
-use hce_bake::reference::PathTracer;
 use hce_bake::{bake, BakeParams, Scene, SolverObject};
+use hce_reference::PathTracer;
 
 #[derive(Default)]
 struct Mesh {

@@ -1,5 +1,5 @@
 //! The baked Cornell box against an independent path-traced reference
-//! ([`hce_bake::reference`]), surface by surface: every wall, the floor, the ceiling, every
+//! ([`hce_reference`]), surface by surface: every wall, the floor, the ceiling, every
 //! block face and the light, each as the area average of the outgoing radiance.
 //!
 //! `HCE_REFERENCE_PATHS=N` sets the paths per surface (default 16384, which keeps the test
@@ -21,8 +21,8 @@ use std::path::Path;
 
 use glam::Vec3;
 use hce_bake::import::{import_scene, ImportOptions, ToSolver};
-use hce_bake::reference::PathTracer;
 use hce_bake::{bake, BakeParams};
+use hce_reference::PathTracer;
 
 /// A planar surface: an object's triangles that share one normal.
 struct Surface {

@@ -1,4 +1,4 @@
-//! Objects in a lit room against the independent path tracer ([`hce_bake::reference`]), face
+//! Objects in a lit room against the independent path tracer ([`hce_reference`]), face
 //! by face (issue 20: objects came out darker than path tracers showed them). A closed room
 //! lit by an emitting panel under its ceiling holds an octahedron floating in the middle and
 //! one resting on a vertex on the floor, so that its lower faces look at the floor from close
@@ -12,8 +12,8 @@
 mod common;
 
 use glam::Vec3;
-use hce_bake::reference::PathTracer;
 use hce_bake::{bake, BakeParams, Scene, SolverObject};
+use hce_reference::PathTracer;
 
 struct Mesh {
     positions: Vec<[f32; 3]>,

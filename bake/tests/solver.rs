@@ -684,7 +684,7 @@ fn a_lit_closed_room_agrees_with_the_path_tracer() {
         lights: Vec::new(),
     };
     let res = bake(&scene, &BakeParams::default()).unwrap();
-    let tracer = hce_bake::reference::PathTracer::new(&scene);
+    let tracer = hce_reference::PathTracer::new(&scene);
     let mut per = vec![(0.0f64, 0.0f64); scene.objects.len()];
     for (c, l, oi, _) in leaves(&res, &scene) {
         let area = f64::from((c[1] - c[0]).cross(c[2] - c[0]).length() * 0.5);

@@ -8,10 +8,12 @@
 //! * [`gltf_guard`]: the guards every glTF reader goes through (URI rules here; with `import`
 //!   also the guarded open, accessor checks and panic catching around the `gltf` crate).
 //! * [`atomic`]: [`write_atomic`], the one way every tool output is written.
+//! * [`solver_scene`]: the world-space scene the radiosity solver and the reference path tracer
+//!   read ([`Scene`], [`SolverObject`], [`PunctualLight`]), checked by [`Scene::validate`].
 //!
 //! Feature `import` (default): the readers, on the `gltf` crate, `tobj` and `image`:
 //! * `scene`: the baker's scene importer (objects per node instance and primitive,
-//!   materials and textures, lights, camera);
+//!   materials and textures, lights, camera), and `ToSolver`, its result as a [`Scene`];
 //! * `import`: `load_mesh`, one triangle mesh in world space from OBJ/glTF (`hce subdivide`);
 //! * `plain`: `load_plain_mesh`, `hce render`'s preview of a plain mesh, by the same reader as
 //!   `load_mesh` (the `PlainMesh` type is there without features).
@@ -24,6 +26,7 @@
 pub mod atomic;
 pub mod gltf_guard;
 pub mod scene_graph;
+pub mod solver_scene;
 
 #[cfg(feature = "export")]
 pub mod export;
@@ -38,3 +41,4 @@ pub use atomic::{write_atomic, write_atomic_with, FileWriteError};
 pub use export::ExportError;
 #[cfg(feature = "import")]
 pub use import::{load_mesh, ImportError, InputMesh};
+pub use solver_scene::{LightKind, PunctualLight, Scene, SceneError, SolverObject};

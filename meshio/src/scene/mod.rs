@@ -2,8 +2,8 @@
 //! Wavefront OBJ with MTL, read into one flat list of objects (one per node instance and
 //! triangle primitive), materials, punctual lights and the camera, in a deterministic order.
 //! glTF goes through the guards of [`crate::gltf_guard`] and the node walk of
-//! [`crate::scene_graph`], as every glTF reader of hce does; `hce_bake::import` turns the result
-//! into the solver's world-space scene.
+//! [`crate::scene_graph`], as every glTF reader of hce does; [`ToSolver`] turns the result into
+//! the solver's world-space [`Scene`](crate::solver_scene::Scene).
 //!
 //! Unsupported content (points, lines, non-triangle primitives, missing buffers, unknown
 //! extensions) becomes a warning naming it; only a file that cannot be read at all, or a scene
@@ -11,8 +11,11 @@
 
 mod gltf;
 mod obj;
+mod solver;
 mod texture;
 
+pub use crate::solver_scene::{LightKind, PunctualLight};
+pub use solver::ToSolver;
 pub use texture::{srgb_to_linear, Texture, WrapMode};
 
 use glam::Mat4;
@@ -196,42 +199,6 @@ impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emission.iter().any(|&e| e > 0.0)
     }
-}
-
-/// The kind of a punctual light (KHR_lights_punctual); the baker's solver takes it as is.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum LightKind {
-    /// Emits `intensity` candela in every direction from `position`.
-    Point,
-    /// As a point light inside a cone around `direction`; angles in radians from the axis,
-    /// with glTF's smooth falloff between them.
-    Spot {
-        inner_cone_angle: f32,
-        outer_cone_angle: f32,
-    },
-    /// Parallel light travelling along `direction`; `intensity` in lux.
-    Directional,
-}
-
-/// A punctual light placed in world space: the one light type of the importer and the solver
-/// (`hce_bake::PunctualLight` is this type). Units are those of KHR_lights_punctual: candela
-/// for point and spot lights, lux for directional lights.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PunctualLight {
-    /// The light's name, else its node's, else `light {i}` (its index in the scene's lights).
-    pub name: String,
-    pub kind: LightKind,
-    /// World position (ignored for directional lights).
-    pub position: [f32; 3],
-    /// World direction the light travels (the node's -Z; spot axis / directional), need not be
-    /// unit; unused for point lights.
-    pub direction: [f32; 3],
-    /// Linear RGB colour multiplying `intensity`.
-    pub color: [f32; 3],
-    /// Candela (point, spot) or lux (directional).
-    pub intensity: f32,
-    /// glTF `range`: beyond it the light contributes nothing; `None` is infinite.
-    pub range: Option<f32>,
 }
 
 /// The projection of a camera.

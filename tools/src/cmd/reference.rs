@@ -7,11 +7,11 @@
 //! from the file's control mesh, as `hce render
 //! --cpu-reference` does), flat objects as they are (their refinement is linear), each instance
 //! placed by its node's world transform. Materials and lights are the baker's: the same file read
-//! by [`hce_bake::import::import_scene`] (reflectance and emission per coarse triangle, which
+//! by [`hce_meshio::scene::import_scene`] (reflectance and emission per coarse triangle, which
 //! every fine triangle of it inherits; textured reflectance averaged over each fine triangle;
 //! KHR_lights_punctual). Multiresolution objects shade with the refined mesh's vertex normals
 //! (`Refined::normals`), so the reference is the smooth refined surface
-//! ([`hce_bake::reference`]).
+//! ([`hce_reference`]).
 //!
 //! The camera and the pixel grid are the renderer's: the same camera choice
 //! ([`hce_runtime::gpu::resolve_camera`]) and rays from the inverse of the renderer's own
@@ -37,10 +37,10 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::{DMat4, DVec3, DVec4, Mat3, Mat4, Vec3};
-use hce_bake::import::{import_scene, ImportOptions, ToSolver};
-use hce_bake::reference::PathTracer;
-use hce_bake::{Scene, SolverObject};
 use hce_format::ObjectKind;
+use hce_meshio::scene::{import_scene, ImportOptions, ToSolver};
+use hce_meshio::{Scene, SolverObject};
+use hce_reference::PathTracer;
 use hce_runtime::asset::{Asset, AssetError};
 use indicatif::{ProgressBar, ProgressStyle};
 

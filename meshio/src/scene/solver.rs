@@ -1,4 +1,4 @@
-//! From an imported scene to the solver's world-space [`Scene`](crate::scene::Scene).
+//! From an imported scene to the solver's world-space [`Scene`].
 //!
 //! The importer keeps everything the output writer needs (glTF indices, object-space data); the
 //! solver wants world-space triangles with a reflectance and an emission per triangle. Textured
@@ -8,7 +8,7 @@
 use std::sync::Arc;
 
 use super::{ImportedObject, ImportedScene};
-use crate::scene::{self, Scene};
+use crate::solver_scene::{self as scene, Scene};
 
 /// The solver's view of an imported scene.
 pub trait ToSolver {

@@ -1,3 +1,5 @@
+//! # hce-reference
+//!
 //! An independent Monte-Carlo path tracer for diffuse scenes, to check the radiosity solver
 //! and the rendered results against (Kajiya, "The rendering equation", SIGGRAPH 1986;
 //! next-event estimation and Russian roulette as in Arvo & Kirk, "Particle transport and image
@@ -34,10 +36,11 @@
 //! Deterministic: path `i` of a surface query draws its random numbers from its own generator,
 //! seeded by `(seed, i)`, every pixel of an image from one seeded by `(seed, pixel)`, and sums
 //! are taken in a fixed order, so results do not depend on the number of threads.
+#![forbid(unsafe_code)]
 
 use std::time::Duration;
 
-use glam::DVec3;
+use glam::{DVec3, Vec3A};
 use obvhs::{
     cwbvh::{builder::build_cwbvh_from_tris, CwBvh},
     ray::{Ray, RayHit},
@@ -46,7 +49,7 @@ use obvhs::{
 };
 use rayon::prelude::*;
 
-use crate::scene::{LightKind, Scene};
+use hce_meshio::solver_scene::{LightKind, Scene};
 
 /// Bounces after which a path stops whatever its weight (0.95^64 < 4 %; with Cornell box
 /// reflectances the truncated energy is far below the noise).
@@ -212,10 +215,12 @@ fn intersect(t: &Tri, o: DVec3, d: DVec3) -> Option<(f64, f64, f64)> {
     Some((t.e2.dot(q) * inv, u, v))
 }
 
-/// The f32 ray `obvhs` traverses with; `None` when the ray cannot be represented.
+/// The f32 ray `obvhs` traverses with; `None` when the ray cannot be represented. A negative
+/// zero in the direction is made positive (`-0.0 + 0.0` is `+0.0`): its reciprocal is `-inf`,
+/// for which the BVH's slab test misses every box.
 fn bvh_ray(o: DVec3, d: DVec3) -> Option<Ray> {
     let (o, d) = (o.as_vec3a(), d.as_vec3a());
-    (o.is_finite() && d.is_finite()).then(|| crate::visibility::bvh_ray(o, d, 0.0, f32::INFINITY))
+    (o.is_finite() && d.is_finite()).then(|| Ray::new(o, d + Vec3A::ZERO, 0.0, f32::INFINITY))
 }
 
 /// A distance the BVH may prune beyond without losing a hit at `dist` (rounded up).
@@ -686,7 +691,7 @@ impl<'a> PathTracer<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{PunctualLight, SolverObject};
+    use hce_meshio::solver_scene::{PunctualLight, SolverObject};
 
     fn quad(o: [f32; 3], u: [f32; 3], v: [f32; 3]) -> ([[f32; 3]; 4], [[u32; 3]; 2]) {
         let p = |a: f32, b: f32| [0, 1, 2].map(|k| o[k] + a * u[k] + b * v[k]);
@@ -812,8 +817,8 @@ mod tests {
     fn cornell() -> Scene {
         let path =
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../samples/cornell-box.glb");
-        use crate::import::ToSolver;
-        crate::import::import_scene(&path, &crate::import::ImportOptions::default())
+        use hce_meshio::scene::{import_scene, ImportOptions, ToSolver};
+        import_scene(&path, &ImportOptions::default())
             .unwrap()
             .solver_scene()
     }
