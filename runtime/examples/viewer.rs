@@ -7,10 +7,10 @@
 //! (and in CI), but the calls are the same: load once, upload once, then per frame choose the
 //! levels from the camera, refine what changed and bind the buffers.
 //!
-//! The windowed loop is `hce view` (tools/src/view/): a winit window whose surface comes from
-//! `GpuContext::instance()` and whose device from `GpuContext::on_instance(.., Some(&surface))`,
-//! the same `GpuScene` calls as below each frame, and the scene drawn into the window's own
-//! render pass with `MeshPipeline` (tools/src/view/frame.rs).
+//! The windowed loop is `hce view` (tools/src/cmd/view/window/): a winit window whose surface
+//! comes from `GpuContext::instance()` and whose device from `GpuContext::on_instance(..,
+//! Some(&surface))`, the same `GpuScene` calls as below each frame, and the scene drawn into the
+//! window's own render pass with `MeshPipeline` (tools/src/cmd/view/window/frame.rs).
 
 #[cfg(feature = "gpu")]
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -47,8 +47,8 @@ pub fn usage(e: anyhow::Error) -> anyhow::Error {
     Usage(format!("{e:#}")).into()
 }
 
-/// The input was read and found unacceptable, and the problems were already printed (as by
-/// `hce validate`): exits 3.
+/// The input was read and found unacceptable (an image `hce compare` cannot use, or a file whose
+/// problems `hce validate` already printed): exits 3.
 #[derive(Debug, thiserror::Error)]
 #[error("{0}")]
 pub struct Invalid(pub String);
@@ -58,6 +58,24 @@ pub struct Invalid(pub String);
 #[derive(Debug, thiserror::Error)]
 #[error("{0}")]
 pub struct Io(pub String);
+
+/// Why a file could not be loaded (`hce inspect`, `hce validate`): I/O (exit 4) or invalid
+/// content (exit 3).
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    #[error("{0}")]
+    Io(String),
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl LoadError {
+    pub fn message(&self) -> &str {
+        match self {
+            LoadError::Io(m) | LoadError::Invalid(m) => m,
+        }
+    }
+}
 
 /// The documented status of `e`. A cause whose type fixes the status decides (the outermost
 /// one); otherwise any I/O error among the causes makes it 4, any error of unacceptable input
@@ -88,10 +106,10 @@ fn decisive(c: &(dyn std::error::Error + 'static)) -> Option<Status> {
     if c.is::<Io>() {
         return Some(Status::Io);
     }
-    if let Some(e) = c.downcast_ref::<crate::cmd::inspect::LoadError>() {
+    if let Some(e) = c.downcast_ref::<LoadError>() {
         return Some(match e {
-            crate::cmd::inspect::LoadError::Io(_) => Status::Io,
-            crate::cmd::inspect::LoadError::Invalid(_) => Status::Invalid,
+            LoadError::Io(_) => Status::Io,
+            LoadError::Invalid(_) => Status::Invalid,
         });
     }
     if let Some(e) = c.downcast_ref::<PipelineError>() {
@@ -144,7 +162,6 @@ fn is_invalid_input(c: &(dyn std::error::Error + 'static)) -> bool {
         || c.is::<hce_format::ReadError>()
         || c.is::<hce_format::GltfError>()
         || c.is::<hce_runtime::AssetError>()
-        || c.is::<crate::cmd::compare::InvalidImage>()
 }
 
 /// A level out of range is the caller's argument (2); anything else is the mesh's (3).
@@ -153,6 +170,17 @@ fn subdiv_status(e: &hce_geometry::SubdivError) -> Status {
         hce_geometry::SubdivError::Level(_) => Status::Usage,
         _ => Status::Invalid,
     }
+}
+
+/// The status of a panic that ends the command quietly, from the panic's message, or `None` for
+/// a panic that is a bug (left to the default hook). A reader that closes the pipe early
+/// (`hce inspect x.glb | head`) makes `println!` panic with "failed printing to stdout: Broken
+/// pipe": the reader's choice, not a crash, but the output was not all written, so the status is
+/// that of an output that cannot be written (4), never success; a pipeline under
+/// `set -o pipefail` does not take a cut-off listing for a whole one.
+pub fn quiet_panic_status(message: &str) -> Option<Status> {
+    (message.starts_with("failed printing to std") && message.contains("Broken pipe"))
+        .then_some(Status::Io)
 }
 
 /// Prints `e` with its causes and returns its status.
@@ -212,6 +240,24 @@ mod tests {
             path: "x.png".into(),
         };
         assert_eq!(classify(&anyhow::Error::new(e)), Status::Usage);
+    }
+
+    #[test]
+    fn a_closed_pipe_ends_with_the_status_of_an_unwritable_output() {
+        let closed = "failed printing to stdout: Broken pipe (os error 32)";
+        assert_eq!(quiet_panic_status(closed), Some(Status::Io));
+        assert_eq!(
+            quiet_panic_status("failed printing to stderr: Broken pipe (os error 32)"),
+            Some(Status::Io)
+        );
+        assert_ne!(Status::Io as i32, 0);
+        // A full disk is not the reader's choice, and any other panic is a bug: no quiet end.
+        let full = "failed printing to stdout: No space left on device (os error 28)";
+        assert_eq!(quiet_panic_status(full), None);
+        assert_eq!(
+            quiet_panic_status("index out of bounds: the len is 3"),
+            None
+        );
     }
 
     #[test]

@@ -6,8 +6,6 @@ use clap::{Parser, Subcommand};
 
 mod cmd;
 mod exit;
-#[cfg(feature = "gpu")]
-mod view;
 
 use exit::EXIT_CODES;
 
@@ -62,8 +60,8 @@ enum Command {
 }
 
 /// `hce inspect x.glb | head` closes the pipe early; Rust's `println!` then panics with "failed
-/// printing to stdout: Broken pipe". That is the reader's choice, not a failure of the command:
-/// end quietly, as a Unix tool does on SIGPIPE.
+/// printing to stdout: Broken pipe". That is the reader's choice, not a crash: end quietly, as a
+/// Unix tool does on SIGPIPE, with the status `exit::quiet_panic_status` gives it.
 fn quiet_on_broken_pipe() {
     let default = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
@@ -73,8 +71,8 @@ fn quiet_on_broken_pipe() {
             .map(String::as_str)
             .or_else(|| info.payload().downcast_ref::<&str>().copied())
             .unwrap_or("");
-        if message.starts_with("failed printing to std") && message.contains("Broken pipe") {
-            std::process::exit(0);
+        if let Some(status) = exit::quiet_panic_status(message) {
+            std::process::exit(status as i32);
         }
         default(info);
     }));

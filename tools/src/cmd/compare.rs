@@ -23,6 +23,8 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use serde::Serialize;
 
+use crate::exit::Invalid;
+
 #[derive(Args, Debug)]
 pub struct CompareArgs {
     /// The image to judge (linear .exr).
@@ -102,11 +104,6 @@ pub fn diff_picture(a: &Rgb, b: &Rgb, mask: Option<&[bool]>, scale: f32, block: 
     out
 }
 
-/// An image the command cannot use: undecodable, or a size that does not match (exit status 3).
-#[derive(Debug, thiserror::Error)]
-#[error("{0}")]
-pub struct InvalidImage(pub String);
-
 /// The figures `hce compare` prints.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Comparison {
@@ -147,7 +144,7 @@ pub fn read_exr(path: &Path) -> Result<Rgb> {
         },
     )
     .map_err(|e| {
-        InvalidImage(format!(
+        Invalid(format!(
             "{}: not a readable RGB(A) EXR: {e}",
             path.display()
         ))
@@ -160,7 +157,7 @@ pub fn read_mask(path: &Path) -> Result<(usize, usize, Vec<bool>)> {
     let file =
         std::fs::File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
     let bad = |e: &dyn std::fmt::Display| {
-        InvalidImage(format!("{}: not a readable PNG mask: {e}", path.display()))
+        Invalid(format!("{}: not a readable PNG mask: {e}", path.display()))
     };
     let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
     decoder.set_transformations(png::Transformations::normalize_to_color8());
@@ -205,11 +202,11 @@ pub fn compare(a: &Rgb, b: &Rgb, mask: Option<&[bool]>) -> Result<Comparison> {
         }
     }
     if pixels == 0 {
-        bail!(InvalidImage("the mask selects no pixel".into()));
+        bail!(Invalid("the mask selects no pixel".into()));
     }
     let (d2_all, b2_all): (f64, f64) = (d2.iter().sum(), b2.iter().sum());
     if !(b2_all > 0.0 && sum != 0.0) {
-        bail!(InvalidImage(
+        bail!(Invalid(
             "the reference is black where compared: a relative difference is undefined".into()
         ));
     }
@@ -232,7 +229,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
     let b = match (&args.reference, args.constant) {
         (_, Some(v)) => {
             if !(v.is_finite() && v > 0.0) {
-                bail!(InvalidImage(format!(
+                bail!(Invalid(format!(
                     "--constant {v}: a reference value must be positive and finite"
                 )));
             }
@@ -245,7 +242,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
         (Some(path), None) => {
             let b = read_exr(path)?;
             if (a.width, a.height) != (b.width, b.height) {
-                bail!(InvalidImage(format!(
+                bail!(Invalid(format!(
                     "{} is {}x{} but the reference {} is {}x{}; render both at the same --size",
                     args.image.display(),
                     a.width,
@@ -263,7 +260,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
         Some(path) => {
             let (w, h, m) = read_mask(path)?;
             if (w, h) != (a.width, a.height) {
-                bail!(InvalidImage(format!(
+                bail!(Invalid(format!(
                     "the mask {} is {w}x{h} but the images are {}x{}",
                     path.display(),
                     a.width,

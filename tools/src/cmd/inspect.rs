@@ -5,6 +5,8 @@
 
 use clap::Args;
 
+pub use crate::exit::LoadError;
+
 use hce_format::{
     read_layout, read_with, rgb9e5, triangle_trees, Container, ObjectKind, ReadOptions,
 };
@@ -20,24 +22,6 @@ pub struct InspectArgs {
     /// Print one JSON document (shape in SPEC.md Appendix E) instead of text.
     #[arg(long)]
     pub json: bool,
-}
-
-/// Why a file could not be loaded: I/O (exit 4) or invalid content (exit 3; the statuses are
-/// decided in `crate::exit`).
-#[derive(Debug, thiserror::Error)]
-pub enum LoadError {
-    #[error("{0}")]
-    Io(String),
-    #[error("{0}")]
-    Invalid(String),
-}
-
-impl LoadError {
-    pub fn message(&self) -> &str {
-        match self {
-            LoadError::Io(m) | LoadError::Invalid(m) => m,
-        }
-    }
 }
 
 /// A primitive linked to a container object, with the hash recomputed from its geometry.

@@ -1,5 +1,7 @@
 //! `hce view`: open a baked asset (or preview a plain mesh) in a window and move around it, with
-//! the levels chosen live from the view. The window itself is in [`crate::view`].
+//! the levels chosen live from the view. The window itself is in [`window`].
+
+mod window;
 
 use std::path::PathBuf;
 
@@ -79,9 +81,9 @@ pub struct ViewArgs {
 
 #[cfg(feature = "gpu")]
 pub fn run(args: ViewArgs) -> Result<()> {
-    use crate::view::{camera::CameraPath, content::Levels, Options, Settings};
     use anyhow::bail;
     use hce_runtime::gpu::LodParams;
+    use window::{camera::CameraPath, content::Levels, Options, Settings};
 
     let size = super::render::parse_size(&args.size)?;
     let camera = super::render::camera_choice(args.camera.as_deref())?;
@@ -114,7 +116,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
         .as_deref()
         .map(CameraPath::parse)
         .transpose()?;
-    crate::view::run(Options {
+    window::run(Options {
         file: args.file,
         size,
         camera,
