@@ -17,7 +17,23 @@
 use glam::Vec3;
 
 use super::lod::Camera;
-use super::render::auto_camera;
+
+/// The camera [`Framing::Auto`](super::render::Framing::Auto) uses for these bounds and aspect ratio (width / height).
+pub(crate) fn auto_camera(lo: [f32; 3], hi: [f32; 3], aspect: f32) -> Camera {
+    let fov = 40.0f32;
+    let centre = (Vec3::from(lo) + Vec3::from(hi)) * 0.5;
+    let radius = ((Vec3::from(hi) - Vec3::from(lo)).length() * 0.5).max(1e-6);
+    // Fit the sphere in the narrower of the two fields of view, with 10% margin.
+    let half_v = (fov * 0.5).to_radians();
+    let half_h = (half_v.tan() * aspect.min(1.0)).atan();
+    let distance = 1.1 * radius / half_h.sin();
+    let dir = Vec3::new(0.55, 0.45, 1.0).normalize();
+    Camera {
+        eye: (centre + dir * distance).into(),
+        target: centre.into(),
+        fov_y_degrees: fov,
+    }
+}
 
 /// Where [`auto_scene_camera`] placed the eye.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -19,6 +19,7 @@
 
 use glam::{Mat4, Vec3, Vec4};
 
+use super::framing::auto_camera;
 use super::lod::Camera;
 use super::util::{bind_buffers, uniform_init};
 use super::{GpuContext, GpuError};
@@ -192,23 +193,6 @@ pub fn mesh_bounds(positions: &[f32]) -> Option<([f32; 3], [f32; 3])> {
     (lo.iter().chain(&hi).all(|x| x.is_finite())).then_some((lo, hi))
 }
 
-/// The camera [`Framing::Auto`] uses for these bounds and aspect ratio (width / height).
-pub(crate) fn auto_camera(lo: [f32; 3], hi: [f32; 3], aspect: f32) -> Camera {
-    let fov = 40.0f32;
-    let centre = (Vec3::from(lo) + Vec3::from(hi)) * 0.5;
-    let radius = ((Vec3::from(hi) - Vec3::from(lo)).length() * 0.5).max(1e-6);
-    // Fit the sphere in the narrower of the two fields of view, with 10% margin.
-    let half_v = (fov * 0.5).to_radians();
-    let half_h = (half_v.tan() * aspect.min(1.0)).atan();
-    let distance = 1.1 * radius / half_h.sin();
-    let dir = Vec3::new(0.55, 0.45, 1.0).normalize();
-    Camera {
-        eye: (centre + dir * distance).into(),
-        target: centre.into(),
-        fov_y_degrees: fov,
-    }
-}
-
 /// View-projection matrix (wgpu clip space, depth 0..1) of `camera`, with near and far planes
 /// around the bounds.
 pub fn view_projection(camera: &Camera, lo: [f32; 3], hi: [f32; 3], aspect: f32) -> Mat4 {
@@ -345,18 +329,6 @@ pub struct MeshDraw<'a> {
     pub indices: &'a wgpu::Buffer,
     pub index_count: u32,
     pub transform: Mat4,
-}
-
-impl<'a> From<&super::SceneDraw<'a>> for MeshDraw<'a> {
-    fn from(d: &super::SceneDraw<'a>) -> Self {
-        Self {
-            positions: d.positions,
-            colours: d.colours,
-            indices: d.indices,
-            index_count: d.index_count,
-            transform: d.transform,
-        }
-    }
 }
 
 /// The pipeline that draws placed meshes with their linear colours and no lighting

@@ -253,6 +253,18 @@ pub struct SceneDraw<'a> {
     pub transform: Mat4,
 }
 
+impl<'a> From<&SceneDraw<'a>> for MeshDraw<'a> {
+    fn from(d: &SceneDraw<'a>) -> Self {
+        Self {
+            positions: d.positions,
+            colours: d.colours,
+            indices: d.indices,
+            index_count: d.index_count,
+            transform: d.transform,
+        }
+    }
+}
+
 /// A refined object copied back to the CPU.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ObjectMesh {
