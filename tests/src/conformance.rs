@@ -91,6 +91,22 @@ fn creased_grid() -> Container {
     c
 }
 
+/// The unit normal `(p1 − p0) × (p2 − p0)` of a triangle, in `f64`.
+fn face_normal(p: [[f32; 3]; 3]) -> [f64; 3] {
+    let p = p.map(|c| c.map(f64::from));
+    let (u, v) = (
+        [0, 1, 2].map(|k| p[1][k] - p[0][k]),
+        [0, 1, 2].map(|k| p[2][k] - p[0][k]),
+    );
+    let n = [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ];
+    let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    n.map(|x| x / l)
+}
+
 /// A flat strip of three unit squares (six triangles) along `x`: the first lies in `z = 0`, the
 /// second rises 5 degrees from it (a fold under 10 degrees: joined, its vertices shared), the
 /// third turns up 90 degrees from the second (a fold that splits, SPEC.md F.5, G.2). Every
@@ -138,18 +154,7 @@ fn flat_fold() -> Container {
             normal_start: normals.len() as u32,
             normal_count: 1,
         });
-        let p = [0, 1, 2].map(|c| corner(tri[c]).map(f64::from));
-        let (u, v) = (
-            [0, 1, 2].map(|k| p[1][k] - p[0][k]),
-            [0, 1, 2].map(|k| p[2][k] - p[0][k]),
-        );
-        let n = [
-            u[1] * v[2] - u[2] * v[1],
-            u[2] * v[0] - u[0] * v[2],
-            u[0] * v[1] - u[1] * v[0],
-        ];
-        let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-        normals.push(n.map(|x| (x / l) as f32));
+        normals.push(face_normal([0, 1, 2].map(|c| corner(tri[c]))).map(|x| x as f32));
         let light = [[0.8, 0.7, 0.6], [0.6, 0.55, 0.5], [0.05, 0.04, 0.03]][t / 2];
         for k in 0..flags.len() {
             let f = 1.0 + 0.1 * k as f32;
@@ -209,17 +214,7 @@ fn uneven_normals() -> Container {
     let mut w = BitWriter::new();
     let (mut records, mut normals, mut colours) = (Vec::new(), Vec::new(), Vec::new());
     for (t, tri) in triangles.chunks_exact(3).enumerate() {
-        let p = [0, 1, 2].map(|c| corner(tri[c]).map(f64::from));
-        let (u, v) = (
-            [0, 1, 2].map(|k| p[1][k] - p[0][k]),
-            [0, 1, 2].map(|k| p[2][k] - p[0][k]),
-        );
-        let geometric = [
-            u[1] * v[2] - u[2] * v[1],
-            u[2] * v[0] - u[0] * v[2],
-            u[0] * v[1] - u[1] * v[0],
-        ];
-        let g = unit(geometric).map(f64::from);
+        let g = face_normal([0, 1, 2].map(|c| corner(tri[c])));
         let set: Vec<[f32; 3]> = std::iter::once(unit(g))
             .chain(
                 tilts[..t]
