@@ -673,7 +673,8 @@ pub fn linked_geometries(
 /// [`crate::validate_bytes`]), and every primitive link: well-formed, object in range, one mesh
 /// per object, triangle range inside the object and not overlapping another primitive's,
 /// triangles still hashing to `geometryHash` (and to the object's hash when the primitive is the
-/// whole object). `buffers` are the asset's loaded buffers ([`Asset::buffers`]). An empty result
+/// whole object). When the container cannot be read, the link checks that need no object are
+/// still made. `buffers` are the asset's loaded buffers ([`Asset::buffers`]). An empty result
 /// means the asset is valid; an asset that does not use the extension is one problem.
 pub fn validate_asset(json: &Value, buffers: &[Vec<u8>]) -> Vec<crate::Problem> {
     let mut p = crate::validate::Problems::default();
@@ -682,11 +683,10 @@ pub fn validate_asset(json: &Value, buffers: &[Vec<u8>]) -> Vec<crate::Problem> 
     for e in errors {
         push_error(&mut p, e);
     }
-    let Some(container) = container else {
-        return p.finish();
-    };
-    let _ = check_links(
-        &container.objects,
+    // Without a readable container the checks of rule 15 that read only the asset still run
+    // (SPEC.md Appendix C, stages 1 and 2): an edited mesh is worth reporting either way.
+    let _ = check_links_against(
+        container.as_ref().map(|c| c.objects.as_slice()),
         json,
         buffers,
         &links,
@@ -817,6 +817,20 @@ pub fn check_links(
     links: &[PrimitiveLink],
     sink: &mut impl LinkSink,
 ) -> Result<Vec<usize>, crate::rules::Stop> {
+    check_links_against(Some(objects), json, buffers, links, sink)
+}
+
+/// [`check_links`] with the container's objects, or `None` when the container cannot be read:
+/// then only the checks that read the asset alone are made (one mesh per object, readable
+/// triangles, `geometryHash`, no overlap), and those that need an object (in range, the range
+/// inside it, its `geometry_hash`) are skipped (SPEC.md Appendix C).
+fn check_links_against(
+    objects: Option<&[crate::Object]>,
+    json: &Value,
+    buffers: &[Vec<u8>],
+    links: &[PrimitiveLink],
+    sink: &mut impl LinkSink,
+) -> Result<Vec<usize>, crate::rules::Stop> {
     let geometries = linked_geometries(json, buffers, links);
     let mut good = Vec::with_capacity(links.len());
     // (object, first triangle, end, location, link index) of each range that was read.
@@ -834,11 +848,17 @@ pub fn check_links(
                 }
             };
         }
-        let Some(object) = objects.get(l.object as usize) else {
-            fault!(LinkFault::ObjectOutOfRange {
-                objects: objects.len()
-            });
-            continue;
+        let object = match objects {
+            Some(objects) => {
+                let Some(object) = objects.get(l.object as usize) else {
+                    fault!(LinkFault::ObjectOutOfRange {
+                        objects: objects.len()
+                    });
+                    continue;
+                };
+                Some(object)
+            }
+            None => None,
         };
         match mesh_of.entry(l.object) {
             std::collections::hash_map::Entry::Vacant(v) => {
@@ -861,17 +881,16 @@ pub fn check_links(
                 computed: hash,
                 stored: l.geometry_hash
             });
-        } else if l.first_triangle == 0
-            && triangles == object.triangles.len()
-            && hash != object.geometry_hash
-        {
+        } else if let Some(object) = object.filter(|o| {
+            l.first_triangle == 0 && triangles == o.triangles.len() && hash != o.geometry_hash
+        }) {
             fault!(LinkFault::WholeObject {
                 computed: hash,
                 stored: object.geometry_hash
             });
         }
         let end = u64::from(l.first_triangle) + triangles as u64;
-        if end > object.triangles.len() as u64 {
+        if let Some(object) = object.filter(|o| end > o.triangles.len() as u64) {
             fault!(LinkFault::Range {
                 end,
                 triangles: object.triangles.len(),

@@ -196,3 +196,69 @@ fn primitive_hash_object_range_and_mesh_rules() {
         "primitives of one mesh only",
     );
 }
+
+/// The example GLB with its JSON and its embedded container's bytes edited, validated.
+fn glb_problems_with(
+    edit: impl FnOnce(&mut Value),
+    damage: impl FnOnce(&mut [u8]),
+) -> Vec<Problem> {
+    let a = Asset::from_glb(&example::triangle_glb()).unwrap();
+    let mut json = a.json.clone();
+    edit(&mut json);
+    let mut buffers = a.buffers(|_| Err("none".into())).unwrap();
+    let view = &json["bufferViews"][json["extensions"][EXTENSION_NAME]["bufferView"]
+        .as_u64()
+        .unwrap() as usize];
+    let at = view["byteOffset"].as_u64().unwrap() as usize;
+    let len = view["byteLength"].as_u64().unwrap() as usize;
+    damage(&mut buffers[0][at..at + len]);
+    validate_asset(&json, &buffers)
+}
+
+/// A stale hash and an object out of range, on the example's only primitive.
+fn stale_link_to_object_4(j: &mut Value) {
+    let link = &mut j["meshes"][0]["primitives"][0]["extensions"][EXTENSION_NAME];
+    link["geometryHash"] = json!("0123456789abcdef");
+    link["object"] = json!(4);
+}
+
+/// `edge_count` of object 0 made one too large, every checksum resealed: a decoding failure.
+fn wrong_edge_count(b: &mut [u8]) {
+    let objs = common::u64_at(b, common::entry(1) + 8) as usize;
+    let e = common::u32_at(b, objs + 8 + 36);
+    common::put_u32(b, objs + 8 + 36, e + 1);
+    common::reseal(b);
+}
+
+#[test]
+fn an_unreadable_container_hides_only_the_link_checks_that_need_it() {
+    // Stage 1 (the header checksum): one problem at `file`; the stale hash is still found, the
+    // object's range is not judged (the container's objects are unknown).
+    let p = glb_problems_with(stale_link_to_object_4, |b| b[28] ^= 1);
+    assert_eq!(p.len(), 2, "{p:#?}");
+    assert_problem(&p, "file", "header checksum");
+    assert_problem(&p, "meshes[0].primitives[0]", "edited after baking");
+    // Stage 2's decoding (edge_count): the same.
+    let p = glb_problems_with(stale_link_to_object_4, wrong_edge_count);
+    assert_eq!(p.len(), 2, "{p:#?}");
+    assert_problem(&p, "file", "edge_count");
+    assert_problem(&p, "meshes[0].primitives[0]", "edited after baking");
+    // A readable container: the range is judged too.
+    let p = glb_problems_with(stale_link_to_object_4, |_| {});
+    assert_problem(&p, &format!("{PRIM}.object"), "out of range");
+}
+
+#[test]
+fn a_decoding_failure_skips_the_content_rules_but_not_the_checksums() {
+    let mut c = example::two_triangles();
+    // Rule 11 broken: not reported once the decoding fails.
+    c.objects[0].mesh.positions[0] = 0.25;
+    let mut b = write(&c).unwrap();
+    wrong_edge_count(&mut b);
+    let last = b.len() - 1;
+    b[last] ^= 1;
+    let p = validate_bytes(&b);
+    assert_eq!(p.len(), 2, "{p:#?}");
+    assert_problem(&p, "sections[14] (COLR of object 0)", "checksum mismatch");
+    assert_problem(&p, "file", "edge_count");
+}

@@ -91,6 +91,22 @@ fn creased_grid() -> Container {
     c
 }
 
+/// The unit normal `(p1 − p0) × (p2 − p0)` of a triangle, in `f64`.
+fn face_normal(p: [[f32; 3]; 3]) -> [f64; 3] {
+    let p = p.map(|c| c.map(f64::from));
+    let (u, v) = (
+        [0, 1, 2].map(|k| p[1][k] - p[0][k]),
+        [0, 1, 2].map(|k| p[2][k] - p[0][k]),
+    );
+    let n = [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ];
+    let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    n.map(|x| x / l)
+}
+
 /// A flat strip of three unit squares (six triangles) along `x`: the first lies in `z = 0`, the
 /// second rises 5 degrees from it (a fold under 10 degrees: joined, its vertices shared), the
 /// third turns up 90 degrees from the second (a fold that splits, SPEC.md F.5, G.2). Every
@@ -138,18 +154,7 @@ fn flat_fold() -> Container {
             normal_start: normals.len() as u32,
             normal_count: 1,
         });
-        let p = [0, 1, 2].map(|c| corner(tri[c]).map(f64::from));
-        let (u, v) = (
-            [0, 1, 2].map(|k| p[1][k] - p[0][k]),
-            [0, 1, 2].map(|k| p[2][k] - p[0][k]),
-        );
-        let n = [
-            u[1] * v[2] - u[2] * v[1],
-            u[2] * v[0] - u[0] * v[2],
-            u[0] * v[1] - u[1] * v[0],
-        ];
-        let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-        normals.push(n.map(|x| (x / l) as f32));
+        normals.push(face_normal([0, 1, 2].map(|c| corner(tri[c]))).map(|x| x as f32));
         let light = [[0.8, 0.7, 0.6], [0.6, 0.55, 0.5], [0.05, 0.04, 0.03]][t / 2];
         for k in 0..flags.len() {
             let f = 1.0 + 0.1 * k as f32;
@@ -166,6 +171,88 @@ fn flat_fold() -> Container {
         objects: vec![Object {
             name: "fold".into(),
             kind: ObjectKind::Flat,
+            geometry_hash: hash,
+            mesh: example::control_mesh(positions, triangles),
+            triangles: records,
+            normals,
+            bits,
+            bit_len,
+            colours,
+        }],
+    }
+}
+
+/// A multiresolution fan of four triangles of different areas around an apex (vertex 0), with
+/// 1, 2, 3 and 4 normals in their sets and trees 0, 1, 2 and 1 deep: the leaves meeting at the
+/// apex and along the fan's edges differ in area, depth and normal count, so the probes'
+/// colours pin the weights of SPEC.md G.3 (a sample weighs its leaf's area over its triangle's
+/// normal count).
+fn uneven_normals() -> Container {
+    use hce_format::{geometry_hash, BitWriter, Metadata, Object, ObjectKind, TriangleRecord};
+    let positions = vec![
+        0.0, 0.0, 0.5, // the apex
+        1.0, 0.0, 0.0, 0.0, 1.5, 0.0, -0.8, 0.0, 0.0, 0.0, -1.2, 0.0,
+    ];
+    let triangles = vec![0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 1];
+    let corner = |v: u32| {
+        let i = 3 * v as usize;
+        [positions[i], positions[i + 1], positions[i + 2]]
+    };
+    let hash = geometry_hash(triangles.iter().map(|&v| corner(v)));
+    let unit = |n: [f64; 3]| {
+        let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        n.map(|x| (x / l) as f32)
+    };
+    // Directions the extra normals lean towards, one more per triangle.
+    let tilts = [[0.4, 0.0, 0.0], [0.0, 0.4, 0.1], [-0.3, -0.2, 0.3]];
+    let trees: [&[bool]; 4] = [
+        &[false],
+        &[true, false, false, false, false],
+        &[true, false, false, true, false, false, false, false, false],
+        &[true, false, false, false, false],
+    ];
+    let mut w = BitWriter::new();
+    let (mut records, mut normals, mut colours) = (Vec::new(), Vec::new(), Vec::new());
+    for (t, tri) in triangles.chunks_exact(3).enumerate() {
+        let g = face_normal([0, 1, 2].map(|c| corner(tri[c])));
+        let set: Vec<[f32; 3]> = std::iter::once(unit(g))
+            .chain(
+                tilts[..t]
+                    .iter()
+                    .map(|d| unit([g[0] + d[0], g[1] + d[1], g[2] + d[2]])),
+            )
+            .collect();
+        let bits_start = w.push_tree(trees[t]).expect("a small tree") as u32;
+        records.push(TriangleRecord {
+            bits_start,
+            colour_start: colours.len() as u32,
+            normal_start: normals.len() as u32,
+            normal_count: set.len() as u32,
+        });
+        for k in 0..trees[t].len() {
+            for (j, n) in set.iter().enumerate() {
+                // Brighter towards +x and up, with a step per node and per normal.
+                let base = 0.3 + 0.2 * t as f32 + 0.05 * k as f32;
+                let lean = 0.5 * n[0] + 0.3 * n[2] + 0.1 * j as f32;
+                colours.push(rgb9e5::encode([
+                    base + lean,
+                    0.5 * base + 0.2 * lean,
+                    0.25 + 0.1 * lean,
+                ]));
+            }
+        }
+        normals.extend(set);
+    }
+    let (bits, bit_len) = w.finish();
+    Container {
+        metadata: Metadata {
+            generator: "hce conformance uneven normals".into(),
+            bake_parameters: String::new(),
+            source_hash: hash,
+        },
+        objects: vec![Object {
+            name: "fan".into(),
+            kind: ObjectKind::Multiresolution,
             geometry_hash: hash,
             mesh: example::control_mesh(positions, triangles),
             triangles: records,
@@ -216,6 +303,13 @@ pub fn cases(cornell_baked: Vec<u8>) -> Vec<Case> {
              last probes are copies",
         ),
         case(
+            "valid/uneven-normals.hce",
+            hce(&uneven_normals()),
+            "SPEC.md G.3: a multiresolution fan whose triangles have 1 to 4 normals and trees 0 to \
+             2 deep; probe 0 is the apex, where leaves of every area, depth and normal count \
+             meet (a sample weighs its leaf's area over its triangle's normal count)",
+        ),
+        case(
             "valid/triangle.glb",
             example::triangle_glb(),
             "the Appendix D container in a GLB, linked from one primitive",
@@ -264,8 +358,7 @@ pub fn cases(cornell_baked: Vec<u8>) -> Vec<Case> {
         "A.1: 256 zero bytes after the last section, counted in file_length",
     ));
     let mut b = hce(&example::single_triangle());
-    let last = b.len() - 1;
-    b[last] ^= 1;
+    flip_last_byte(&mut b);
     out.push(case(
         "invalid/section-checksum.hce",
         b,
@@ -286,19 +379,42 @@ pub fn cases(cornell_baked: Vec<u8>) -> Vec<Case> {
         "A.6: bake_parameters is neither empty nor a JSON object",
     ));
 
-    // glTF mutations of the valid GLB (SPEC.md Section 3).
-    let glb = |file: &str, description: &str, edit: &dyn Fn(&mut Value)| {
-        let a = Asset::from_glb(&example::triangle_glb()).expect("the example GLB parses");
-        let mut j = a.json;
-        edit(&mut j);
-        let bytes =
-            hce_format::write_glb(&j, a.bin.as_deref().unwrap_or(&[])).expect("a small GLB");
-        case(file, bytes, description)
-    };
+    // The validation stages (SPEC.md Appendix C): what a failure leaves unchecked.
+    let mut c = example::two_triangles();
+    c.objects[0].mesh.positions[0] = 0.25;
+    let mut b = hce(&c);
+    wrong_edge_count(&mut b);
+    flip_last_byte(&mut b);
+    out.push(case(
+        "invalid/stages-sections.hce",
+        b,
+        "Appendix C stage 2: a COLR checksum mismatch (reported), edge_count one too large (a \
+         decoding failure, reported at file) and POSN edited (rule 11, skipped after the \
+         decoding failure)",
+    ));
+
+    // glTF mutations of the valid GLB (SPEC.md Section 3): its JSON edited, and the bytes of
+    // its embedded container.
     let view = |j: &Value| {
         j["extensions"][EXTENSION_NAME]["bufferView"]
             .as_u64()
             .unwrap_or(0) as usize
+    };
+    let damaged_glb =
+        |file: &str, description: &str, edit: &dyn Fn(&mut Value), damage: &dyn Fn(&mut [u8])| {
+            let a = Asset::from_glb(&example::triangle_glb()).expect("the example GLB parses");
+            let mut j = a.json;
+            let mut bin = a.bin.unwrap_or_default();
+            let v = &j["bufferViews"][view(&j)];
+            let at = v["byteOffset"].as_u64().unwrap_or(0) as usize;
+            let len = v["byteLength"].as_u64().unwrap_or(0) as usize;
+            damage(&mut bin[at..at + len]);
+            edit(&mut j);
+            let bytes = hce_format::write_glb(&j, &bin).expect("a small GLB");
+            case(file, bytes, description)
+        };
+    let glb = |file: &str, description: &str, edit: &dyn Fn(&mut Value)| {
+        damaged_glb(file, description, edit, &|_| {})
     };
     let link = "/meshes/0/primitives/0/extensions/EXT_hce_baked_lighting";
     out.extend([
@@ -358,8 +474,76 @@ pub fn cases(cornell_baked: Vec<u8>) -> Vec<Case> {
                 }
             },
         ),
+        damaged_glb(
+            "invalid/stages-layout.glb",
+            "Appendix C stage 1: the container's header checksum broken (reported at file; the \
+             container is not read further); a second primitive with an uppercase geometryHash \
+             (rule 14, reported); the first primitive's geometryHash stale (rule 15, reported: \
+             it needs no container) and its object 4 (not judged without the container)",
+            &|j| {
+                let mut second = j["meshes"][0]["primitives"][0].clone();
+                let upper = second["extensions"][EXTENSION_NAME]["geometryHash"]
+                    .as_str()
+                    .unwrap_or("")
+                    .to_uppercase();
+                second["extensions"][EXTENSION_NAME]["geometryHash"] = json!(upper);
+                if let Some(p) = j["meshes"][0]["primitives"].as_array_mut() {
+                    p.push(second);
+                }
+                stale_link_to_object_4(j, link);
+            },
+            &|b| b[28] ^= 1,
+        ),
+        damaged_glb(
+            "invalid/stages-sections.glb",
+            "Appendix C stage 2: the container's COLR checksum broken (reported) and its \
+             edge_count one too large (a decoding failure, reported at file); the primitive's \
+             geometryHash stale (rule 15, reported: it needs no container) and its object 4 (not \
+             judged without the container)",
+            &|j| stale_link_to_object_4(j, link),
+            &|b| {
+                wrong_edge_count(b);
+                flip_last_byte(b);
+            },
+        ),
     ]);
     out
+}
+
+/// Gives the primitive extension object at JSON pointer `link` a geometryHash that matches
+/// nothing and object 4 (of a one-object container).
+fn stale_link_to_object_4(j: &mut Value, link: &str) {
+    if let Some(x) = j.pointer_mut(&format!("{link}/geometryHash")) {
+        *x = json!("0123456789abcdef");
+    }
+    if let Some(x) = j.pointer_mut(&format!("{link}/object")) {
+        *x = json!(4);
+    }
+}
+
+/// Makes object 0's `edge_count` one too large and reseals the `OBJS` checksum (directory
+/// entry 1, as the writer lays the file out) and the header's: a decoding failure (A.7).
+fn wrong_edge_count(b: &mut [u8]) {
+    let entry = 32 + 32;
+    let u64_at =
+        |b: &[u8], at: usize| u64::from_le_bytes(b[at..at + 8].try_into().expect("8 bytes"));
+    let (offset, length) = (
+        u64_at(b, entry + 8) as usize,
+        u64_at(b, entry + 16) as usize,
+    );
+    let at = offset + 8 + 36;
+    let e = u32::from_le_bytes(b[at..at + 4].try_into().expect("4 bytes"));
+    b[at..at + 4].copy_from_slice(&(e + 1).to_le_bytes());
+    let crc = crc32fast::hash(&b[offset..offset + length]);
+    b[entry + 24..entry + 28].copy_from_slice(&crc.to_le_bytes());
+    reseal_header(b);
+}
+
+/// Flips a bit of the last byte, in the last section (`COLR`), whose checksum then fails.
+fn flip_last_byte(b: &mut [u8]) {
+    if let Some(x) = b.last_mut() {
+        *x ^= 1;
+    }
 }
 
 /// Recomputes the header CRC (A.3) after an edit of the header.
@@ -445,9 +629,9 @@ pub fn probes(file: &str, bytes: &[u8]) -> Value {
 pub const SCENE_LEVEL: u32 = 1;
 
 /// What `hce subdivide FILE -l SCENE_LEVEL -o out.glb` writes for a baked glTF case (SPEC.md
-/// F.9): per linked primitive, its vertex count and the `NORMAL` and `COLOR_0` (after the
-/// scene's one exposure) of probe vertices, numbered as the output numbers them (flat objects'
-/// vertices split per coarse triangle).
+/// F.10): per linked primitive, its object, vertex count, output vertex order, and the `NORMAL`
+/// and `COLOR_0` (after the scene's one exposure) of probe vertices, numbered as the output
+/// numbers them (flat objects' vertices split per coarse triangle).
 pub fn scene(file: &str, bytes: &[u8]) -> Value {
     use hce_runtime::asset::{Asset as RuntimeAsset, GltfSource, OpenOptions};
     let scratch = tempfile::tempdir().expect("a scratch folder");
@@ -475,6 +659,7 @@ pub fn scene(file: &str, bytes: &[u8]) -> Value {
     .expect("the scene writes");
     let (doc, buffers, _) =
         gltf::import_slice(std::fs::read(&output).expect("the scene")).expect("the scene reads");
+    let links = hce_format::primitive_links(&source.json).expect("suite GLBs are valid");
     let mut out = Vec::new();
     for mesh in doc.meshes() {
         for prim in mesh.primitives() {
@@ -489,15 +674,46 @@ pub fn scene(file: &str, bytes: &[u8]) -> Value {
                 .into_iter()
                 .map(|v| json!({ "vertex": v, "normal": vector(normals[v]), "colour": vector(colours[v]) }))
                 .collect();
+            // The suite's scenes keep every mesh and primitive, so the output's numbers are the
+            // input's.
+            let link = links
+                .iter()
+                .find(|l| l.mesh == mesh.index() && l.primitive == prim.index())
+                .expect("every refined primitive is linked");
+            let k = link.object as usize;
+            let order = output_vertices(asset.objects[k].kind(), &refined[k].mesh);
+            assert_eq!(order.len(), normals.len(), "{file}: output vertices");
             out.push(json!({
                 "mesh": mesh.index(),
                 "primitive": prim.index(),
+                "object": k,
                 "vertex_count": normals.len(),
+                "refined_vertices": order,
                 "probes": probes,
             }));
         }
     }
     json!({ "level": SCENE_LEVEL, "primitives": out })
+}
+
+/// The refined vertex (SPEC.md F.5) that each output vertex of `hce subdivide`'s scene is, in
+/// output order (SPEC.md F.10): the refined mesh as it is for a multiresolution object; for a
+/// flat one, per coarse triangle, each refined vertex at its first use by the triangle's fine
+/// triangles, in fine-triangle and corner order.
+fn output_vertices(
+    kind: hce_format::ObjectKind,
+    mesh: &hce_geometry::subdivide::Refined,
+) -> Vec<u32> {
+    if kind == hce_format::ObjectKind::Multiresolution {
+        return (0..mesh.positions.len() as u32).collect();
+    }
+    let per = 1usize << (2 * mesh.level);
+    let mut order = Vec::new();
+    for fine in mesh.indices.chunks(per) {
+        let mut met = std::collections::HashSet::new();
+        order.extend(fine.iter().flatten().filter(|&&i| met.insert(i)));
+    }
+    order
 }
 
 /// The manifest of `cases`.

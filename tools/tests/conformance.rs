@@ -216,8 +216,11 @@ fn probe_colours_match_both_reconstructions() {
     assert!(checked > 100, "{checked} probe colours");
 }
 
-/// The `scene` entries (SPEC.md F.9): what `hce subdivide FILE -l 1` writes as a scene, read
-/// back, per primitive: vertex count, `NORMAL` and `COLOR_0` (after the exposure) bitwise.
+/// The `scene` entries (SPEC.md F.10): what `hce subdivide FILE -l 1` writes as a scene, read
+/// back, per primitive: vertex count, `NORMAL` and `COLOR_0` (after the exposure) bitwise, and
+/// the output vertex order: each output vertex at the position of the refined vertex that
+/// `refined_vertices` names, and the primitive's indices, read through that list, the refined
+/// mesh's fine triangles of the primitive's coarse triangles.
 #[test]
 fn scene_entries_match_hce_subdivide() {
     let m = manifest();
@@ -227,7 +230,13 @@ fn scene_entries_match_hce_subdivide() {
         let Some(scene) = c.get("scene") else {
             continue;
         };
-        let file = suite().join(c["file"].as_str().unwrap());
+        let name = c["file"].as_str().unwrap();
+        let file = suite().join(name);
+        let bytes = std::fs::read(&file).unwrap();
+        let objects = hce_tests::conformance::objects(name, &bytes);
+        let input = hce_format::GltfAsset::parse(&bytes).unwrap();
+        let input_buffers = input.buffers(|_| Err("none".into())).unwrap();
+        let links = hce_format::primitive_links(&input.json).unwrap();
         let out = dir.path().join(format!("scene{checked}.glb"));
         let level = scene["level"].to_string();
         common::hce_ok(&[
@@ -252,6 +261,41 @@ fn scene_entries_match_hce_subdivide() {
             let normals: Vec<[f32; 3]> = reader.read_normals().unwrap().collect();
             let colours: Vec<[f32; 3]> = reader.read_colors(0).unwrap().into_rgb_f32().collect();
             assert_eq!(normals.len() as u64, p["vertex_count"].as_u64().unwrap());
+            let order: Vec<u32> = p["refined_vertices"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_u64().unwrap() as u32)
+                .collect();
+            let (m, q) = (mesh.index(), prim.index());
+            let link = links
+                .iter()
+                .find(|l| l.mesh == m && l.primitive == q)
+                .unwrap();
+            assert_eq!(p["object"].as_u64(), Some(u64::from(link.object)));
+            let level = scene["level"].as_u64().unwrap() as u32;
+            let refined =
+                hce_geometry::refine::refine_object(&objects[link.object as usize], level).unwrap();
+            let positions: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
+            assert_eq!(positions.len(), order.len(), "{name} mesh {m}");
+            for (v, &r) in order.iter().enumerate() {
+                assert_eq!(
+                    positions[v].map(f32::to_bits),
+                    refined.mesh.positions[r as usize].map(f32::to_bits),
+                    "{name} mesh {m} output vertex {v}"
+                );
+            }
+            let (_, coarse) =
+                hce_format::primitive_geometry(&input.json, &input_buffers, m, q).unwrap();
+            let per = 1usize << (2 * level);
+            let first = link.first_triangle as usize * per;
+            let fine = &refined.mesh.indices[first..first + coarse * per];
+            let indices: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
+            let through: Vec<[u32; 3]> = indices
+                .chunks_exact(3)
+                .map(|t| [0, 1, 2].map(|k| order[t[k] as usize]))
+                .collect();
+            assert_eq!(through, fine, "{name} mesh {m}: fine triangles");
             for probe in p["probes"].as_array().unwrap() {
                 let v = probe["vertex"].as_u64().unwrap() as usize;
                 let at = format!("{} mesh {} vertex {v}", c["file"], p["mesh"]);
