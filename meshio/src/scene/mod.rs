@@ -10,9 +10,11 @@
 //! with nothing to light it, is an error.
 
 mod gltf;
+mod inputs;
 mod obj;
 mod texture;
 
+pub use inputs::{input_files, InputFile};
 pub use texture::{srgb_to_linear, Texture, WrapMode};
 
 use glam::Mat4;
