@@ -11,14 +11,7 @@ use std::path::{Path, PathBuf};
 use serde_json::Value;
 
 /// Coarse settings: the tests are about what a bake depends on, not the solution.
-const CHEAP: [&str; 6] = [
-    "--bf-epsilon",
-    "1e-2",
-    "--visibility-rays",
-    "2",
-    "--max-level",
-    "1",
-];
+const CHEAP: [&str; 6] = common::COARSE_BAKE;
 
 fn cornell_glb() -> Vec<u8> {
     std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("../samples/cornell-box.glb")).unwrap()
