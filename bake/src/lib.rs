@@ -7,6 +7,7 @@
 //! into container objects with [`encode::encode_object`].
 #![forbid(unsafe_code)]
 
+pub mod cache_key;
 pub mod cluster;
 pub mod element;
 pub mod encode;

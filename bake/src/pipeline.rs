@@ -174,12 +174,9 @@ fn occluder_level(triangles: usize, levels: u32) -> Option<u32> {
         .find(|&l| triangles << (2 * l) <= OCCLUDER_TRIANGLES)
 }
 
-/// Bakes `input` and writes `options.output`. `progress` gets `(phase, done, total)`.
-pub fn bake_file(
-    input: &Path,
-    options: &PipelineOptions,
-    progress: Progress<'_>,
-) -> Result<BakeOutcome, PipelineError> {
+/// The output format `options` ask for, `glb`, `gltf` or `hce` (from the output's extension),
+/// once the options are found acceptable.
+pub fn output_format(options: &PipelineOptions) -> Result<&'static str, PipelineError> {
     if options.levels > 6 {
         return Err(PipelineError::Levels(options.levels));
     }
@@ -188,11 +185,23 @@ pub fn bake_file(
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    if !matches!(ext.as_deref(), Some("glb" | "gltf" | "hce")) {
-        return Err(PipelineError::OutputExtension {
+    match ext.as_deref() {
+        Some("glb") => Ok("glb"),
+        Some("gltf") => Ok("gltf"),
+        Some("hce") => Ok("hce"),
+        _ => Err(PipelineError::OutputExtension {
             path: options.output.clone(),
-        });
+        }),
     }
+}
+
+/// Bakes `input` and writes `options.output`. `progress` gets `(phase, done, total)`.
+pub fn bake_file(
+    input: &Path,
+    options: &PipelineOptions,
+    progress: Progress<'_>,
+) -> Result<BakeOutcome, PipelineError> {
+    let format = output_format(options)?;
     let mut phases = Vec::new();
     let t = Instant::now();
     progress("import", 0, 1);
@@ -317,7 +326,7 @@ pub fn bake_file(
     let t = Instant::now();
     progress("write", 0, 1);
     let (colours, exposure) = fallback_colours(&scene, &per_triangle_light);
-    let output_bytes = if ext.as_deref() == Some("hce") {
+    let output_bytes = if format == "hce" {
         hce_meshio::write_atomic(&options.output, &bytes)?;
         bytes.len() as u64
     } else {
@@ -334,7 +343,7 @@ pub fn bake_file(
         let mut size = std::fs::metadata(&options.output)
             .map(|m| m.len())
             .unwrap_or(0);
-        if ext.as_deref() == Some("gltf") {
+        if format == "gltf" {
             size += std::fs::metadata(options.output.with_extension("bin"))
                 .map(|m| m.len())
                 .unwrap_or(0);
@@ -361,7 +370,9 @@ pub fn bake_file(
     })
 }
 
-fn parameters_json(options: &PipelineOptions) -> String {
+/// The bake parameters a container records (its metadata's `bake_parameters`): every solver, normal-set
+/// and subdivision parameter that shapes the lighting, as one JSON object.
+pub fn parameters_json(options: &PipelineOptions) -> String {
     let mut v: serde_json::Value =
         serde_json::from_str(&options.bake.to_json()).unwrap_or_else(|_| serde_json::json!({}));
     v["levels"] = serde_json::json!(options.levels);

@@ -12,15 +12,7 @@ fn bake(input: &Path, out: &Path, extra: &[&str]) -> (i32, String, String) {
         .arg(input)
         .arg("-o")
         .arg(out)
-        // Coarse settings: the test is about the command, not the solution.
-        .args([
-            "--bf-epsilon",
-            "1e-2",
-            "--visibility-rays",
-            "2",
-            "--max-level",
-            "1",
-        ])
+        .args(common::COARSE_BAKE)
         .args(extra)
         .output()
         .expect("the hce binary runs");

@@ -10,11 +10,13 @@
 //! with nothing to light it, is an error.
 
 mod gltf;
+mod inputs;
 mod obj;
 mod solver;
 mod texture;
 
 pub use crate::solver_scene::{LightKind, PunctualLight};
+pub use inputs::{input_files, InputFile};
 pub use solver::ToSolver;
 pub use texture::{srgb_to_linear, Texture, WrapMode};
 

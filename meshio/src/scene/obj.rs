@@ -25,19 +25,39 @@ pub(super) fn import(path: &Path, options: &ImportOptions) -> Result<ImportedSce
     let base = path.parent().unwrap_or_else(|| Path::new("."));
     let mtl_warnings = RefCell::new(Vec::new());
     let loaded = tobj::load_obj_buf(&mut &bytes[..], &LOAD, |mtl| {
-        // Only a regular file: a device or a pipe named by `mtllib` would be read forever.
-        let p = base.join(mtl);
-        if !std::fs::metadata(&p).is_ok_and(|m| m.is_file()) {
-            return Err(tobj::LoadError::OpenFileFailed);
-        }
-        let text = std::fs::read(&p).map_err(|_| tobj::LoadError::OpenFileFailed)?;
-        let (clean, w) = sanitize_mtl(&text);
-        mtl_warnings.borrow_mut().extend(w);
-        tobj::load_mtl_buf(&mut &clean[..])
+        load_mtl(base, mtl, &mut mtl_warnings.borrow_mut())
     });
     let mut scene = finish(path, Some(base), loaded, points_and_lines(&bytes), options)?;
     scene.warnings.extend(mtl_warnings.into_inner());
     Ok(scene)
+}
+
+/// The MTL library `mtl` (as `mtllib` names it) beside an OBJ in `base`.
+fn load_mtl(base: &Path, mtl: &Path, warnings: &mut Vec<String>) -> tobj::MTLLoadResult {
+    // Only a regular file: a device or a pipe named by `mtllib` would be read forever.
+    let p = base.join(mtl);
+    if !std::fs::metadata(&p).is_ok_and(|m| m.is_file()) {
+        return Err(tobj::LoadError::OpenFileFailed);
+    }
+    let text = std::fs::read(&p).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+    let (clean, w) = sanitize_mtl(&text);
+    warnings.extend(w);
+    tobj::load_mtl_buf(&mut &clean[..])
+}
+
+/// The files besides the OBJ itself that [`import`] reads, as the OBJ and its MTL libraries
+/// name them: each `mtllib` library and each material's `map_Kd` texture, in the order named.
+pub(super) fn referenced_files(bytes: &[u8], base: &Path) -> Vec<String> {
+    let names = RefCell::new(Vec::new());
+    let loaded = tobj::load_obj_buf(&mut &bytes[..], &LOAD, |mtl| {
+        names.borrow_mut().push(mtl.to_string_lossy().into_owned());
+        load_mtl(base, mtl, &mut Vec::new())
+    });
+    let mut names = names.into_inner();
+    if let Ok((_, Ok(materials))) = loaded {
+        names.extend(materials.into_iter().filter_map(|m| m.diffuse_texture));
+    }
+    names
 }
 
 /// Drops the colour lines (`Ka`, `Kd`, `Ks`, `Ke`) with fewer than three values, on which

@@ -1,14 +1,18 @@
 //! `hce bake`: import a glTF or OBJ scene, choose normal sets, solve enriched hierarchical
 //! radiosity and write the baked `.glb`/`.gltf` (extension + `COLOR_0` fallback) or the `.hce`
 //! container alone. The work is `hce_bake::pipeline::bake_file`; this module parses flags,
-//! draws progress bars and prints the summary.
+//! draws progress bars and prints the summary. `--print-inputs` and `--print-key` print the
+//! bake's cache key (`hce_bake::cache_key`) and what it was made of without baking; `--report`
+//! writes what a build system needs to know of a bake, failed or not, as JSON.
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
+use std::time::Instant;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use hce_bake::cache_key::{cache_key, CacheKey, KEY_FORMAT};
 use hce_bake::import::ImportOptions;
 use hce_bake::normal_sets::NormalSetParams;
 use hce_bake::pipeline::{bake_file, BakeOutcome, PipelineOptions};
@@ -63,6 +67,21 @@ pub struct BakeArgs {
     /// No progress bars and no summary.
     #[arg(long, short = 'q')]
     pub quiet: bool,
+    /// Print the bake's cache key and do not bake: the SHA-256 of a canonical document of the
+    /// key format, the hce version, each input file's name within the asset and SHA-256, and
+    /// every parameter that can change the output with its defaults filled in (the output
+    /// format from -o included; not --threads, not any path). Equal keys, equal bytes.
+    #[arg(long)]
+    pub print_key: bool,
+    /// Print the key's inputs as JSON (files with their paths and hashes, canonical
+    /// parameters, the key document and the key) and do not bake.
+    #[arg(long)]
+    pub print_inputs: bool,
+    /// Write a JSON report of the bake to FILE (atomically, also when the bake fails): its
+    /// inputs, parameters and key, timings, counts, warnings, and its exit status and error
+    /// message.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
 }
 
 /// A subdivision level, 0 to [`hce_geometry::subdivide::MAX_LOOP_LEVEL`].
@@ -91,7 +110,51 @@ fn non_negative_degrees(s: &str) -> Result<f32, String> {
 }
 
 pub fn run(args: BakeArgs) -> Result<()> {
-    let options = PipelineOptions {
+    let options = pipeline_options(&args);
+    if args.print_inputs || args.print_key {
+        let key = cache_key(&args.input, &options)
+            .with_context(|| format!("reading {}", args.input.display()))?;
+        if args.print_inputs {
+            let mut v = inputs_json(&key);
+            v["document"] = serde_json::json!(key.document);
+            v["key"] = serde_json::json!(key.key);
+            println!("{}", serde_json::to_string_pretty(&v)?);
+        }
+        if args.print_key {
+            println!("{}", key.key);
+        }
+        return Ok(());
+    }
+    let Some(report_path) = args.report.clone() else {
+        return bake(&args, &options).map(|_| ());
+    };
+    let started = Instant::now();
+    // The key of what is about to be baked, read before the bake reads the same files.
+    let key = cache_key(&args.input, &options);
+    let key_seconds = started.elapsed().as_secs_f64();
+    let outcome = bake(&args, &options);
+    let report = Report {
+        args: &args,
+        key: key.as_ref().ok(),
+        key_seconds,
+        total_seconds: started.elapsed().as_secs_f64(),
+        outcome: outcome.as_ref(),
+    };
+    let written = hce_meshio::write_atomic(&report_path, report.to_json().as_bytes());
+    match (outcome, written) {
+        (Ok(_), written) => Ok(written?),
+        (Err(e), Ok(())) => Err(e),
+        (Err(e), Err(w)) => {
+            // The bake's own error decides the status; the lost report is said beside it.
+            eprintln!("warning: {}", crate::exit::message(&w.into()));
+            Err(e)
+        }
+    }
+}
+
+/// The pipeline's options from the command line.
+fn pipeline_options(args: &BakeArgs) -> PipelineOptions {
+    PipelineOptions {
         import: ImportOptions {
             multires: args.multires.clone(),
         },
@@ -109,7 +172,11 @@ pub fn run(args: BakeArgs) -> Result<()> {
             ..BakeParams::default()
         },
         output: args.output.clone(),
-    };
+    }
+}
+
+/// Bakes with progress bars and prints the summary.
+fn bake(args: &BakeArgs, options: &PipelineOptions) -> Result<BakeOutcome> {
     let show = !args.quiet && std::io::stderr().is_terminal();
     let bars = Bars {
         enabled: show,
@@ -121,13 +188,101 @@ pub fn run(args: BakeArgs) -> Result<()> {
         builder = builder.num_threads(n);
     }
     let pool = builder.build().context("cannot start the worker threads")?;
-    let outcome = pool.install(|| bake_file(&args.input, &options, &progress));
+    let outcome = pool.install(|| bake_file(&args.input, options, &progress));
     bars.finish();
     let outcome = outcome.with_context(|| format!("baking {}", args.input.display()))?;
     if !args.quiet {
-        print_summary(&outcome, &args);
+        print_summary(&outcome, args);
     }
-    Ok(())
+    Ok(outcome)
+}
+
+/// The inputs and parameters of a key, as `--print-inputs` and `--report` give them.
+fn inputs_json(key: &CacheKey) -> serde_json::Value {
+    let inputs: Vec<serde_json::Value> = key
+        .inputs
+        .iter()
+        .map(|i| {
+            serde_json::json!({
+                "name": i.file.name,
+                "path": path_text(&i.file.path),
+                "sha256": i.sha256,
+                "bytes": i.bytes,
+            })
+        })
+        .collect();
+    serde_json::json!({
+        "key_format": KEY_FORMAT,
+        "inputs": inputs,
+        "parameters": key.parameters,
+    })
+}
+
+fn path_text(p: &Path) -> String {
+    p.to_string_lossy().into_owned()
+}
+
+/// What `--report` writes.
+struct Report<'a> {
+    args: &'a BakeArgs,
+    /// `None` when the key could not be computed (the bake then fails with the reason).
+    key: Option<&'a CacheKey>,
+    key_seconds: f64,
+    total_seconds: f64,
+    outcome: Result<&'a BakeOutcome, &'a anyhow::Error>,
+}
+
+impl Report<'_> {
+    fn to_json(&self) -> String {
+        use serde_json::json;
+        let mut v = match self.key {
+            Some(k) => inputs_json(k),
+            None => json!({ "key_format": KEY_FORMAT, "inputs": [], "parameters": {} }),
+        };
+        v["report_format"] = json!(1);
+        v["hce"] = json!(env!("CARGO_PKG_VERSION"));
+        v["input"] = json!(path_text(&self.args.input));
+        v["output"] = json!(path_text(&self.args.output));
+        v["key"] = json!(self.key.map(|k| &k.key));
+        v["threads"] = json!(self.args.threads.unwrap_or_else(rayon::current_num_threads));
+        let mut phases = vec![json!({ "phase": "key", "seconds": self.key_seconds })];
+        match self.outcome {
+            Ok(o) => {
+                phases.extend(
+                    o.phase_seconds
+                        .iter()
+                        .map(|(p, s)| json!({ "phase": p, "seconds": s })),
+                );
+                let multires = o
+                    .objects
+                    .iter()
+                    .filter(|s| s.kind == ObjectKind::Multiresolution)
+                    .count();
+                v["status"] = json!(0);
+                v["error"] = json!(null);
+                v["warnings"] = json!(o.warnings);
+                v["counts"] = json!({
+                    "objects": o.objects.len(),
+                    "multiresolution_objects": multires,
+                    "coarse_triangles": o.coarse_triangles,
+                    "elements": o.elements,
+                    "links": o.links,
+                    "iterations": o.iterations,
+                    "output_bytes": o.output_bytes,
+                });
+            }
+            Err(e) => {
+                v["status"] = json!(crate::exit::classify(e) as u8);
+                v["error"] = json!(crate::exit::message(e));
+                v["warnings"] = json!([]);
+                v["counts"] = json!(null);
+            }
+        }
+        v["timings"] = json!({ "phases": phases, "total_seconds": self.total_seconds });
+        let mut text = serde_json::to_string_pretty(&v).unwrap_or_else(|_| "{}".into());
+        text.push('\n');
+        text
+    }
 }
 
 /// One progress bar per phase, replaced when the phase changes.

@@ -5,6 +5,16 @@
 use std::ffi::OsStr;
 use std::process::Command;
 
+/// Coarse `hce bake` settings for tests about the command rather than the solution.
+pub const COARSE_BAKE: [&str; 6] = [
+    "--bf-epsilon",
+    "1e-2",
+    "--visibility-rays",
+    "2",
+    "--max-level",
+    "1",
+];
+
 /// A command for the `hce` binary built with these tests, to add arguments and environment to.
 pub fn command() -> Command {
     Command::new(env!("CARGO_BIN_EXE_hce"))
