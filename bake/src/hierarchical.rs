@@ -615,10 +615,10 @@ impl Ctx<'_> {
     /// is narrower than `s`. Judged by the geometry, from the receiver's centre and inset
     /// corners towards the light's centre and corners, and with no threshold on the light the
     /// link brings, so that the receivers along one shadow edge split alike. Split where that
-    /// light passed a threshold (the thirteenth round), a thin shadow (Teatime's spoon) was
+    /// light passed a threshold, a thin shadow (Teatime's spoon) was
     /// drawn as dashes, sharp where a receiver passed and blurred between; kept to where the
     /// light was a quarter to three quarters hidden, a contact shadow's outline was ragged
-    /// (BENCHMARKS.md, fourteenth round). `refine_root` takes the receiver's other links down
+    /// (docs/decisions.md; `bake/tests/contact_shadows.rs` holds the outline). `refine_root` takes the receiver's other links down
     /// with the light's.
     fn narrow_shadow_splittable(
         &self,
@@ -1029,8 +1029,8 @@ impl Ctx<'_> {
     /// part of them most: a closed room lit from the middle of its ceiling is brightest in
     /// the middle of its floor, which the ceiling's middle sees square on, and the power the
     /// room's surfaces sent through their links fell 0.6% short of what they reflect (walls
-    /// and ceiling 0.7% dark against a path tracer; read by parts, 0.35%: BENCHMARKS.md,
-    /// sixteenth round).
+    /// and ceiling 0.7% dark against a path tracer; read by parts, 0.35%:
+    /// `a_lit_closed_room_agrees_with_the_path_tracer` in `bake/tests/solver.rs`).
     fn reads_deep(&self, c: u32, p: Vec3) -> bool {
         let cluster = &self.clusters.clusters[c as usize];
         cluster.radius() >= DEEP_READ * (cluster.centre - p).length()
