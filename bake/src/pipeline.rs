@@ -596,7 +596,7 @@ fn incident_light(o: &crate::scene::SolverObject, sol: &[TriangleSolution]) -> V
             }
             let b = ts.colours.first().copied().unwrap_or([0.0; 3]);
             let rho = o.reflectance.get(t).copied().unwrap_or([1.0; 3]);
-            [0, 1, 2].map(|c| (b[c] - e[c]).max(0.0) / rho[c].max(0.02))
+            [0, 1, 2].map(|c| (b[c] - e[c]).max(0.0) / rho[c].max(hce_format::ALBEDO_FLOOR))
         })
         .collect()
 }
@@ -646,7 +646,7 @@ fn fallback_colours(scene: &ImportedScene, light: &[Vec<[f32; 3]>]) -> (Vec<Vec<
         );
         raw.push(colours);
     }
-    let exposure = crate::output::refined_scene::colour_exposure(&mut maxima);
+    let exposure = hce_format::colour_exposure(&mut maxima);
     let out = raw
         .into_iter()
         .map(|cs| {

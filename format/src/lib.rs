@@ -14,6 +14,7 @@
 // The modules are private: what the crate offers is the flat list below. Two namespaces stay
 // public: `rules` (each Appendix C rule once, named after the rule, for the validator and the
 // refinement guard) and, behind feature `testing`, `example` (small valid files for tests).
+mod colour0;
 mod error;
 #[cfg(any(test, feature = "testing"))]
 pub mod example;
@@ -28,6 +29,7 @@ mod tree;
 mod validate;
 mod write;
 
+pub use colour0::{colour_exposure, ALBEDO_FLOOR};
 pub use error::{ReadError, WriteError};
 pub use gltf::{
     buffer_view_bytes, check_links, container_bytes, decode_base64, embed_container, hash_hex,

@@ -650,7 +650,7 @@ pub fn scene(file: &str, bytes: &[u8]) -> Value {
         .collect();
     let output = scratch.path().join("scene.glb");
     let objects: Vec<&hce_format::Object> = asset.objects.iter().map(|o| &o.object).collect();
-    hce_bake::output::refined_scene::write_refined_scene(
+    hce_refined::write_refined_scene(
         &output,
         &objects,
         Some((&source.json, source.buffers.as_slice())),

@@ -45,6 +45,11 @@ const RULES: &[(&str, &[&str], &[&str])] = &[
         &["hce-bake", "wgpu", "hce-runtime", "hce-tools"],
     ),
     (
+        "hce-refined",
+        &["wgpu", "hce-bake", "hce-runtime", "hce-tools"],
+        &["wgpu", "hce-bake", "hce-runtime", "hce-tools"],
+    ),
+    (
         "hce-bake",
         &["hce-tools", "hce-runtime"],
         &["hce-tools", "hce-runtime"],
@@ -204,6 +209,7 @@ const ORDER: &[&str] = &[
     "hce-meshio",
     "hce-runtime",
     "hce-reference",
+    "hce-refined",
     "hce-bake",
     "hce-tools",
 ];

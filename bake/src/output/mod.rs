@@ -7,11 +7,8 @@
 //! used by several nodes are copied so that each instance carries its own lighting, and every
 //! baked primitive gets a float `COLOR_0` accessor and its link to the container. An OBJ input
 //! is converted to glTF first ([`obj_to_gltf`]).
-//!
-//! [`refined_scene`] writes a baked scene refined to one level (`hce subdivide BAKED`).
 
 mod from_obj;
-pub mod refined_scene;
 
 pub use from_obj::obj_to_gltf;
 

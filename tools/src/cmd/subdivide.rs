@@ -7,7 +7,7 @@
 //! ([`hce_geometry::refine::refine_object`]: Loop for multiresolution objects, linear
 //! 1-to-4 for flat ones, the vertices split at sharp edges and at flat objects' folds of more
 //! than 10 degrees (SPEC.md F.5), colours from [`hce_geometry::colour::apply_baked_colours`]);
-//! the scene is written back whole ([`hce_bake::output::refined_scene::write_refined_scene`]:
+//! the scene is written back whole ([`hce_refined::write_refined_scene`]:
 //! flat objects' vertices split further per coarse triangle, each with its face's normal), or
 //! with `--merge` as one mesh in object space (the refined vertices of SPEC.md F.5, copies
 //! included).
@@ -17,10 +17,10 @@ use std::time::Instant;
 
 use anyhow::{anyhow, Context, Result};
 use clap::Args;
-use hce_bake::output::refined_scene::write_refined_scene;
 use hce_format::ObjectKind;
 use hce_geometry::refine::{refine_object_with, RefinedObject};
 use hce_geometry::topology::{Creases, NonManifold, TopologyConfig};
+use hce_refined::write_refined_scene;
 use hce_runtime::asset::{Asset, GltfSource, OpenOptions};
 
 #[derive(Args)]

@@ -26,7 +26,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use hce_format::{hash_hex, write_glb, PrimitiveLink};
+use hce_format::{colour_exposure, hash_hex, write_glb, PrimitiveLink, ALBEDO_FLOOR};
 use hce_format::{Object, ObjectKind};
 use serde_json::{json, Map, Value};
 
@@ -240,22 +240,6 @@ impl Writer<'_> {
     }
 }
 
-/// The one exposure of a scene's `COLOR_0` (SPEC.md F.9): the reciprocal of the 90th percentile
-/// of the per-vertex brightest channels `maxima` (sorted in place), or 1 when that is not a
-/// positive finite number. `hce bake` and `hce subdivide` both scale by it.
-pub fn colour_exposure(maxima: &mut [f32]) -> f32 {
-    maxima.sort_unstable_by(f32::total_cmp);
-    let p90 = maxima
-        .get((maxima.len() * 9 / 10).min(maxima.len().saturating_sub(1)))
-        .copied()
-        .unwrap_or(1.0);
-    if p90 > 0.0 && p90.is_finite() {
-        1.0 / p90
-    } else {
-        1.0
-    }
-}
-
 /// Base colour (RGB factor) and whether the material emits, for `COLOR_0`.
 fn material_response(input: &Value, material: Option<u64>) -> ([f32; 3], bool) {
     let m = material.and_then(|m| input.get("materials")?.get(m as usize));
@@ -356,7 +340,7 @@ pub fn write_refined_scene(
             let light: Vec<[f32; 3]> = g
                 .radiosity
                 .iter()
-                .map(|c| [0, 1, 2].map(|i| c[i] / base[i].max(0.02)))
+                .map(|c| [0, 1, 2].map(|i| c[i] / base[i].max(ALBEDO_FLOOR)))
                 .collect();
             if !emissive {
                 let mut used = vec![false; light.len()];
