@@ -54,6 +54,19 @@ pub fn precheck(json: &Value) -> Result<(), String> {
     Ok(())
 }
 
+/// Percent-encodes every byte but RFC 3986's unreserved characters, for a file name written
+/// into a glTF `uri` or a URL path.
+pub fn percent_encode(s: &str) -> String {
+    s.bytes()
+        .map(|b| match b {
+            b'A'..=b'Z' | b'a'..=b'z' | b'0'..=b'9' | b'-' | b'.' | b'_' | b'~' => {
+                (b as char).to_string()
+            }
+            _ => format!("%{b:02X}"),
+        })
+        .collect()
+}
+
 pub fn percent_decode(s: &str) -> String {
     let b = s.as_bytes();
     let mut out = Vec::with_capacity(b.len());
@@ -361,6 +374,10 @@ mod tests {
         assert_eq!(percent_decode("a%20b.bin"), "a b.bin");
         assert_eq!(percent_decode("100%"), "100%");
         assert_eq!(percent_decode("%4"), "%4");
+        for name in ["a b#.bin", "ü/%x.png", "plain-name_1.~"] {
+            assert_eq!(percent_decode(&percent_encode(name)), name);
+        }
+        assert_eq!(percent_encode("a b#.bin"), "a%20b%23.bin");
     }
 
     #[test]

@@ -793,11 +793,11 @@ mod tests {
         assert!(hits > 100, "only {hits} rays met something");
     }
 
-    #[test]
-    fn point_light_over_a_patch_follows_the_inverse_square_law() {
-        // 8 cd, 2 m above a small patch of reflectance 0.5: L = 0.5 · 2 / π.
+    /// A 2 cm patch of reflectance 0.5 at the origin, facing +z, with an 8 cd point light 2 m
+    /// straight above it.
+    fn patch_under_point_light() -> Scene {
         let (p, t) = quad([-0.01, -0.01, 0.0], [0.02, 0.0, 0.0], [0.0, 0.02, 0.0]);
-        let scene = Scene {
+        Scene {
             objects: vec![SolverObject::new("patch", p.to_vec(), t.to_vec(), [0.5; 3])],
             lights: vec![PunctualLight {
                 name: "l".into(),
@@ -808,7 +808,13 @@ mod tests {
                 intensity: 8.0,
                 range: None,
             }],
-        };
+        }
+    }
+
+    #[test]
+    fn point_light_over_a_patch_follows_the_inverse_square_law() {
+        // 8 cd, 2 m above a small patch of reflectance 0.5: L = 0.5 · 2 / π.
+        let scene = patch_under_point_light();
         let e = PathTracer::new(&scene).surface_radiance(0, &[0, 1], 64, 3);
         let want = 0.5 * 2.0 / std::f64::consts::PI;
         assert!((e.mean[0] - want).abs() < 1e-3 * want, "{e:?} vs {want}");
@@ -926,19 +932,7 @@ mod tests {
     fn vertex_normals_shade_a_flat_patch_like_a_tilted_one() {
         // A point light straight above a patch: flat, the patch reflects ρ I / (π d²); with
         // every vertex normal tilted by 60° about x, the cosine halves.
-        let (p, t) = quad([-0.01, -0.01, 0.0], [0.02, 0.0, 0.0], [0.0, 0.02, 0.0]);
-        let scene = Scene {
-            objects: vec![SolverObject::new("patch", p.to_vec(), t.to_vec(), [0.5; 3])],
-            lights: vec![PunctualLight {
-                name: "l".into(),
-                kind: LightKind::Point,
-                position: [0.0, 0.0, 2.0],
-                direction: [0.0, 0.0, -1.0],
-                color: [1.0; 3],
-                intensity: 8.0,
-                range: None,
-            }],
-        };
+        let scene = patch_under_point_light();
         let flat = 0.5 * 2.0 / std::f64::consts::PI;
         let mut pt = PathTracer::new(&scene);
         let (l, _) = pt.radiance_along([0.0, 0.001, 1.0], [0.0, 0.0, -1.0], 4, 1, 0);

@@ -101,12 +101,7 @@ fn normal_closure(m: &Value) -> BTreeMap<String, BTreeSet<String>> {
 
 /// Per workspace package name, the workspace packages it names as dev-dependencies (directly).
 fn dev_dependencies(m: &Value) -> BTreeMap<String, BTreeSet<String>> {
-    let members: BTreeSet<&str> = m["workspace_members"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|id| id.as_str().unwrap())
-        .collect();
+    let members = workspace_members(m);
     let name_of = names(m);
     let mut out = BTreeMap::new();
     for node in m["resolve"]["nodes"].as_array().unwrap() {
@@ -133,6 +128,16 @@ fn dev_dependencies(m: &Value) -> BTreeMap<String, BTreeSet<String>> {
         out.insert(name_of[id].to_string(), dev);
     }
     out
+}
+
+/// The package ids of the workspace's members.
+fn workspace_members(m: &Value) -> BTreeSet<&str> {
+    m["workspace_members"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|id| id.as_str().unwrap())
+        .collect()
 }
 
 fn names(m: &Value) -> BTreeMap<&str, &str> {
@@ -325,12 +330,7 @@ fn the_rules_are_the_ones_architecture_md_states() {
 #[test]
 fn no_module_circle_within_a_crate() {
     let m = metadata();
-    let members: BTreeSet<&str> = m["workspace_members"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|id| id.as_str().unwrap())
-        .collect();
+    let members = workspace_members(&m);
     let mut circles = Vec::new();
     let mut modules = 0;
     let mut edges = 0;

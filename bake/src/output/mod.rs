@@ -14,7 +14,7 @@ pub use from_obj::obj_to_gltf;
 
 use crate::import::{ImportedScene, SourceFormat};
 use hce_format::{embed_container, link_primitive, write_glb, GltfAsset as Asset, PrimitiveLink};
-use hce_meshio::gltf_guard::read_uri;
+use hce_meshio::gltf_guard::{percent_encode, read_uri};
 use hce_meshio::write_atomic;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -88,7 +88,7 @@ impl BakedAsset {
                     .to_owned();
                 let mut json = self.json.clone();
                 if let Some(b0) = json.get_mut("buffers").and_then(|b| b.get_mut(0)) {
-                    b0["uri"] = json!(uri_escape(&bin_name));
+                    b0["uri"] = json!(percent_encode(&bin_name));
                 }
                 write_atomic(&bin_path, &self.bin)?;
                 let text = serde_json::to_vec_pretty(&json)
@@ -100,17 +100,6 @@ impl BakedAsset {
             }),
         }
     }
-}
-
-fn uri_escape(name: &str) -> String {
-    name.bytes()
-        .map(|b| match b {
-            b'A'..=b'Z' | b'a'..=b'z' | b'0'..=b'9' | b'-' | b'_' | b'.' | b'~' => {
-                (b as char).to_string()
-            }
-            _ => format!("%{b:02X}"),
-        })
-        .collect()
 }
 
 /// Bakes a scene into GLB bytes: see [`bake_gltf`].
@@ -555,10 +544,5 @@ mod tests {
         assert_eq!(j["extensionsUsed"], json!(["KHR_lights_punctual"]));
         assert!(j.get("extensions").is_none());
         assert!(j["meshes"][0]["primitives"][0].get("extensions").is_none());
-    }
-
-    #[test]
-    fn uri_escaping() {
-        assert_eq!(uri_escape("a b#.bin"), "a%20b%23.bin");
     }
 }
