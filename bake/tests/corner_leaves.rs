@@ -6,7 +6,7 @@
 //! and those leaves read 6% off in a closed furnace (`furnace_property.rs`, `large_faces`).
 
 use glam::Vec3;
-use hce_bake::element::ElemKey;
+use hce_bake::ElemKey;
 use hce_bake::{bake, BakeParams, BakeResult, Scene, SolverObject};
 
 const SIZE: f32 = 2.0;

@@ -19,9 +19,9 @@ use std::path::Path;
 
 use glam::{Quat, Vec3};
 use hce_bake::import::{import_scene, ImportOptions, ToSolver};
-use hce_bake::normal_sets::NormalSetParams;
-use hce_bake::pipeline::{bake_file, PipelineOptions};
+use hce_bake::NormalSetParams;
 use hce_bake::{bake, BakeParams, SolverObject};
+use hce_bake::{bake_file, PipelineOptions};
 use hce_format::{rgb9e5, Object, ObjectKind};
 use hce_geometry::colour::apply_baked_colours;
 use hce_geometry::{subdivide, Creases, Refined};

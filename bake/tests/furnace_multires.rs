@@ -9,9 +9,9 @@
 use std::path::Path;
 
 use hce_bake::import::ImportOptions;
-use hce_bake::normal_sets::NormalSetParams;
-use hce_bake::pipeline::{bake_file, PipelineOptions};
 use hce_bake::BakeParams;
+use hce_bake::NormalSetParams;
+use hce_bake::{bake_file, PipelineOptions};
 use hce_format::{Object, ObjectKind};
 use hce_geometry::colour::{apply_baked_colours_with, Reconstruction};
 use hce_geometry::{subdivide, Creases};

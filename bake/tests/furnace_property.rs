@@ -15,9 +15,9 @@
 mod common;
 
 use glam::Vec3;
-use hce_bake::element::Rng;
-use hce_bake::normal_sets::{select_normal_set, NormalSetParams};
+use hce_bake::Rng;
 use hce_bake::{bake, BakeParams, Scene, SolverObject};
+use hce_bake::{select_normal_set, NormalSetParams};
 
 const EMISSION: f32 = 0.4;
 const RHO: f32 = 0.5;
@@ -181,7 +181,7 @@ fn worst_node(scene: &Scene) -> (f32, String) {
                     let (level, path) = sol.nodes[i / nn];
                     let leaf = !sol.subdivided[i / nn];
                     let normal = i % nn;
-                    let key = hce_bake::element::ElemKey {
+                    let key = hce_bake::ElemKey {
                         root: 0,
                         level,
                         path,
@@ -575,7 +575,7 @@ fn a_block_resting_on_the_floor_leaves_its_footprint_out() {
             if sol.subdivided[i] {
                 continue;
             }
-            let key = hce_bake::element::ElemKey {
+            let key = hce_bake::ElemKey {
                 root: 0,
                 level,
                 path,

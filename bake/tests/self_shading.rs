@@ -12,7 +12,7 @@
 //! traced images of real meshes is in BENCHMARKS.md: the teapot 5.6% to 3.8%.)
 
 use glam::Vec3;
-use hce_bake::element::ElemKey;
+use hce_bake::ElemKey;
 use hce_bake::{bake, BakeParams, BakeResult, Scene, SolverObject};
 
 const RHO: f32 = 0.6;

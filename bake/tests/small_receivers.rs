@@ -19,8 +19,8 @@
 mod common;
 
 use glam::Vec3;
-use hce_bake::formfactor::{point_to_polygon, stratified_points};
 use hce_bake::{bake, BakeParams, Scene, SolverObject};
+use hce_bake::{point_to_polygon, stratified_points};
 
 const RHO: f32 = 0.5;
 

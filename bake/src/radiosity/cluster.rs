@@ -25,10 +25,13 @@ pub struct Cluster {
     pub centre: Vec3,
     pub area: f32,
     /// Projected front-facing area seen along ±x, ±y, ±z: `Σ aᵢ max(0, ±nᵢ·axis)`.
+    #[cfg_attr(not(test), allow(dead_code))]
     pub proj: [f32; 6],
     /// Area-weighted normal `Σ aᵢ nᵢ` and second moment `Σ aᵢ nᵢ nᵢᵀ` (xx, yy, zz, xy, xz,
     /// yz) of its triangles, for [`Cluster::projected_area`].
+    #[cfg_attr(not(test), allow(dead_code))]
     pub normal_sum: Vec3,
+    #[cfg_attr(not(test), allow(dead_code))]
     pub moment: [f32; 6],
     /// Normal cone of its triangles: unit axis and half-angle in radians (π when the normals
     /// do not fit in a cone narrower than a hemisphere).
@@ -51,6 +54,7 @@ impl Cluster {
     /// otherwise), and the area times the largest cosine the normal cone allows (exact for a
     /// planar cluster, and zero seen from behind it, where the per-axis sums still count the
     /// axes along which its faces turn towards `w`).
+    #[cfg(test)]
     pub fn projected_area(&self, w: Vec3) -> f32 {
         let pick = |c: f32, i: usize| {
             if c >= 0.0 {

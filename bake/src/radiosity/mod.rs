@@ -1,0 +1,86 @@
+//! Stage 2: enriched hierarchical radiosity.
+//!
+//! Hanrahan, Salzman & Aupperle, "A rapid hierarchical radiosity algorithm" (SIGGRAPH 1991):
+//! elements are coarse triangles split 1-to-4 (children Top, Left, Center, Right as in
+//! `hce_format::model`); a link between a receiver and a source is refined, splitting the
+//! larger of the two, while its brightness-weighted estimate (form factor × source radiance ×
+//! receiver area, as power) exceeds `bf_epsilon` times the scene's reference power. Two more
+//! rules bound a link's error rather than its power: for near pairs, a receiver over which
+//! the form factor varies is split, and a source whose radiance varies in the previous
+//! solution is split (that error weighed against every receiver that makes it: the whole
+//! coarse receiver triangle, so that a finely split receiver cannot hide it; and the coarse
+//! triangles of the same object around it that see the source
+//! from about the same place, so that a finely tessellated object cannot either). Every leaf
+//! is drawn, so two rules judge a link against the radiance of its receiver rather than the
+//! scene's power: a receiver over which the link's form factor bends more than a linear
+//! function follows is split, and so is one that a shadow edge crosses (partial visibility),
+//! or that an occluder right next to it shades unevenly (an object resting on it, whose
+//! shadow edge every link shares). A link's visibility is the kernel-weighted fraction of its
+//! rays that are clear.
+//! A link's coefficient is linear over its receiver (its values at the three corners), so that
+//! push hands each leaf the form factor over its own part (in a closed furnace, constant links
+//! left leaves by a wall 13% too bright). The system is solved
+//! by gathering over links and push-pull, and links are refined again against the solution.
+//! Instead of linking every pair of input triangles up front, receivers start from
+//! the top of a cluster hierarchy ([`cluster`], after Smits et al. 1994) and open
+//! clusters by the same oracle, which culls pairs that face away or lie behind each other.
+//!
+//! Enrichment (Padrón et al. 2010): every element of a multiresolution object stores one
+//! radiance per normal of its root triangle's set; gathering evaluates the receiver cosine
+//! with each normal, while an element acting as a source radiates with its geometric normal
+//! (the value for n0). Punctual lights add direct illumination through shadow rays.
+//!
+//! Quantities are outgoing radiance `L` (see [`crate::scene`]); a receiver gathers
+//! `Q = Σ F·L_src + H_direct / π` and a leaf has `L = L_e + ρ·Q`, the area average over the
+//! element. As a source an element sends its reflected light from its open part only (the
+//! part not shut in under other geometry, such as the floor under a block standing on it):
+//! `L_src = L_e + (L − L_e) / open`.
+//!
+//! Determinism: work is split per root triangle, every random number is seeded from element
+//! ids, and every sum runs in a fixed order, so the result does not depend on the thread count.
+//!
+//! ## Where things are
+//!
+//! - The elements and their links: [`element`] (keys of the 1-to-4 split), [`links`] (what a
+//!   link holds), [`tree`] (one root's element tree, push), [`surface`] (a multiresolution
+//!   object's refined surface under its coarse triangles), [`context`] (what every part reads).
+//! - Link refinement: [`refine`] walks the (receiver, source) pairs of one root, asking each
+//!   rule in turn. One file per rule, each saying what it resolves: [`power`],
+//!   [`factor_variation`], [`bend`], [`source_variation`], [`shadow_edge`],
+//!   [`narrow_shadow`], [`near_occluder`], [`self_shade`].
+//! - What a link carries: [`formfactor`] (point-to-polygon form factors), [`coefficients`]
+//!   (a link's form factors, linear over its receiver), [`link_visibility`] (its rays),
+//!   [`source_radiance`] and [`cluster_reading`] (what it reads of its source), [`enclosure`]
+//!   (what a closed leaf's form factors sum to).
+//! - Solving: [`direct`] (punctual lights), [`gather`] (gather, push-pull, Jacobi
+//!   iterations), [`solution`] (what the bake hands back), [`schedule`] (passes, and the
+//!   parallel work of one).
+
+mod bend;
+pub(crate) mod cluster;
+mod cluster_reading;
+mod coefficients;
+mod context;
+mod direct;
+pub(crate) mod element;
+mod enclosure;
+pub(crate) mod formfactor;
+mod gather;
+mod link_visibility;
+mod links;
+mod narrow_shadow;
+mod near_occluder;
+mod params;
+mod refine;
+mod schedule;
+mod self_shade;
+mod shadow_edge;
+mod solution;
+mod source_radiance;
+mod source_variation;
+mod surface;
+mod tree;
+
+pub use params::{BakeParams, MAX_VISIBILITY_RAYS};
+pub use schedule::{bake, bake_with_progress, Progress};
+pub use solution::{BakeResult, BakeStats, ObjectSolution, TriangleSolution};
