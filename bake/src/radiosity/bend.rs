@@ -50,10 +50,45 @@ impl Ctx<'_> {
             Source::Elem(sk) => Some(self.roots[sk.root as usize].object),
             Source::Cluster(c) => self.cluster_object[c as usize].map(|o| o as usize),
         };
-        if object == Some(self.roots[k.root as usize].object) {
-            0.5 * BEND_TOLERANCE
-        } else {
-            BEND_TOLERANCE
-        }
+        bend_tolerance(object == Some(self.roots[k.root as usize].object))
+    }
+}
+
+/// [`BEND_TOLERANCE`], halved between two parts of one object ([`Ctx::bend_tolerance`]).
+pub(super) fn bend_tolerance(same_object: bool) -> f32 {
+    if same_object {
+        0.5 * BEND_TOLERANCE
+    } else {
+        BEND_TOLERANCE
+    }
+}
+
+/// Whether a link whose form factor bends by `bend` over its receiver, from a source of radiance
+/// `l` onto a receiver of reflectance `rho` and radiance `recv_l`, puts more than `tolerance`
+/// of the receiver's radiance wrong.
+pub(super) fn bend_splits(bend: f32, l: f32, rho: f32, tolerance: f32, recv_l: f32) -> bool {
+    bend * l * rho > tolerance * recv_l
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_bend_over_a_thousandth_of_the_receivers_radiance_splits() {
+        // A bend of a thousandth of the receiver's radiance, as it gathers it.
+        let splits = |wrong: f32, same_object| {
+            bend_splits(wrong, 1.0, 1.0, bend_tolerance(same_object), 1.0)
+        };
+        assert!(splits(0.0011, false));
+        assert!(!splits(0.0009, false));
+        // Half of it within one object.
+        assert!(splits(0.00055, true));
+        assert!(!splits(0.00045, true));
+        assert!(!splits(0.00055, false));
+        // Source radiance and reflectance weigh it; the receiver's radiance scales the bound.
+        assert!(bend_splits(0.0006, 2.0, 1.0, BEND_TOLERANCE, 1.0));
+        assert!(!bend_splits(0.0011, 1.0, 0.5, BEND_TOLERANCE, 1.0));
+        assert!(!bend_splits(0.0011, 1.0, 1.0, BEND_TOLERANCE, 2.0));
     }
 }

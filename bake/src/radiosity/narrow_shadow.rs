@@ -4,6 +4,8 @@
 //! other links go down with the light's. Shown by Teatime's spoon and the base of its teapot
 //! (`samples/teatime.glb`).
 
+use std::collections::HashSet;
+
 use glam::Vec3;
 use hce_format::MAX_TREE_DEPTH;
 
@@ -28,12 +30,11 @@ impl Ctx<'_> {
     /// than `s·D/W` (receiver size `s`, light distance `D` and width `W`), where its penumbra
     /// is narrower than `s`. Judged by the geometry, from the receiver's centre and inset
     /// corners towards the light's centre and corners, and with no threshold on the light the
-    /// link brings, so that the receivers along one shadow edge split alike. Split where that
-    /// light passed a threshold (the thirteenth round), a thin shadow (Teatime's spoon) was
-    /// drawn as dashes, sharp where a receiver passed and blurred between; kept to where the
-    /// light was a quarter to three quarters hidden, a contact shadow's outline was ragged
-    /// (BENCHMARKS.md, fourteenth round). `refine_root` takes the receiver's other links down
-    /// with the light's.
+    /// link brings, so that the receivers along one shadow edge split alike. Split only where
+    /// that light passed a threshold, a thin shadow (Teatime's spoon) was drawn as dashes, sharp
+    /// where a receiver passed and blurred between; kept to where the light was a quarter to
+    /// three quarters hidden, a contact shadow's outline was ragged. The refinement takes the
+    /// receiver's other links down with the light's ([`taken_down_with`]).
     pub(super) fn narrow_shadow_splittable(
         &self,
         k: ElemKey,
@@ -43,8 +44,12 @@ impl Ctx<'_> {
     ) -> bool {
         let object = self.roots[k.root as usize].object;
         if self.scene.objects[object].multires
-            || k.level >= (self.params.detail_level + NARROW_SHADOW_LEVELS).min(MAX_TREE_DEPTH)
-            || area * 0.25 * NARROW_SHADOW_AREA < self.min_area_of(k)
+            || !narrow_shadow_may_split(
+                k.level,
+                area,
+                self.params.detail_level,
+                self.min_area_of(k),
+            )
         {
             return false;
         }
@@ -79,5 +84,99 @@ impl Ctx<'_> {
                         .is_some()
             })
         })
+    }
+}
+
+/// Whether the narrow shadow rule may split a receiver of `level` and `area`: down to
+/// [`NARROW_SHADOW_LEVELS`] below `detail_level` and to a [`NARROW_SHADOW_AREA`]th of the
+/// object's least element area `min_area`.
+pub(super) fn narrow_shadow_may_split(
+    level: u32,
+    area: f32,
+    detail_level: u32,
+    min_area: f32,
+) -> bool {
+    level < (detail_level + NARROW_SHADOW_LEVELS).min(MAX_TREE_DEPTH)
+        && area * 0.25 * NARROW_SHADOW_AREA >= min_area
+}
+
+/// The receivers whose links go down with those of the receivers in `narrow`, which the rule
+/// split: the elements above them (`above`; there only a link to a near source, the object
+/// casting the shadow, goes down: near the point of contact its form factor is far from linear
+/// over that receiver), and the ancestors of their edge neighbours (`graded`), so that the
+/// elements beside a split receiver exist at its level.
+///
+/// Every other link of a split receiver goes down with the light's, to the same leaves: the
+/// links of one leaf sum to what it sees only at one resolution. In a closed furnace the walls'
+/// links, split beside an object resting on the floor, saw the object hide them leaf by leaf,
+/// while the object's own link, on the larger receiver, spread its share linearly, and the
+/// leaves at the point of contact read -13% to +10%. Graded along the shadow's edge, its dark
+/// side is as fine as its lit side: otherwise the leaves just inside the umbra, whose light link
+/// every ray found hidden and which no rule splits, stayed two or three levels larger than the
+/// split ones beside them, and the field drawn along the edge followed their sides (a serrated
+/// outline, and the lit leaves' corners pulled dark at the T-vertices on those sides).
+pub(super) fn taken_down_with(narrow: &HashSet<ElemKey>) -> (HashSet<ElemKey>, HashSet<ElemKey>) {
+    let mut above: HashSet<ElemKey> = HashSet::new();
+    for k in narrow {
+        let mut k = k.parent();
+        while let Some(x) = k {
+            if !above.insert(x) {
+                break;
+            }
+            k = x.parent();
+        }
+    }
+    let mut graded: HashSet<ElemKey> = HashSet::new();
+    for k in narrow {
+        for beside in k.edge_neighbours() {
+            let mut x = beside.parent();
+            while let Some(a) = x {
+                if !graded.insert(a) {
+                    break;
+                }
+                x = a.parent();
+            }
+        }
+    }
+    (above, graded)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn narrow_shadows_split_two_levels_deeper_down_to_a_sixteenth_of_the_least_area() {
+        // Two levels below detail level 5.
+        assert!(narrow_shadow_may_split(6, 1.0, 5, 1e-3));
+        assert!(!narrow_shadow_may_split(7, 1.0, 5, 1e-3));
+        // Its children may be a sixteenth of the least area: the element itself a quarter.
+        assert!(narrow_shadow_may_split(3, 0.25, 5, 1.0));
+        assert!(!narrow_shadow_may_split(3, 0.2, 5, 1.0));
+        // Never below the format's deepest tree.
+        assert!(!narrow_shadow_may_split(
+            MAX_TREE_DEPTH,
+            1.0,
+            MAX_TREE_DEPTH,
+            1e-3
+        ));
+    }
+
+    #[test]
+    fn a_split_receivers_ancestors_and_its_neighbours_ancestors_go_down() {
+        // The centre child of the centre child: its neighbours are the three corner children
+        // around it, inside the same parent.
+        let k = ElemKey::root(3).child(2).child(2);
+        let (above, graded) = taken_down_with(&HashSet::from([k]));
+        assert_eq!(
+            above,
+            HashSet::from([ElemKey::root(3).child(2), ElemKey::root(3)])
+        );
+        for beside in k.edge_neighbours() {
+            let parent = beside.parent().unwrap();
+            assert!(graded.contains(&parent), "{parent:?}");
+        }
+        assert!(!graded.contains(&k));
+        assert!(taken_down_with(&HashSet::new()).0.is_empty());
     }
 }

@@ -9,12 +9,21 @@ use super::coefficients::inset_corners;
 use super::context::Ctx;
 use super::element::ElemKey;
 use super::enclosure::cosine_strata;
+use crate::visibility::Occluders;
 
 /// How far from a receiver, in receiver radii, an occluder is looked for by
 /// [`Ctx::near_shadow`].
 pub(super) const NEAR_SHADOW_REACH: f32 = 10.0;
 
 impl Ctx<'_> {
+    /// Whether the near occluder rule splits receiver `k` of `area`: a rule judged against the
+    /// receiver's own radiance may ([`Ctx::detail_splittable`]) and an occluder beside it casts
+    /// a shadow edge across it ([`Ctx::near_shadow`], found once per element).
+    pub(super) fn near_occluder_splits(&self, k: ElemKey, area: f32) -> bool {
+        self.detail_splittable(k, area)
+            && self.memo(k, |m| &mut m.near_shadow, || self.near_shadow(k))
+    }
+
     /// Whether an occluder close to receiver `k` casts a shadow edge across it: from the
     /// receiver's centre and inset corners, rays along fixed cosine-stratified directions of
     /// its hemisphere; in a direction where some ray meets a surface within
@@ -45,25 +54,97 @@ impl Ctx<'_> {
         let object = self.roots[k.root as usize].object;
         let own = self.scene.objects[object].multires;
         let ignore = |t: usize| own && self.owner_object(t) == object;
-        for d in cosine_strata(n, 3, 4, 0.0) {
-            let hits = pts.map(|p| self.occ.first_hit_from(p, n, d, reach, ignore));
-            if hits.iter().all(Option::is_none) {
-                continue;
-            }
-            // What each point sees along `d`, stopped short of the surface it meets.
-            let ends: Vec<Vec3> = pts
-                .iter()
-                .zip(&hits)
-                .map(|(&p, h)| p + d * (h.unwrap_or(reach) * 0.95))
-                .collect();
-            for (i, &p) in pts.iter().enumerate() {
-                for (j, &e) in ends.iter().enumerate() {
-                    if i != j && !self.occ.segment_clear_between_but(p, n, e, d, ignore) {
-                        return true;
-                    }
+        hides_unevenly(&self.occ, pts, n, reach, ignore)
+    }
+}
+
+/// Whether, from points `pts` of a receiver with normal `n`, an occluder of `occ` within `reach`
+/// along one of the fixed directions of [`Ctx::near_shadow`] hides from one point what another
+/// sees along it; triangles for which `ignore` holds do not count.
+pub(super) fn hides_unevenly(
+    occ: &Occluders,
+    pts: [Vec3; 4],
+    n: Vec3,
+    reach: f32,
+    ignore: impl Fn(usize) -> bool + Copy,
+) -> bool {
+    for d in cosine_strata(n, 3, 4, 0.0) {
+        let hits = pts.map(|p| occ.first_hit_from(p, n, d, reach, ignore));
+        if hits.iter().all(Option::is_none) {
+            continue;
+        }
+        // What each point sees along `d`, stopped short of the surface it meets.
+        let ends: Vec<Vec3> = pts
+            .iter()
+            .zip(&hits)
+            .map(|(&p, h)| p + d * (h.unwrap_or(reach) * 0.95))
+            .collect();
+        for (i, &p) in pts.iter().enumerate() {
+            for (j, &e) in ends.iter().enumerate() {
+                if i != j && !occ.segment_clear_between_but(p, n, e, d, ignore) {
+                    return true;
                 }
             }
         }
-        false
+    }
+    false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The twelve triangles of the box from `lo` to `hi`, facing out.
+    fn cuboid(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
+        let c = |i: usize| {
+            Vec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            )
+        };
+        let faces = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        faces
+            .iter()
+            .flat_map(|f| [[c(f[0]), c(f[1]), c(f[2])], [c(f[0]), c(f[2]), c(f[3])]])
+            .collect()
+    }
+
+    #[test]
+    fn a_block_beside_the_receiver_within_reach_shades_it_unevenly() {
+        // A receiver on the floor z = 0 of radius about 0.75; a thin block standing at
+        // `x` from it, along −x, where the fixed directions look.
+        let rt = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let rc = (rt[0] + rt[1] + rt[2]) / 3.0;
+        let radius = rt.iter().map(|v| (*v - rc).length()).fold(0.0, f32::max);
+        let [c0, c1, c2] = inset_corners(rt);
+        let pts = [rc, c0, c1, c2];
+        let reach = NEAR_SHADOW_REACH * radius;
+        let shades = |x: f32| {
+            let occ = Occluders::new(cuboid(
+                Vec3::new(-x - 0.1, -0.25, 0.0),
+                Vec3::new(-x, 0.25, 10.0),
+            ));
+            hides_unevenly(&occ, pts, Vec3::Z, reach, |_| false)
+        };
+        // Ten radii, 7.45: the block met along the lowest directions (66° from the normal)
+        // 4.05 away is within reach, 9.9 away is not.
+        assert!((reach - 7.45).abs() < 0.01, "{reach}");
+        assert!(shades(0.5));
+        assert!(shades(3.7));
+        assert!(!shades(9.0));
+        // A wall along the whole side is seen alike from every point.
+        let wall = Occluders::new(cuboid(
+            Vec3::new(-1.1, -50.0, 0.0),
+            Vec3::new(-1.0, 50.0, 50.0),
+        ));
+        assert!(!hides_unevenly(&wall, pts, Vec3::Z, reach, |_| false));
     }
 }

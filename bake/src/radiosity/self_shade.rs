@@ -24,6 +24,13 @@ pub(super) const SELF_SHADE_AZIMUTHS: u32 = 6;
 pub(super) const SELF_SHADE_TOLERANCE: f32 = 0.1;
 
 impl Ctx<'_> {
+    /// Whether the self-shading rule splits receiver `k`: it may ([`Ctx::self_shade_splittable`])
+    /// and its parts are shut in unevenly ([`Ctx::self_shade_varies`], found once per element).
+    pub(super) fn self_shade_splits(&self, k: ElemKey) -> bool {
+        self.self_shade_splittable(k)
+            && self.memo(k, |m| &mut m.shade_varies, || self.self_shade_varies(k))
+    }
+
     /// Whether the self-shading rule may split `k` ([`Ctx::self_shade_varies`]): an element of
     /// an object with a refined surface, down to a quarter of one of that surface's triangles
     /// (the rays that judge it meet that surface, and resolve nothing finer), whatever its
@@ -64,6 +71,25 @@ impl Ctx<'_> {
             lo = lo.min(open);
             hi = hi.max(open);
         }
-        (hi - lo) as f32 > SELF_SHADE_TOLERANCE * (SELF_SHADE_RINGS * SELF_SHADE_AZIMUTHS) as f32
+        open_counts_differ(lo, hi)
+    }
+}
+
+/// Whether the least and the most open directions (`lo`, `hi`) of an element's points differ by
+/// more than [`SELF_SHADE_TOLERANCE`] of all the directions cast.
+pub(super) fn open_counts_differ(lo: u32, hi: u32) -> bool {
+    (hi - lo) as f32 > SELF_SHADE_TOLERANCE * (SELF_SHADE_RINGS * SELF_SHADE_AZIMUTHS) as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn more_than_two_of_twenty_four_directions_apart_splits() {
+        assert!(!open_counts_differ(10, 12));
+        assert!(open_counts_differ(10, 13));
+        assert!(!open_counts_differ(24, 24));
+        assert!(open_counts_differ(0, 24));
     }
 }

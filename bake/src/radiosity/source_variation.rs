@@ -72,3 +72,55 @@ impl Ctx<'_> {
         }
     }
 }
+
+/// The area of the receivers that make the same error as one receiver of a source whose
+/// radiance varies: the largest of the clusters of its own object around it (`neighbourhood`,
+/// their radii and areas, largest first) whose radius is below `reach`, or its coarse triangle
+/// (`root_area`) if that is larger.
+pub(super) fn receivers_sharing(neighbourhood: &[(f32, f32)], reach: f32, root_area: f32) -> f32 {
+    neighbourhood
+        .iter()
+        .find(|(radius, _)| *radius < reach)
+        .map_or(root_area, |&(_, area)| area.max(root_area))
+}
+
+/// Whether `svar`, the power a source's variation puts wrong into the receivers that share the
+/// error, exceeds `eps_power`, lowered for a receiver whose radiance `receiver_l` is below the
+/// scene's mean `mean_l` in proportion, down to [`DIM_RECEIVER_FLOOR`].
+pub(super) fn source_variation_splits(
+    svar: f32,
+    eps_power: f32,
+    receiver_l: f32,
+    mean_l: f32,
+) -> bool {
+    let dim = (receiver_l / mean_l.max(f32::MIN_POSITIVE)).clamp(DIM_RECEIVER_FLOOR, 1.0);
+    svar > eps_power * dim
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_dim_receiver_lowers_the_threshold_down_to_the_floor() {
+        // As bright as the scene's mean: the threshold itself.
+        assert!(source_variation_splits(1.01, 1.0, 1.0, 1.0));
+        assert!(!source_variation_splits(0.99, 1.0, 1.0, 1.0));
+        // Half as bright: half the threshold.
+        assert!(source_variation_splits(0.51, 1.0, 0.5, 1.0));
+        assert!(!source_variation_splits(0.49, 1.0, 0.5, 1.0));
+        // A tenth as bright: the floor, three tenths.
+        assert!(source_variation_splits(0.31, 1.0, 0.1, 1.0));
+        assert!(!source_variation_splits(0.29, 1.0, 0.1, 1.0));
+    }
+
+    #[test]
+    fn the_error_is_shared_by_the_largest_cluster_within_reach() {
+        let around = [(4.0, 100.0), (2.0, 30.0), (0.5, 3.0)];
+        assert_eq!(receivers_sharing(&around, 3.0, 1.0), 30.0);
+        assert_eq!(receivers_sharing(&around, 5.0, 1.0), 100.0);
+        // None within reach, or the coarse triangle larger: the coarse triangle.
+        assert_eq!(receivers_sharing(&around, 0.4, 1.0), 1.0);
+        assert_eq!(receivers_sharing(&around, 1.0, 5.0), 5.0);
+    }
+}
