@@ -116,7 +116,7 @@ impl Occluders {
     /// sharp edge, or along a wall from a point next to it) runs within rounding distance of
     /// that plane for a long way, and met the neighbouring triangles of its own surface
     /// there. A fixed gap at each end let a closed 30-degree wedge lose 4% of its light at the
-    /// leaves along its edge (issue 20).
+    /// leaves along its edge (`tests/furnace_property.rs`, `wedge`).
     pub fn segment_clear_between(&self, a: Vec3, na: Vec3, b: Vec3, nb: Vec3) -> bool {
         self.segment_clear_between_but(a, na, b, nb, |_| false)
     }

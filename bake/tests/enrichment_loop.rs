@@ -1,4 +1,4 @@
-//! Enrichment on real Loop subdivision (issue 4, "Correctness tests", last bullet).
+//! Enrichment on real Loop subdivision.
 //!
 //! A bumpy multiresolution object (an icosphere whose twelve original vertices stand out, so
 //! that its Loop limit surface has twelve smooth bumps) stands on a flat floor and is lit from

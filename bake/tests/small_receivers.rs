@@ -1,4 +1,4 @@
-//! A finely tessellated ball beside a bright patch on a large floor (issue 11's darkening of
+//! A finely tessellated ball beside a bright patch on a large floor (the darkening of
 //! curved objects): a lamp tilted away from the ball lights a patch of the floor about a metre
 //! across, so the floor's radiance runs from that patch to dim far corners, and the ball, which
 //! sees only the floor and the lamp's black back, gathers all its light from it while each of

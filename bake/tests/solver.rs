@@ -633,7 +633,7 @@ fn progress_reports_every_phase_without_changing_the_result() {
 /// light at the default refinement: 0.7% dark on the walls and ceiling while a cluster link
 /// read its cluster's mean radiance where the receiver sees its brighter part most, about
 /// 0.4% now that near clusters are read by parts (within 0.3% with `bf_epsilon` 3e-5 or
-/// `cluster_opening` 0.25; BENCHMARKS.md, fifteenth and sixteenth rounds). The bound holds
+/// `cluster_opening` 0.25). The bound holds
 /// what the solver achieves, so that a leak of light or a double count (the ceiling behind
 /// the lamp) shows.
 #[test]

@@ -27,7 +27,7 @@ impl Ctx<'_> {
     /// floor and the ceiling, were split a level deeper along the floor and the ceiling for
     /// them, and the leaves by the corner where two walls meet read 6% too dark and too bright
     /// in turn in a closed furnace (`tests/furnace_property.rs`, `large_faces`; bright lines
-    /// along the room's corners in issue 20).
+    /// along the room's corners, `tests/corner_leaves.rs`).
     pub(super) fn bend_splittable(&self, k: ElemKey, area: f32, sk: ElemKey) -> bool {
         if self.roots[k.root as usize].object == self.roots[sk.root as usize].object
             && !self.surface[k.root as usize].is_empty()

@@ -28,7 +28,7 @@ pub struct Cluster {
     #[cfg_attr(not(test), allow(dead_code))]
     pub proj: [f32; 6],
     /// Area-weighted normal `Σ aᵢ nᵢ` and second moment `Σ aᵢ nᵢ nᵢᵀ` (xx, yy, zz, xy, xz,
-    /// yz) of its triangles, for [`Cluster::projected_area`].
+    /// yz) of its triangles, for `Cluster::projected_area`.
     #[cfg_attr(not(test), allow(dead_code))]
     pub normal_sum: Vec3,
     #[cfg_attr(not(test), allow(dead_code))]
@@ -37,7 +37,7 @@ pub struct Cluster {
     /// do not fit in a cone narrower than a hemisphere).
     pub cone_axis: Vec3,
     pub cone_angle: f32,
-    /// `cos` and `sin` of `cone_angle`, kept for [`Cluster::projected_area`], which the
+    /// `cos` and `sin` of `cone_angle`, kept for `Cluster::projected_area`, which the
     /// solver calls for every cluster a receiver gathers from.
     pub cone_cos: f32,
     pub cone_sin: f32,
@@ -211,9 +211,9 @@ impl ClusterTree {
     /// grid triangle on one face), and read by linear interpolation over the grid triangle
     /// holding `w / |w|₁`, times `|w|₁`. Linear interpolation of a convex function lies on or
     /// above it, so this is an upper bound too, exact at the nodes and within 2% of a sphere
-    /// from any side, where the moment bound of [`Cluster::projected_area`] is 15% over (a
+    /// from any side, where the moment bound of `Cluster::projected_area` is 15% over (a
     /// floor beside an object that it saw as clusters read 2-3% too bright in a closed
-    /// furnace, issue 20). Along the kink of a nearly planar cluster seen edge-on it is
+    /// furnace, `tests/furnace_property.rs`). Along the kink of a nearly planar cluster seen edge-on it is
     /// looser, so the smaller of it and the cone's bound (exact for a planar cluster) is
     /// returned. A cluster of at most
     /// [`DIRECT_SUM`] triangles has no table: its sum is taken over them, exactly.
@@ -529,11 +529,11 @@ fn build_cluster(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
     /// The 12 triangles of the box from `lo` to `hi`, wound to face out (or in).
-    fn box_tris(lo: Vec3, hi: Vec3, inward: bool) -> Vec<[Vec3; 3]> {
+    pub(in crate::radiosity) fn box_tris(lo: Vec3, hi: Vec3, inward: bool) -> Vec<[Vec3; 3]> {
         let c = |i: u32| Vec3::select(glam::BVec3::new(i & 1 != 0, i & 2 != 0, i & 4 != 0), hi, lo);
         // Each face as four corners counter-clockwise seen from outside.
         let faces = [
@@ -582,7 +582,7 @@ mod tests {
     /// The front-facing projected area of a closed cluster, seen from many directions: never
     /// below the truth (it bounds a form factor from above, which the visibility rays then
     /// cut), and within 16% of it for a sphere and 42% for an octahedron (seen along an edge),
-    /// where the per-axis sums alone are 73% and 100% too large (issue 20: a room in a closed
+    /// where the per-axis sums alone are 73% and 100% too large (a room in a closed
     /// furnace read 1-2% too bright where it saw such objects as clusters).
     #[test]
     fn projected_area_of_closed_clusters_is_close_from_every_side() {

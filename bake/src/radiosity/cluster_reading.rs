@@ -143,8 +143,8 @@ impl Ctx<'_> {
     /// part of them most: a closed room lit from the middle of its ceiling is brightest in
     /// the middle of its floor, which the ceiling's middle sees square on, and the power the
     /// room's surfaces sent through their links fell 0.6% short of what they reflect (walls
-    /// and ceiling 0.7% dark against a path tracer; read by parts, 0.35%: BENCHMARKS.md,
-    /// sixteenth round).
+    /// and ceiling 0.7% dark against a path tracer; read by parts, 0.35%:
+    /// `tests/solver.rs`, `a_lit_closed_room_agrees_with_the_path_tracer`).
     pub(super) fn reads_deep(&self, c: u32, p: Vec3) -> bool {
         let cluster = &self.clusters.clusters[c as usize];
         cluster.radius() >= DEEP_READ * (cluster.centre - p).length()

@@ -11,7 +11,7 @@ use super::formfactor::{point_to_polygon, stratified_points};
 use super::links::{Source, CORNERS};
 
 /// A cluster is one disc in a link's coefficient while its radius is below this fraction of
-/// its distance ([`Ctx::cluster_form_factor`]).
+/// its distance ([`Ctx::cluster_form_factors`]).
 pub(super) const CLUSTER_DISC_OPENING: f32 = 0.2;
 
 /// Where a receiver's form factor is sampled for its slope: its corners moved a tenth of the
@@ -75,7 +75,7 @@ impl Ctx<'_> {
     /// Returns the coefficients (`CORNERS × nn`, corner-major) and the visible fraction. For a
     /// receiver on a refined surface (its points carried onto it, [`Ctx::on_surface`])
     /// `CORNERS` more follow: the same for that surface's own normal at each point, what the
-    /// receiver's normals are filled against ([`Tree::closure`]).
+    /// receiver's normals are filled against ([`Tree::closure`](super::tree::Tree::closure)).
     pub(super) fn link_coefficients(
         &self,
         (recv, rt): (ElemKey, [Vec3; 3]),
@@ -220,7 +220,7 @@ impl Ctx<'_> {
     /// `cluster_opening` (one half) times its distance from the receiver's centre; a lone disc
     /// there is 10-20% off, and more at the receiver's corners, which can lie closer (in a
     /// closed furnace, leaves near a cube's corners summed to 8% less or more than the
-    /// whole hemisphere, issue 20). The link stays one link; only its coefficient is summed
+    /// whole hemisphere, `tests/furnace_property.rs`). The link stays one link; only its coefficient is summed
     /// finer. Adds the form factor for each of `normals` to `out`.
     pub(super) fn cluster_form_factors(&self, c: u32, p: Vec3, normals: &[Vec3], out: &mut [f32]) {
         if normals.is_empty() {

@@ -39,7 +39,7 @@ pub(super) const FAINT_LINK: f32 = 0.01;
 /// One fraction for all, the geometric normal's, left a tilted normal with the visibility of
 /// rays it does not see along (and with none at all, read as wholly clear, where the source
 /// lies behind the geometric plane): under spot's muzzle, normals facing the chest and the
-/// floor came out too bright (issue 20). A normal no ray counts takes the fraction of all the
+/// floor came out too bright. A normal no ray counts takes the fraction of all the
 /// rays cast.
 ///
 /// Every ray is cast and weighed by the kernel. Stopping after four that agreed made the
@@ -47,7 +47,7 @@ pub(super) const FAINT_LINK: f32 = 0.01;
 /// and counting the rays alike, points spread evenly over a large source, read the part of it
 /// straight above the receiver no heavier than the part at its horizon: next to an object
 /// resting on a floor, which hides the first, floor leaves in a closed furnace summed form
-/// factors to 1.07 (issue 20).
+/// factors to 1.07 (`tests/furnace_property.rs`).
 ///
 /// The linear function: the rays weighed also by their point's barycentric coordinate of
 /// corner `c` read, for rays spread evenly over the receiver, a linear visibility at the point
@@ -55,7 +55,7 @@ pub(super) const FAINT_LINK: f32 = 0.01;
 /// the corner is the mean plus four times that reading's difference from the mean of the
 /// three readings: the least-squares linear fit. Its mean is the fraction in `vis`, and a
 /// slope that would take a corner outside [0, 1] is flattened until it does not, keeping the
-/// mean (BENCHMARKS.md, "Eighteenth round").
+/// mean (`a_soft_shadow_across_a_receiver_is_linear_over_it` below).
 pub(super) fn visible_fractions(
     n: u32,
     vis: &mut [f32],
@@ -140,7 +140,7 @@ pub(super) fn kernel(p: Vec3, np: Vec3, q: Vec3, nq: Vec3, size: f32) -> f32 {
 impl Ctx<'_> {
     /// Whether nothing can hide any part of a source in the box `src_box` (with its plane, when
     /// one) from receiver `recv` (corners `rt`): its root is unobstructed, or the shaft between
-    /// them is empty ([`Occluders::shaft_clear`]).
+    /// them is empty ([`Occluders::shaft_clear`](crate::visibility::Occluders::shaft_clear)).
     pub(super) fn certainly_clear(
         &self,
         recv: ElemKey,

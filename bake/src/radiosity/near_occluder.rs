@@ -93,29 +93,7 @@ pub(super) fn hides_unevenly(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The twelve triangles of the box from `lo` to `hi`, facing out.
-    fn cuboid(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
-        let c = |i: usize| {
-            Vec3::new(
-                if i & 1 == 0 { lo.x } else { hi.x },
-                if i & 2 == 0 { lo.y } else { hi.y },
-                if i & 4 == 0 { lo.z } else { hi.z },
-            )
-        };
-        let faces = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        faces
-            .iter()
-            .flat_map(|f| [[c(f[0]), c(f[1]), c(f[2])], [c(f[0]), c(f[2]), c(f[3])]])
-            .collect()
-    }
+    use crate::radiosity::cluster::tests::box_tris;
 
     #[test]
     fn a_block_beside_the_receiver_within_reach_shades_it_unevenly() {
@@ -128,9 +106,10 @@ mod tests {
         let pts = [rc, c0, c1, c2];
         let reach = NEAR_SHADOW_REACH * radius;
         let shades = |x: f32| {
-            let occ = Occluders::new(cuboid(
+            let occ = Occluders::new(box_tris(
                 Vec3::new(-x - 0.1, -0.25, 0.0),
                 Vec3::new(-x, 0.25, 10.0),
+                false,
             ));
             hides_unevenly(&occ, pts, Vec3::Z, reach, |_| false)
         };
@@ -141,9 +120,10 @@ mod tests {
         assert!(shades(3.7));
         assert!(!shades(9.0));
         // A wall along the whole side is seen alike from every point.
-        let wall = Occluders::new(cuboid(
+        let wall = Occluders::new(box_tris(
             Vec3::new(-1.1, -50.0, 0.0),
             Vec3::new(-1.0, 50.0, 50.0),
+            false,
         ));
         assert!(!hides_unevenly(&wall, pts, Vec3::Z, reach, |_| false));
     }

@@ -42,7 +42,7 @@ pub struct BakeStats {
     pub phase_seconds: Vec<(String, f64)>,
 }
 
-/// What [`bake`] returns.
+/// What [`bake`](super::bake) returns.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BakeResult {
     pub objects: Vec<ObjectSolution>,

@@ -98,7 +98,7 @@ impl Ctx<'_> {
     /// mesh's points both as a source and as a hole through which it saw what lies behind (a
     /// wall in a closed furnace 5% too bright in front of a refined star's point), and at a
     /// concave fold of one object each coarse triangle saw the other over a wider angle than
-    /// the refined surface does (the creases of curved objects 5-27% too bright, issue 20).
+    /// the refined surface does (the creases of curved objects 5-27% too bright).
     pub(super) fn source_shape<'s>(
         &'s self,
         k: ElemKey,
