@@ -528,6 +528,41 @@ fn build_cluster(
     mid
 }
 
+/// How many levels below a linked cluster its radiance is read apart ([`Ctx::cluster_seen`](super::context::Ctx::cluster_seen)),
+/// and so into how many parts at most.
+pub(super) const READ_DEPTH: u32 = 2;
+
+pub(super) const READ_PARTS: usize = 1 << READ_DEPTH;
+
+/// The parts of cluster `c` that a link to it reads apart ([`Ctx::cluster_seen`](super::context::Ctx::cluster_seen)): its
+/// descendants [`READ_DEPTH`] levels down, a root triangle met on the way standing for
+/// itself; and how many there are.
+pub(super) fn read_parts(clusters: &ClusterTree, c: u32) -> ([ClusterChild; READ_PARTS], u8) {
+    let mut parts = [ClusterChild::Cluster(c); READ_PARTS];
+    let mut count = 1;
+    for _ in 0..READ_DEPTH {
+        let mut next = parts;
+        let mut n = 0;
+        for part in &parts[..count] {
+            match *part {
+                ClusterChild::Cluster(x) => {
+                    for ch in clusters.clusters[x as usize].children {
+                        next[n] = ch;
+                        n += 1;
+                    }
+                }
+                root => {
+                    next[n] = root;
+                    n += 1;
+                }
+            }
+        }
+        parts = next;
+        count = n;
+    }
+    (parts, count as u8)
+}
+
 #[cfg(test)]
 pub(super) mod tests {
     use super::*;

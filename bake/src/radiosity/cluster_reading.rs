@@ -1,18 +1,15 @@
 //! What a link to a cluster reads of it: per cluster the radiance its faces send towards each
 //! axis direction ([`ClusterLight`]), and for a near cluster its parts apart, each by its share
-//! of what the receiver sees.
+//! of what the receiver sees. A cluster's light is its roots' as
+//! [`source_radiance`](super::source_radiance) reads them, so the radiance of any source, element
+//! or cluster ([`Ctx::src_radiance`]), is read here.
 
 use glam::Vec3;
 
-use super::cluster::{ClusterChild, ClusterTree};
+use super::cluster::{ClusterChild, READ_PARTS};
 use super::context::Ctx;
+use super::links::Source;
 use super::tree::Tree;
-
-/// How many levels below a linked cluster its radiance is read apart ([`Ctx::cluster_seen`]),
-/// and so into how many parts at most.
-pub(super) const READ_DEPTH: u32 = 2;
-
-pub(super) const READ_PARTS: usize = 1 << READ_DEPTH;
 
 /// A cluster whose radius is at least this fraction of its distance from the receiver is read
 /// in parts ([`Ctx::reads_deep`]).
@@ -72,35 +69,6 @@ impl ClusterLight {
     }
 }
 
-/// The parts of cluster `c` that a link to it reads apart ([`Ctx::cluster_seen`]): its
-/// descendants [`READ_DEPTH`] levels down, a root triangle met on the way standing for
-/// itself; and how many there are.
-pub(super) fn read_parts(clusters: &ClusterTree, c: u32) -> ([ClusterChild; READ_PARTS], u8) {
-    let mut parts = [ClusterChild::Cluster(c); READ_PARTS];
-    let mut count = 1;
-    for _ in 0..READ_DEPTH {
-        let mut next = parts;
-        let mut n = 0;
-        for part in &parts[..count] {
-            match *part {
-                ClusterChild::Cluster(x) => {
-                    for ch in clusters.clusters[x as usize].children {
-                        next[n] = ch;
-                        n += 1;
-                    }
-                }
-                root => {
-                    next[n] = root;
-                    n += 1;
-                }
-            }
-        }
-        parts = next;
-        count = n;
-    }
-    (parts, count as u8)
-}
-
 impl Ctx<'_> {
     /// Cluster radiances (normal 0), bottom-up: per cluster the sums of radiance times open
     /// area turned towards each of ±x, ±y, ±z ([`ClusterLight`]).
@@ -131,13 +99,31 @@ impl Ctx<'_> {
         out
     }
 
+    /// Radiance (normal 0) of a source in the previous solution.
+    /// `at` is the receiver's point: a cluster's radiance is that of its faces turned towards it.
+    pub(super) fn src_radiance(
+        &self,
+        trees: &[Tree],
+        cl: &[ClusterLight],
+        s: Source,
+        at: Vec3,
+    ) -> Vec3 {
+        match s {
+            Source::Cluster(c) => cl[c as usize].toward(self.leaving(c, at)),
+            Source::Elem(k) => {
+                let t = &trees[k.root as usize];
+                self.source_radiance(k.root, t, t.deepest_toward(k) as usize)
+            }
+        }
+    }
+
     /// The unit direction in which light leaves cluster `c` towards the point `at`.
     pub(super) fn leaving(&self, c: u32, at: Vec3) -> Vec3 {
         (at - self.clusters.clusters[c as usize].centre).normalize_or_zero()
     }
 
     /// Whether a link from cluster `c` to a receiver centred at `p` reads the cluster in its
-    /// [`READ_DEPTH`]-level parts rather than its two children: a cluster near enough for its
+    /// [`READ_DEPTH`](super::cluster::READ_DEPTH)-level parts rather than its two children: a cluster near enough for its
     /// radius to be [`DEEP_READ`] of its distance or more. Linked whole up to
     /// `cluster_opening` (a half), it read its two children's mean where the receiver sees one
     /// part of them most: a closed room lit from the middle of its ceiling is brightest in
@@ -151,7 +137,7 @@ impl Ctx<'_> {
     }
 
     /// The parts of cluster `c` a link reads apart, and how many there are: its
-    /// [`READ_DEPTH`]-level descendants where it reads `deep` ([`read_parts`]), else its two
+    /// [`READ_DEPTH`](super::cluster::READ_DEPTH)-level descendants where it reads `deep` ([`read_parts`](super::cluster::read_parts)), else its two
     /// children.
     pub(super) fn cluster_parts(&self, c: u32, deep: bool) -> ([ClusterChild; READ_PARTS], usize) {
         if deep {

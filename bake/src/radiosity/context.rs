@@ -1,23 +1,21 @@
 //! What every part of the solver reads: the coarse triangles (roots), the cluster hierarchies,
 //! the occluders and refined surfaces, the figures found once per bake, and the memo of what the
-//! geometry alone decides per element.
+//! geometry alone decides per element. The state and what it answers directly; it is built in
+//! [`prepare`](super::prepare), and the solver's readings and rules add their own methods
+//! in their files.
 
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
 use glam::Vec3;
 use hce_format::MAX_TREE_DEPTH;
-use rayon::prelude::*;
 
-use super::cluster::{ClusterChild, ClusterTree};
-use super::cluster_reading::{read_parts, READ_PARTS};
+use super::cluster::{ClusterChild, ClusterTree, READ_PARTS};
 use super::element::ElemKey;
 use super::links::Source;
 use super::params::BakeParams;
-use super::surface::surface_point;
 use crate::scene::Scene;
 use crate::visibility::Occluders;
-use crate::BakeError;
 
 /// A coarse triangle as the solver sees it.
 pub(super) struct Root {
@@ -56,7 +54,7 @@ pub(super) struct Ctx<'a> {
     /// cluster, and a room lit by a panel under its ceiling came out 2-6% darker than a path
     /// tracer shows it, one wall darker than its mirror image (`tests/objects_reference.rs`).
     pub(super) mixes_emitters: Vec<bool>,
-    /// Per cluster: the parts a link to it reads apart when it reads deep ([`read_parts`]),
+    /// Per cluster: the parts a link to it reads apart when it reads deep ([`read_parts`](super::cluster::read_parts)),
     /// found once rather than walked for every link in every iteration.
     pub(super) read_parts: Vec<([ClusterChild; READ_PARTS], u8)>,
     /// Per root: nothing but the scene's outer boundary lies in front of its plane (the convex
@@ -105,162 +103,6 @@ pub(super) fn lum(v: Vec3) -> f32 {
 /// How many times the scene's mean emission an emitter sends to count as a light
 /// ([`Ctx::lights`]).
 pub(super) const LIGHT_EMISSION: f32 = 2.0;
-
-impl<'a> Ctx<'a> {
-    /// Everything the solver reads about `scene`: its roots, cluster hierarchies, occluders,
-    /// refined surfaces and the figures found once per bake.
-    pub(super) fn new(scene: &'a Scene, params: &'a BakeParams) -> Result<Ctx<'a>, BakeError> {
-        let mut roots = Vec::new();
-        for (oi, o) in scene.objects.iter().enumerate() {
-            for t in 0..o.triangles.len() {
-                let corners = o.corners(t);
-                let c = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
-                roots.push(Root {
-                    corners,
-                    normal: c.normalize(),
-                    area: c.length() * 0.5,
-                    normals: o.normals_of(t),
-                    emission: Vec3::from(o.emission_of(t)),
-                    object: oi,
-                    triangle: t,
-                });
-            }
-        }
-        if roots.len() >= u32::MAX as usize {
-            return Err(BakeError::InvalidParameter("too many triangles".into()));
-        }
-        let all_tris: Vec<[Vec3; 3]> = roots.iter().map(|r| r.corners).collect();
-        let clusters = ClusterTree::build(&all_tris);
-        let emits = |t: u32| roots[t as usize].emission.max_element() > 0.0;
-        let mixes_emitters = clusters
-            .clusters
-            .iter()
-            .map(|c| {
-                let ts = clusters.roots_of(c);
-                let e = ts.iter().filter(|&&t| emits(t)).count();
-                e > 0 && e < ts.len()
-            })
-            .collect();
-        let read_parts = (0..clusters.clusters.len() as u32)
-            .map(|c| read_parts(&clusters, c))
-            .collect();
-        // What casts shadows: every root, but a multiresolution object with an occluder of its
-        // own ([`SolverObject::occluder`]) by that; each occluder triangle with its root.
-        let (occ_tris, occ_owner, surface) = {
-            let (mut tris, mut owner) = (Vec::new(), Vec::new());
-            let mut surface: Vec<Vec<[Vec3; 3]>> = vec![Vec::new(); roots.len()];
-            let mut first = 0u32;
-            for o in &scene.objects {
-                if o.occluder.is_empty() {
-                    for t in 0..o.triangles.len() as u32 {
-                        tris.push(roots[(first + t) as usize].corners);
-                        owner.push(first + t);
-                    }
-                } else {
-                    for (tri, t) in &o.occluder {
-                        let tri = tri.map(Vec3::from);
-                        surface[(first + *t) as usize].push(tri);
-                        tris.push(tri);
-                        owner.push(first + *t);
-                    }
-                }
-                first += o.triangles.len() as u32;
-            }
-            (tris, owner, surface)
-        };
-        let occ = Occluders::new(occ_tris.iter().copied());
-        let plane_eps = {
-            let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
-            for t in &all_tris {
-                for v in t {
-                    lo = lo.min(*v);
-                    hi = hi.max(*v);
-                }
-            }
-            (hi - lo).length() * 1e-6
-        };
-        let object_clusters: Vec<(ClusterTree, u32)> = {
-            let mut first = 0usize;
-            scene
-                .objects
-                .iter()
-                .map(|o| {
-                    let n = o.triangles.len();
-                    let tree = ClusterTree::build(&all_tris[first..first + n]);
-                    first += n;
-                    (tree, (first - n) as u32)
-                })
-                .collect()
-        };
-        let convex = object_clusters
-            .iter()
-            .map(|(tree, first)| {
-                let tris = &all_tris[*first as usize..*first as usize + tree.order.len()];
-                !tris.is_empty() && tree.is_convex(tris, 10.0 * plane_eps)
-            })
-            .collect();
-        let cluster_object = clusters
-            .clusters
-            .iter()
-            .map(|c| {
-                let ts = clusters.roots_of(c);
-                let object = roots[ts[0] as usize].object;
-                ts.iter()
-                    .all(|&t| roots[t as usize].object == object)
-                    .then_some(object as u32)
-            })
-            .collect();
-        Ok(Ctx {
-            scene,
-            params,
-            clusters,
-            object_clusters,
-            convex,
-            mixes_emitters,
-            read_parts,
-            cluster_object,
-            boundary_closed: OnceLock::new(),
-            unobstructed: roots
-                .par_iter()
-                .map(|r| occ.shaft_clear(r.corners, r.normal, Vec3::MIN, Vec3::MAX, None))
-                .collect(),
-            occ,
-            occ_owner,
-            shape: roots
-                .iter()
-                .zip(&surface)
-                .map(|(r, surf)| {
-                    r.corners
-                        .map(|q| surface_point(r.corners, r.normal, surf, q).0)
-                })
-                .collect(),
-            surface,
-            min_area: {
-                let mut area = vec![0.0f64; scene.objects.len()];
-                for r in &roots {
-                    area[r.object] += f64::from(r.area);
-                }
-                let scene_area: f64 = area.iter().sum();
-                area.iter()
-                    .map(|a| {
-                        (a.max(scene_area / 16.0) * f64::from(params.min_area_fraction)) as f32
-                    })
-                    .collect()
-            },
-            plane_eps,
-            memos: roots.iter().map(|_| Mutex::default()).collect(),
-            light_floor: {
-                let (mut area, mut sent) = (0.0f64, 0.0f64);
-                for r in &roots {
-                    area += f64::from(r.area);
-                    sent += f64::from(r.area) * f64::from(lum(r.emission));
-                }
-                (f64::from(LIGHT_EMISSION) * sent / area.max(f64::MIN_POSITIVE)) as f32
-            },
-            roots,
-        })
-    }
-}
 
 impl Ctx<'_> {
     pub(super) fn nn(&self, r: u32) -> usize {

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use super::cluster_reading::READ_PARTS;
+use super::cluster::READ_PARTS;
 use super::element::ElemKey;
 
 /// A link's coefficients are a linear function over its receiver, stored as its values at the
@@ -34,7 +34,7 @@ pub(super) struct RawLink {
     /// For a cluster source, the share of each of its parts in what the receiver sees of it
     /// ([`Ctx::cluster_share`](super::context::Ctx::cluster_share)); unused for an element source.
     pub(super) share: [f32; READ_PARTS],
-    /// For a cluster source: whether its parts are its [`READ_DEPTH`](super::cluster_reading::READ_DEPTH)-level descendants
+    /// For a cluster source: whether its parts are its [`READ_DEPTH`](super::cluster::READ_DEPTH)-level descendants
     /// ([`Ctx::reads_deep`](super::context::Ctx::reads_deep)) rather than its two children.
     pub(super) deep: bool,
     /// For an element source: which of its normals' radiance it sends towards the receiver

@@ -1,6 +1,7 @@
-//! The bake's passes: direct light, then `refine_passes` times link refinement and a solve; the
-//! parallel work of each (per root, and within a root's refinement in parts whose bounds depend
-//! on the step count alone, so that the result does not depend on the thread count).
+//! The bake's passes: direct light, then `refine_passes` times link refinement and a solve,
+//! each pass's work run in parallel per root (within a root's refinement, in the parts of
+//! [`parallel_walk`](super::parallel_walk)), so that the result does not depend on the thread
+//! count.
 
 use std::time::Instant;
 
@@ -12,64 +13,12 @@ use super::context::{lum, Ctx};
 use super::element::ElemKey;
 use super::links::{Link, RawLink, Source, SrcIdx};
 use super::params::BakeParams;
-use super::refine::{Judge, Pair};
+use super::refine::Judge;
 use super::solution::{BakeResult, BakeStats, ObjectSolution, TriangleSolution};
 use super::source_variation::DIM_RECEIVER_FLOOR;
 use super::tree::Tree;
 use crate::scene::Scene;
 use crate::BakeError;
-
-/// Pairs one part of a root's refinement takes before it hands the pairs left on its stack
-/// to parts that run in parallel ([`refine_in_parallel`]).
-pub(super) const REFINE_STEPS: usize = 16384;
-
-/// Refines `stack` with `run` ([`Ctx::refine_root`]'s depth-first walk of at most
-/// [`REFINE_STEPS`] pairs), then each pair it left in parallel, the same way; the links in
-/// the order the walk would have popped them, their coefficients' offsets moved to match.
-/// Where the parts fall depends on the step count alone, so the links come out the same for
-/// any number of threads. A room of a few large coarse triangles was refined one triangle per
-/// thread, and the floor's alone took most of the time (the Cornell box: 1.2 cores busy of 2).
-#[allow(clippy::type_complexity)]
-pub(super) fn refine_in_parallel(
-    run: &(dyn Fn(Vec<Pair>) -> (Vec<RawLink>, Vec<f32>, Vec<Pair>) + Sync),
-    stack: Vec<Pair>,
-) -> (Vec<RawLink>, Vec<f32>) {
-    // The parts' results in order, joined once at the end.
-    #[allow(clippy::type_complexity)]
-    pub(super) fn parts(
-        run: &(dyn Fn(Vec<Pair>) -> (Vec<RawLink>, Vec<f32>, Vec<Pair>) + Sync),
-        stack: Vec<Pair>,
-    ) -> Vec<(Vec<RawLink>, Vec<f32>)> {
-        let (links, ks, left) = run(stack);
-        let mut out = vec![(links, ks)];
-        if !left.is_empty() {
-            let rest: Vec<Vec<(Vec<RawLink>, Vec<f32>)>> = left
-                .into_par_iter()
-                .rev()
-                .map(|p| parts(run, vec![p]))
-                .collect();
-            out.extend(rest.into_iter().flatten());
-        }
-        out
-    }
-    let mut all = parts(run, stack);
-    if all.len() == 1 {
-        return all.pop().unwrap_or_default();
-    }
-    let (mut links, mut ks) = (
-        Vec::with_capacity(all.iter().map(|p| p.0.len()).sum()),
-        Vec::with_capacity(all.iter().map(|p| p.1.len()).sum()),
-    );
-    for (part_links, part_ks) in all {
-        let offset = ks.len() as u32;
-        links.extend(part_links.into_iter().map(|mut l| {
-            l.k_start += offset;
-            l
-        }));
-        ks.extend(part_ks);
-    }
-    (links, ks)
-}
 
 /// Progress callback: `(phase, done, total)`, e.g. `("refine 1", 1200, 20000)` coarse
 /// triangles, or `("solve 2", 3, 200)` iterations (the total is the iteration cap). Called

@@ -4,32 +4,12 @@
 
 use glam::Vec3;
 
-use super::cluster_reading::ClusterLight;
 use super::context::Ctx;
 use super::element::{child_toward, ElemKey};
 use super::formfactor::stratified_points;
-use super::links::Source;
 use super::tree::Tree;
 
 impl Ctx<'_> {
-    /// Radiance (normal 0) of a source in the previous solution.
-    /// `at` is the receiver's point: a cluster's radiance is that of its faces turned towards it.
-    pub(super) fn src_radiance(
-        &self,
-        trees: &[Tree],
-        cl: &[ClusterLight],
-        s: Source,
-        at: Vec3,
-    ) -> Vec3 {
-        match s {
-            Source::Cluster(c) => cl[c as usize].toward(self.leaving(c, at)),
-            Source::Elem(k) => {
-                let t = &trees[k.root as usize];
-                self.source_radiance(k.root, t, t.deepest_toward(k) as usize)
-            }
-        }
-    }
-
     /// Radiance (normal 0) that node `i` of root `r`'s tree sends out. Its stored value is
     /// the area average that a viewer sees; but light leaves only from the open part of the
     /// element (see [`Ctx::open_fraction`]): the part of a floor element under a block
