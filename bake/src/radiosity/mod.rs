@@ -39,22 +39,29 @@
 //! Determinism: work is split per root triangle, every random number is seeded from element
 //! ids, and every sum runs in a fixed order, so the result does not depend on the thread count.
 //!
-//! ## Where things are
+//! ## Layers
 //!
-//! - The elements and their links: [`element`] (keys of the 1-to-4 split), [`links`] (what a
-//!   link holds), [`tree`] (one root's element tree, push), [`surface`] (a multiresolution
-//!   object's refined surface under its coarse triangles), [`context`] (what every part reads).
-//! - Link refinement: [`refine`] walks the (receiver, source) pairs of one root, asking each
-//!   rule in turn. One file per rule, each saying what it resolves: [`power`],
-//!   [`factor_variation`], [`bend`], [`source_variation`], [`shadow_edge`],
-//!   [`narrow_shadow`], [`near_occluder`], [`self_shade`].
-//! - What a link carries: [`formfactor`] (point-to-polygon form factors), [`coefficients`]
-//!   (a link's form factors, linear over its receiver), [`link_visibility`] (its rays),
-//!   [`source_radiance`] and [`cluster_reading`] (what it reads of its source), [`enclosure`]
-//!   (what a closed leaf's form factors sum to).
-//! - Solving: [`direct`] (punctual lights), [`gather`] (gather, push-pull, Jacobi
-//!   iterations), [`solution`] (what the bake hands back), [`schedule`] (passes, and the
-//!   parallel work of one).
+//! Each file names only files of the layers below its own (a file's methods on [`Ctx`](context::Ctx) are
+//! called only from above it too):
+//!
+//! 1. Geometry and data, which know no `Ctx`: [`element`] (keys of the 1-to-4 split),
+//!    [`cluster`] (the cluster hierarchy and the parts a link reads of a cluster),
+//!    [`formfactor`] (point-to-polygon form factors), [`params`], [`links`] (what a link
+//!    holds), [`parallel_walk`] (a root's refinement in parts run in parallel), and the rules'
+//!    pure decisions [`power`], [`factor_variation`], [`shadow_edge`].
+//! 2. The state: [`context`] (`Ctx`, what every part reads, and what it answers directly).
+//! 3. Readings of the scene, each an `impl Ctx` block: [`surface`] (a multiresolution object's
+//!    refined surface under its coarse triangles), then [`direct`] (punctual lights),
+//!    [`enclosure`] (what a closed leaf's form factors sum to), [`link_visibility`] (a link's
+//!    rays), [`bend`]; [`prepare`] (`Ctx::new`); [`coefficients`] (a link's form factors,
+//!    linear over its receiver) and [`tree`] (one root's element tree, push);
+//!    [`source_radiance`] (what a link reads of a source element), then [`cluster_reading`]
+//!    (of a cluster, and of any source).
+//! 4. The refinement rules judged by the geometry: [`narrow_shadow`], [`near_occluder`], then
+//!    [`self_shade`]; and [`source_variation`], [`solution`] (what the bake hands back).
+//! 5. The steps: [`refine`] walks the (receiver, source) pairs of one root, asking each rule in
+//!    turn; [`gather`] (gather, push-pull, Jacobi iterations).
+//! 6. [`schedule`]: the passes, and the parallel work of each.
 
 mod bend;
 pub(crate) mod cluster;
