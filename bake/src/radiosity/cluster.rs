@@ -213,7 +213,8 @@ impl ClusterTree {
     /// above it, so this is an upper bound too, exact at the nodes and within 2% of a sphere
     /// from any side, where the moment bound of `Cluster::projected_area` is 15% over (a
     /// floor beside an object that it saw as clusters read 2-3% too bright in a closed
-    /// furnace, `tests/furnace_property.rs`). Along the kink of a nearly planar cluster seen edge-on it is
+    /// furnace, `tests/furnace_property.rs`). Along the kink of a nearly planar cluster seen
+    /// edge-on it is
     /// looser, so the smaller of it and the cone's bound (exact for a planar cluster) is
     /// returned. A cluster of at most
     /// [`DIRECT_SUM`] triangles has no table: its sum is taken over them, exactly.
@@ -528,13 +529,15 @@ fn build_cluster(
     mid
 }
 
-/// How many levels below a linked cluster its radiance is read apart ([`Ctx::cluster_seen`](super::context::Ctx::cluster_seen)),
+/// How many levels below a linked cluster its radiance is read apart
+/// ([`Ctx::cluster_seen`](super::context::Ctx::cluster_seen)),
 /// and so into how many parts at most.
 pub(super) const READ_DEPTH: u32 = 2;
 
 pub(super) const READ_PARTS: usize = 1 << READ_DEPTH;
 
-/// The parts of cluster `c` that a link to it reads apart ([`Ctx::cluster_seen`](super::context::Ctx::cluster_seen)): its
+/// The parts of cluster `c` that a link to it reads apart
+/// ([`Ctx::cluster_seen`](super::context::Ctx::cluster_seen)): its
 /// descendants [`READ_DEPTH`] levels down, a root triangle met on the way standing for
 /// itself; and how many there are.
 pub(super) fn read_parts(clusters: &ClusterTree, c: u32) -> ([ClusterChild; READ_PARTS], u8) {

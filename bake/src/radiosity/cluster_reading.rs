@@ -123,7 +123,8 @@ impl Ctx<'_> {
     }
 
     /// Whether a link from cluster `c` to a receiver centred at `p` reads the cluster in its
-    /// [`READ_DEPTH`](super::cluster::READ_DEPTH)-level parts rather than its two children: a cluster near enough for its
+    /// [`READ_DEPTH`](super::cluster::READ_DEPTH)-level parts rather than its two children: a
+    /// cluster near enough for its
     /// radius to be [`DEEP_READ`] of its distance or more. Linked whole up to
     /// `cluster_opening` (a half), it read its two children's mean where the receiver sees one
     /// part of them most: a closed room lit from the middle of its ceiling is brightest in
@@ -137,7 +138,8 @@ impl Ctx<'_> {
     }
 
     /// The parts of cluster `c` a link reads apart, and how many there are: its
-    /// [`READ_DEPTH`](super::cluster::READ_DEPTH)-level descendants where it reads `deep` ([`read_parts`](super::cluster::read_parts)), else its two
+    /// [`READ_DEPTH`](super::cluster::READ_DEPTH)-level descendants where it reads `deep`
+    /// ([`read_parts`](super::cluster::read_parts)), else its two
     /// children.
     pub(super) fn cluster_parts(&self, c: u32, deep: bool) -> ([ClusterChild; READ_PARTS], usize) {
         if deep {
@@ -199,7 +201,8 @@ impl Ctx<'_> {
 
     /// The radiance (normal 0) a link gathers from cluster `c` in direction `w`: its parts'
     /// ([`Ctx::cluster_parts`]; [`ClusterLight::toward`], a root triangle's own), each by its
-    /// `share` of the receiver's view ([`Ctx::cluster_share`]). The cluster's own average weighs its
+    /// `share` of the receiver's view ([`Ctx::cluster_share`]). The cluster's own average weighs
+    /// its
     /// triangles by their areas turned towards `w` alone, which is right from afar; from a
     /// receiver that sees one child closer, or square on, the other edge-on, that child
     /// brings more (a lit room's walls and ceiling gathered 0.3% too little from clusters of

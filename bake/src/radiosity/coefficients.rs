@@ -220,7 +220,8 @@ impl Ctx<'_> {
     /// `cluster_opening` (one half) times its distance from the receiver's centre; a lone disc
     /// there is 10-20% off, and more at the receiver's corners, which can lie closer (in a
     /// closed furnace, leaves near a cube's corners summed to 8% less or more than the
-    /// whole hemisphere, `tests/furnace_property.rs`). The link stays one link; only its coefficient is summed
+    /// whole hemisphere, `tests/furnace_property.rs`). The link stays one link; only its
+    /// coefficient is summed
     /// finer. Adds the form factor for each of `normals` to `out`.
     pub(super) fn cluster_form_factors(&self, c: u32, p: Vec3, normals: &[Vec3], out: &mut [f32]) {
         if normals.is_empty() {

@@ -54,7 +54,8 @@ pub(super) struct Ctx<'a> {
     /// cluster, and a room lit by a panel under its ceiling came out 2-6% darker than a path
     /// tracer shows it, one wall darker than its mirror image (`tests/objects_reference.rs`).
     pub(super) mixes_emitters: Vec<bool>,
-    /// Per cluster: the parts a link to it reads apart when it reads deep ([`read_parts`](super::cluster::read_parts)),
+    /// Per cluster: the parts a link to it reads apart when it reads deep
+    /// ([`read_parts`](super::cluster::read_parts)),
     /// found once rather than walked for every link in every iteration.
     pub(super) read_parts: Vec<([ClusterChild; READ_PARTS], u8)>,
     /// Per root: nothing but the scene's outer boundary lies in front of its plane (the convex

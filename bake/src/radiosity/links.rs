@@ -29,12 +29,14 @@ pub(super) struct RawLink {
     pub(super) src: Source,
     /// Where the link looks: for a cluster source, the direction light leaves it towards the
     /// receiver; for an element source, the barycentric coordinates over the source of the
-    /// centre of the receiver's view of it ([`Ctx::kernel_centre`](super::context::Ctx::kernel_centre)).
+    /// centre of the receiver's view of it
+    /// ([`Ctx::kernel_centre`](super::context::Ctx::kernel_centre)).
     pub(super) aim: Vec3,
     /// For a cluster source, the share of each of its parts in what the receiver sees of it
     /// ([`Ctx::cluster_share`](super::context::Ctx::cluster_share)); unused for an element source.
     pub(super) share: [f32; READ_PARTS],
-    /// For a cluster source: whether its parts are its [`READ_DEPTH`](super::cluster::READ_DEPTH)-level descendants
+    /// For a cluster source: whether its parts are its
+    /// [`READ_DEPTH`](super::cluster::READ_DEPTH)-level descendants
     /// ([`Ctx::reads_deep`](super::context::Ctx::reads_deep)) rather than its two children.
     pub(super) deep: bool,
     /// For an element source: which of its normals' radiance it sends towards the receiver
@@ -47,7 +49,8 @@ pub(super) struct RawLink {
     /// Fraction of the visibility rays that were clear.
     pub(super) visible: f32,
     /// For a cluster source on a receiver that may split: how far its form factor bends over
-    /// the receiver, as the refinement judged it ([`Ctx::cluster_factors_over`](super::context::Ctx::cluster_factors_over)); NaN where it
+    /// the receiver, as the refinement judged it
+    /// ([`Ctx::cluster_factors_over`](super::context::Ctx::cluster_factors_over)); NaN where it
     /// was not judged. The geometry's alone, so the next pass reads it here and does not walk
     /// the cluster again (a tenth of the scaling scene's bake).
     pub(super) bend: f32,

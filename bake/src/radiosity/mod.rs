@@ -41,7 +41,8 @@
 //!
 //! ## Layers
 //!
-//! Each file names only files of the layers below its own (a file's methods on [`Ctx`](context::Ctx) are
+//! Each file names only files of the layers below its own (a file's methods on
+//! [`Ctx`](context::Ctx) are
 //! called only from above it too):
 //!
 //! 1. Geometry and data, which know no `Ctx`: [`element`] (keys of the 1-to-4 split),

@@ -13,7 +13,8 @@ use super::coefficients::inset_corners;
 use super::context::Ctx;
 use super::element::ElemKey;
 
-/// How many levels below [`BakeParams::detail_level`](super::params::BakeParams::detail_level) an emitter's narrow shadow splits a
+/// How many levels below [`BakeParams::detail_level`](super::params::BakeParams::detail_level) an
+/// emitter's narrow shadow splits a
 /// flat receiver ([`Ctx::narrow_shadow_splittable`]).
 pub(super) const NARROW_SHADOW_LEVELS: u32 = 2;
 
@@ -25,7 +26,8 @@ impl Ctx<'_> {
     /// Whether the shadow that a light `st` ([`Ctx::lights`]) casts across flat receiver `k`
     /// (corners `rt`), which the link's rays found partly hidden, may be narrower than the
     /// receiver, which then draws it blurred over its whole width: below
-    /// [`BakeParams::detail_level`](super::params::BakeParams::detail_level) (down to [`NARROW_SHADOW_LEVELS`] more levels and a
+    /// [`BakeParams::detail_level`](super::params::BakeParams::detail_level) (down to
+    /// [`NARROW_SHADOW_LEVELS`] more levels and a
     /// sixteenth of the least area), a surface met between the receiver and the light nearer
     /// than `s·D/W` (receiver size `s`, light distance `D` and width `W`), where its penumbra
     /// is narrower than `s`. Judged by the geometry, from the receiver's centre and inset

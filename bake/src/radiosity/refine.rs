@@ -41,7 +41,8 @@ pub(super) struct Judge {
 }
 
 /// A receiver (its key and corners), a source (with its corners, for an element), and whether
-/// the receiver's own rules ([`near_occluder`](super::near_occluder), [`self_shade`](super::self_shade)) are known to leave it whole:
+/// the receiver's own rules ([`near_occluder`](super::near_occluder),
+/// [`self_shade`](super::self_shade)) are known to leave it whole:
 /// so a pair that splits or opens its source, keeping the receiver, does not ask again.
 pub(super) type Pair = (ElemKey, [Vec3; 3], Source, [Vec3; 3], bool);
 
