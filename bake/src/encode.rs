@@ -12,7 +12,7 @@
 
 use hce_format::{rgb9e5, BitWriter, Object, TriangleRecord};
 
-use crate::hierarchical::TriangleSolution;
+use crate::radiosity::TriangleSolution;
 use crate::BakeError;
 
 /// Appends the trees, colours and normals of `triangles` to `object` (whose mesh and other

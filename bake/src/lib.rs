@@ -2,31 +2,40 @@
 //!
 //! The baker: normal sets (stage 1), enriched hierarchical radiosity (stage 2) and HCE encoding.
 //!
-//! Entry points: build a [`scene::Scene`] (or import one), choose normal sets with
-//! [`normal_sets::select_normal_sets`], solve with [`hierarchical::bake`], and turn the solution
-//! into container objects with [`encode::encode_object`].
+//! Entry points: build a [`Scene`] (or import one), choose normal sets with
+//! [`select_normal_sets`], solve with [`bake`], and turn the solution into container objects with
+//! [`encode_object`]. [`bake_file`] does all of it for a glTF or OBJ file. Everything public is
+//! re-exported here by name; `import` (which re-exports the scene importer of `hce_meshio`) and
+//! `output` stay modules.
 #![forbid(unsafe_code)]
 
-pub mod cache_key;
-pub mod cluster;
-pub mod element;
-pub mod encode;
-pub mod formfactor;
-pub mod hierarchical;
+mod cache_key;
+mod encode;
 pub mod import;
-pub mod normal_sets;
+mod normal_sets;
 pub mod output;
-pub mod pipeline;
-pub mod scene;
-pub mod visibility;
+mod pipeline;
+mod radiosity;
+mod scene;
+mod visibility;
 
-pub use hierarchical::{
+pub use cache_key::{cache_key, canonical_parameters, CacheKey, HashedInput, KEY_FORMAT};
+pub use encode::{encode_object, vertex_colours};
+pub use normal_sets::{
+    select_normal_set, select_normal_sets, NormalSet, NormalSetParams, NormalSetReport,
+};
+pub use pipeline::{bake_file, BakeOutcome, ObjectSummary, PipelineError, PipelineOptions};
+pub use radiosity::element::{jittered_point, ElemKey, Rng};
+pub use radiosity::formfactor::{point_to_polygon, stratified_points};
+pub use radiosity::{
     bake, bake_with_progress, BakeParams, BakeResult, BakeStats, ObjectSolution, Progress,
-    TriangleSolution,
+    TriangleSolution, MAX_VISIBILITY_RAYS,
 };
 pub use scene::{
-    LightKind, PunctualLight, Scene, SceneError, SolverObject, MAX_NORMALS_PER_TRIANGLE,
+    LightKind, PunctualLight, ReflectanceFn, Scene, SceneError, SolverObject,
+    MAX_NORMALS_PER_TRIANGLE,
 };
+pub use visibility::Occluders;
 
 /// Everything that can go wrong while baking.
 #[derive(Debug, thiserror::Error)]

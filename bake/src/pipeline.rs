@@ -49,10 +49,10 @@ use glam::{Mat3, Vec3};
 use hce_format::{Container, ControlMesh, Metadata, Object, ObjectKind};
 use hce_geometry::{build_control_mesh, subdivide, weld, Creases, TopologyConfig};
 
-use crate::hierarchical::{BakeParams, Progress, TriangleSolution};
 use crate::import::{import_scene, ImportOptions, ImportedScene, ToSolver};
 use crate::normal_sets::{select_normal_sets, NormalSetParams};
 use crate::output::{bake_gltf, ObjectLink};
+use crate::radiosity::{BakeParams, Progress, TriangleSolution};
 
 /// Everything `hce bake` can set.
 #[derive(Clone, Debug)]

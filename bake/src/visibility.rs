@@ -116,7 +116,7 @@ impl Occluders {
     /// sharp edge, or along a wall from a point next to it) runs within rounding distance of
     /// that plane for a long way, and met the neighbouring triangles of its own surface
     /// there. A fixed gap at each end let a closed 30-degree wedge lose 4% of its light at the
-    /// leaves along its edge (issue 20).
+    /// leaves along its edge (`tests/furnace_property.rs`, `wedge`).
     pub fn segment_clear_between(&self, a: Vec3, na: Vec3, b: Vec3, nb: Vec3) -> bool {
         self.segment_clear_between_but(a, na, b, nb, |_| false)
     }
@@ -496,8 +496,8 @@ mod tests {
         (t[1] - t[0]).cross(t[2] - t[0]).normalize()
     }
 
-    fn point_on(t: &[Vec3; 3], rng: &mut crate::element::Rng) -> Vec3 {
-        crate::element::jittered_point(*t, 0, 1, rng)
+    fn point_on(t: &[Vec3; 3], rng: &mut crate::radiosity::element::Rng) -> Vec3 {
+        crate::radiosity::element::jittered_point(*t, 0, 1, rng)
     }
 
     #[test]
@@ -518,7 +518,7 @@ mod tests {
     /// some that rays find blocked.
     #[test]
     fn a_certified_shaft_is_clear_along_every_segment() {
-        let mut rng = crate::element::Rng::new(20, 11, 26);
+        let mut rng = crate::radiosity::element::Rng::new(20, 11, 26);
         let (mut certified, mut refused_blocked) = (0, 0);
         for scene in 0..6 {
             let mut tris = Vec::new();

@@ -1,4 +1,4 @@
-//! The leaves along a room's corners (issue 20): where two walls meet, the bend rule refines one
+//! The leaves along a room's corners: where two walls meet, the bend rule refines one
 //! level below `max_level`, so that the light's fall into the corner is not drawn as a bright
 //! line one leaf wide. Alike whether the walls are separate objects or one object whose faces
 //! share their edges: a room whose walls were one object beside a separate floor stopped at
@@ -6,7 +6,7 @@
 //! and those leaves read 6% off in a closed furnace (`furnace_property.rs`, `large_faces`).
 
 use glam::Vec3;
-use hce_bake::element::ElemKey;
+use hce_bake::ElemKey;
 use hce_bake::{bake, BakeParams, BakeResult, Scene, SolverObject};
 
 const SIZE: f32 = 2.0;

@@ -1,4 +1,4 @@
-//! Enrichment on real Loop subdivision (issue 4, "Correctness tests", last bullet).
+//! Enrichment on real Loop subdivision.
 //!
 //! A bumpy multiresolution object (an icosphere whose twelve original vertices stand out, so
 //! that its Loop limit surface has twelve smooth bumps) stands on a flat floor and is lit from
@@ -19,9 +19,9 @@ use std::path::Path;
 
 use glam::{Quat, Vec3};
 use hce_bake::import::{import_scene, ImportOptions, ToSolver};
-use hce_bake::normal_sets::NormalSetParams;
-use hce_bake::pipeline::{bake_file, PipelineOptions};
+use hce_bake::NormalSetParams;
 use hce_bake::{bake, BakeParams, SolverObject};
+use hce_bake::{bake_file, PipelineOptions};
 use hce_format::{rgb9e5, Object, ObjectKind};
 use hce_geometry::colour::apply_baked_colours;
 use hce_geometry::{subdivide, Creases, Refined};

@@ -1,4 +1,4 @@
-//! The closed furnace on a multiresolution object (issue 11): one Loop-subdivided cube seen from
+//! The closed furnace on a multiresolution object: one Loop-subdivided cube seen from
 //! inside, every face emitting `E = 0.4` with reflectance `ρ = 0.5`. Whatever the geometry, the
 //! outgoing radiance is `E / (1 − ρ) = 0.8` everywhere, so every refined vertex at every level
 //! must read 0.8: per-normal colours that lose the light below a coarse triangle's plane, or a
@@ -9,9 +9,9 @@
 use std::path::Path;
 
 use hce_bake::import::ImportOptions;
-use hce_bake::normal_sets::NormalSetParams;
-use hce_bake::pipeline::{bake_file, PipelineOptions};
 use hce_bake::BakeParams;
+use hce_bake::NormalSetParams;
+use hce_bake::{bake_file, PipelineOptions};
 use hce_format::{Object, ObjectKind};
 use hce_geometry::colour::{apply_baked_colours_with, Reconstruction};
 use hce_geometry::{subdivide, Creases};
@@ -163,7 +163,7 @@ fn multiresolution_furnace_is_exact_at_every_level() {
     check_refined(object);
 }
 
-/// A multiresolution object inside a closed furnace room (issue 20): an octahedron, whose Loop
+/// A multiresolution object inside a closed furnace room: an octahedron, whose Loop
 /// surface is a rounded blob with valence-4 corners, floating in a box of flat faces. Its
 /// refined vertices face every way, and the room around them must give `E / (1 − ρ)` at all of
 /// them, at every level and with both reconstructions, as it does at every node.

@@ -1,4 +1,4 @@
-//! The closed furnace over generated scenes (issue 20): inside any closed surface whose every
+//! The closed furnace over generated scenes: inside any closed surface whose every
 //! triangle emits `E` and reflects `ρ`, the outgoing radiance is `E / (1 − ρ)` everywhere,
 //! whatever the tessellation. The renderer draws the deepest leaves of every tree (SPEC.md
 //! G.4), so every node and every leaf must read it, not only the coarse triangles' averages:
@@ -15,9 +15,9 @@
 mod common;
 
 use glam::Vec3;
-use hce_bake::element::Rng;
-use hce_bake::normal_sets::{select_normal_set, NormalSetParams};
+use hce_bake::Rng;
 use hce_bake::{bake, BakeParams, Scene, SolverObject};
+use hce_bake::{select_normal_set, NormalSetParams};
 
 const EMISSION: f32 = 0.4;
 const RHO: f32 = 0.5;
@@ -181,7 +181,7 @@ fn worst_node(scene: &Scene) -> (f32, String) {
                     let (level, path) = sol.nodes[i / nn];
                     let leaf = !sol.subdivided[i / nn];
                     let normal = i % nn;
-                    let key = hce_bake::element::ElemKey {
+                    let key = hce_bake::ElemKey {
                         root: 0,
                         level,
                         path,
@@ -355,8 +355,7 @@ fn octahedron(b: &mut Builder, c: Vec3, r: f32, n: u32) {
 /// each leaf gathered through the form factors its links gave it: eight rays of visibility
 /// each over sources that the octahedra half hide, a cluster's area from a bound (15% over
 /// for a sphere), linear functions pushed down from coarser receivers. The form factors now
-/// sum to the part of the leaf's hemisphere that meets a surface (BENCHMARKS.md, "Fifteenth
-/// round").
+/// sum to the part of the leaf's hemisphere that meets a surface.
 
 #[test]
 fn objects_inside_a_closed_room() {
@@ -575,7 +574,7 @@ fn a_block_resting_on_the_floor_leaves_its_footprint_out() {
             if sol.subdivided[i] {
                 continue;
             }
-            let key = hce_bake::element::ElemKey {
+            let key = hce_bake::ElemKey {
                 root: 0,
                 level,
                 path,

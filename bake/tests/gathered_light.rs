@@ -1,5 +1,5 @@
 //! What the receivers of a lit room gather, against the exact transport over the baked leaves
-//! (issue 20: walls and ceilings of lit rooms came out 1-2% darker than a path tracer shows
+//! (walls and ceilings of lit rooms came out 1-2% darker than a path tracer shows
 //! them, and objects 1% darker, while a closed furnace was right to within 1%).
 //!
 //! A closed 3 × 3 × 2.5 m room, each face a 3 × 3 grid of quads, the middle quad of the
@@ -18,8 +18,8 @@
 mod common;
 
 use glam::Vec3;
-use hce_bake::formfactor::{point_to_polygon, stratified_points};
 use hce_bake::{bake, BakeParams, Scene, SolverObject};
+use hce_bake::{point_to_polygon, stratified_points};
 
 const RHO: f32 = 0.6;
 
@@ -112,7 +112,6 @@ fn a_lit_rooms_faces_gather_what_their_sources_send() {
     assert!(worst.0 < GATHER_TOLERANCE, "{}", worst.1);
 }
 
-/// Bound on a face's gathered light against the exact transport (BENCHMARKS.md, "Twelfth
-/// round"): while links gathered their sources' mean radiance the ceiling was 1.27% short and
+/// Bound on a face's gathered light against the exact transport : while links gathered their sources' mean radiance the ceiling was 1.27% short and
 /// the walls 0.5%; reading it where the receiver looks leaves -0.80% and -0.26% to -0.33%.
 const GATHER_TOLERANCE: f64 = 0.01;

@@ -1,4 +1,4 @@
-//! A multiresolution object that shades itself (issue 20): the inside of a fold, the rim of an
+//! A multiresolution object that shades itself: the inside of a fold, the rim of an
 //! eye socket, a spout's junction with its body. Every link's visibility is one number over its
 //! receiver, and the near-shadow rule leaves a multiresolution object's own surface out, so
 //! without a rule of its own a coarse triangle whose one side lies at the bottom of a fold and
@@ -12,7 +12,7 @@
 //! traced images of real meshes is in BENCHMARKS.md: the teapot 5.6% to 3.8%.)
 
 use glam::Vec3;
-use hce_bake::element::ElemKey;
+use hce_bake::ElemKey;
 use hce_bake::{bake, BakeParams, BakeResult, Scene, SolverObject};
 
 const RHO: f32 = 0.6;

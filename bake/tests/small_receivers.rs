@@ -1,4 +1,4 @@
-//! A finely tessellated ball beside a bright patch on a large floor (issue 11's darkening of
+//! A finely tessellated ball beside a bright patch on a large floor (the darkening of
 //! curved objects): a lamp tilted away from the ball lights a patch of the floor about a metre
 //! across, so the floor's radiance runs from that patch to dim far corners, and the ball, which
 //! sees only the floor and the lamp's black back, gathers all its light from it while each of
@@ -19,8 +19,8 @@
 mod common;
 
 use glam::Vec3;
-use hce_bake::formfactor::{point_to_polygon, stratified_points};
 use hce_bake::{bake, BakeParams, Scene, SolverObject};
+use hce_bake::{point_to_polygon, stratified_points};
 
 const RHO: f32 = 0.5;
 

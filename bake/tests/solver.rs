@@ -2,10 +2,10 @@
 //! thread-count determinism.
 
 use glam::Vec3;
-use hce_bake::element::{ElemKey, Rng};
-use hce_bake::encode::encode_object;
-use hce_bake::visibility::Occluders;
+use hce_bake::encode_object;
+use hce_bake::Occluders;
 use hce_bake::{bake, BakeParams, BakeResult, LightKind, PunctualLight, Scene, SolverObject};
+use hce_bake::{ElemKey, Rng};
 
 /// Two triangles of the parallelogram `o, o+u, o+u+v, o+v`, facing `u × v`.
 fn quad(o: Vec3, u: Vec3, v: Vec3) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
@@ -97,7 +97,7 @@ fn escape_fraction(occ: &Occluders, tri: [Vec3; 3], seed: u64, rays: u32) -> f32
     let mut rng = Rng::new(seed, 7, 9);
     let mut escaped = 0;
     for i in 0..rays {
-        let p = hce_bake::element::jittered_point(tri, i % 16, 16, &mut rng);
+        let p = hce_bake::jittered_point(tri, i % 16, 16, &mut rng);
         let (u1, u2) = (rng.next_f32(), rng.next_f32());
         let r = u1.sqrt();
         let phi = 2.0 * std::f32::consts::PI * u2;
@@ -368,7 +368,7 @@ fn sun_and_wall() -> (SolverObject, PunctualLight) {
 /// runtime will (path down the tree, closest normal), and returns the RMS difference against
 /// a flat bake of the displaced fine mesh itself.
 fn enrichment_rms(max_normals: usize, levels: u32) -> f32 {
-    use hce_bake::normal_sets::{select_normal_sets, NormalSetParams};
+    use hce_bake::{select_normal_sets, NormalSetParams};
     let mut coarse = grid_object(
         "floor",
         Vec3::ZERO,
@@ -633,7 +633,7 @@ fn progress_reports_every_phase_without_changing_the_result() {
 /// light at the default refinement: 0.7% dark on the walls and ceiling while a cluster link
 /// read its cluster's mean radiance where the receiver sees its brighter part most, about
 /// 0.4% now that near clusters are read by parts (within 0.3% with `bf_epsilon` 3e-5 or
-/// `cluster_opening` 0.25; BENCHMARKS.md, fifteenth and sixteenth rounds). The bound holds
+/// `cluster_opening` 0.25). The bound holds
 /// what the solver achieves, so that a leak of light or a double count (the ceiling behind
 /// the lamp) shows.
 #[test]

@@ -752,7 +752,7 @@ pub fn manifest(cases: &[Case]) -> Value {
 
 /// Bakes the bundled Cornell box at low settings (a moment in the dev profile).
 pub fn bake_cornell(samples: &Path, scratch: &Path) -> Vec<u8> {
-    use hce_bake::pipeline::{bake_file, PipelineOptions};
+    use hce_bake::{bake_file, PipelineOptions};
     let output = scratch.join("cornell-box.glb");
     let options = PipelineOptions {
         levels: 2,

@@ -1,4 +1,4 @@
-//! End-to-end tests of `hce bake` (`hce_bake::pipeline::bake_file`) on the sample scenes, at low
+//! End-to-end tests of `hce bake` (`hce_bake::bake_file`) on the sample scenes, at low
 //! settings so that each bake takes a moment in the dev profile: the outputs validate, every
 //! primitive links to its object with the right hash and triangle count, the bytes do not depend
 //! on the thread count, and multiresolution objects keep several normals where they curve.
@@ -6,8 +6,8 @@
 use std::path::{Path, PathBuf};
 
 use hce_bake::import::ImportOptions;
-use hce_bake::pipeline::{bake_file, BakeOutcome, PipelineOptions};
 use hce_bake::BakeParams;
+use hce_bake::{bake_file, BakeOutcome, PipelineOptions};
 use hce_format::ObjectKind;
 use hce_format::{container_bytes, linked_geometries, primitive_links, GltfAsset as Asset};
 use hce_geometry::Creases;

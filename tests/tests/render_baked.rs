@@ -18,8 +18,8 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use hce_bake::import::ImportOptions;
-use hce_bake::pipeline::{bake_file, PipelineOptions};
 use hce_bake::BakeParams;
+use hce_bake::{bake_file, PipelineOptions};
 use hce_format::ObjectKind;
 use hce_geometry::Creases;
 use hce_runtime::asset::{Asset, AssetFormat, OpenOptions};

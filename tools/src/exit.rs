@@ -95,7 +95,7 @@ pub fn classify(e: &anyhow::Error) -> Status {
 
 /// The status of one error whose type (or variant) fixes it whatever its causes.
 fn decisive(c: &(dyn std::error::Error + 'static)) -> Option<Status> {
-    use hce_bake::pipeline::PipelineError;
+    use hce_bake::PipelineError;
     use hce_geometry::refine::RefineError;
     if c.is::<Usage>() {
         return Some(Status::Usage);
@@ -236,7 +236,7 @@ mod tests {
     #[test]
     fn a_decisive_type_wins_over_an_io_cause() {
         // A pipeline's output-extension error is a usage error whatever it wraps.
-        let e = hce_bake::pipeline::PipelineError::OutputExtension {
+        let e = hce_bake::PipelineError::OutputExtension {
             path: "x.png".into(),
         };
         assert_eq!(classify(&anyhow::Error::new(e)), Status::Usage);

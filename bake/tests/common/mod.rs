@@ -58,7 +58,7 @@ pub fn leaves(
         let nn = ts.normals.len();
         for (i, &(level, path)) in ts.nodes.iter().enumerate() {
             if !ts.subdivided[i] {
-                let key = hce_bake::element::ElemKey {
+                let key = hce_bake::ElemKey {
                     root: 0,
                     level,
                     path,

@@ -1,6 +1,6 @@
 //! `hce bake`: import a glTF or OBJ scene, choose normal sets, solve enriched hierarchical
 //! radiosity and write the baked `.glb`/`.gltf` (extension + `COLOR_0` fallback) or the `.hce`
-//! container alone. The work is `hce_bake::pipeline::bake_file`; this module parses flags,
+//! container alone. The work is `hce_bake::bake_file`; this module parses flags,
 //! draws progress bars and prints the summary. `--print-inputs` and `--print-key` print the
 //! bake's cache key (`hce_bake::cache_key`) and what it was made of without baking; `--report`
 //! writes what a build system needs to know of a bake, failed or not, as JSON.
@@ -12,11 +12,10 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use hce_bake::cache_key::{cache_key, CacheKey, KEY_FORMAT};
 use hce_bake::import::ImportOptions;
-use hce_bake::normal_sets::NormalSetParams;
-use hce_bake::pipeline::{bake_file, BakeOutcome, PipelineOptions};
-use hce_bake::BakeParams;
+use hce_bake::NormalSetParams;
+use hce_bake::{bake_file, BakeOutcome, PipelineOptions};
+use hce_bake::{cache_key, BakeParams, CacheKey, KEY_FORMAT};
 use hce_format::ObjectKind;
 use hce_geometry::Creases;
 use indicatif::{ProgressBar, ProgressStyle};

@@ -1,7 +1,7 @@
 //! `hce demo`: the whole toolchain on a bundled sample in one command, for a first look.
 //!
 //! It writes the sample (embedded in the binary, so it works from any directory), bakes it with
-//! [`hce_bake::pipeline::bake_file`], validates the result as `hce validate` does, then draws it
+//! [`hce_bake::bake_file`], validates the result as `hce validate` does, then draws it
 //! with its baked colours at levels 0 to 3 ([`hce_runtime::gpu::render_asset`]) and writes one
 //! PNG per level, the levels side by side in one PNG, and the finest level as a linear EXR.
 //! Every file is written atomically, and each step prints how long it took.
@@ -16,7 +16,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use hce_bake::import::ImportOptions;
-use hce_bake::pipeline::{bake_file, PipelineOptions};
+use hce_bake::{bake_file, PipelineOptions};
 use hce_geometry::Creases;
 
 use super::render::{parse_size, write_exr, write_png};

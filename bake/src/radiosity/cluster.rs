@@ -25,16 +25,19 @@ pub struct Cluster {
     pub centre: Vec3,
     pub area: f32,
     /// Projected front-facing area seen along ±x, ±y, ±z: `Σ aᵢ max(0, ±nᵢ·axis)`.
+    #[cfg_attr(not(test), allow(dead_code))]
     pub proj: [f32; 6],
     /// Area-weighted normal `Σ aᵢ nᵢ` and second moment `Σ aᵢ nᵢ nᵢᵀ` (xx, yy, zz, xy, xz,
-    /// yz) of its triangles, for [`Cluster::projected_area`].
+    /// yz) of its triangles, for `Cluster::projected_area`.
+    #[cfg_attr(not(test), allow(dead_code))]
     pub normal_sum: Vec3,
+    #[cfg_attr(not(test), allow(dead_code))]
     pub moment: [f32; 6],
     /// Normal cone of its triangles: unit axis and half-angle in radians (π when the normals
     /// do not fit in a cone narrower than a hemisphere).
     pub cone_axis: Vec3,
     pub cone_angle: f32,
-    /// `cos` and `sin` of `cone_angle`, kept for [`Cluster::projected_area`], which the
+    /// `cos` and `sin` of `cone_angle`, kept for `Cluster::projected_area`, which the
     /// solver calls for every cluster a receiver gathers from.
     pub cone_cos: f32,
     pub cone_sin: f32,
@@ -51,6 +54,7 @@ impl Cluster {
     /// otherwise), and the area times the largest cosine the normal cone allows (exact for a
     /// planar cluster, and zero seen from behind it, where the per-axis sums still count the
     /// axes along which its faces turn towards `w`).
+    #[cfg(test)]
     pub fn projected_area(&self, w: Vec3) -> f32 {
         let pick = |c: f32, i: usize| {
             if c >= 0.0 {
@@ -207,9 +211,10 @@ impl ClusterTree {
     /// grid triangle on one face), and read by linear interpolation over the grid triangle
     /// holding `w / |w|₁`, times `|w|₁`. Linear interpolation of a convex function lies on or
     /// above it, so this is an upper bound too, exact at the nodes and within 2% of a sphere
-    /// from any side, where the moment bound of [`Cluster::projected_area`] is 15% over (a
+    /// from any side, where the moment bound of `Cluster::projected_area` is 15% over (a
     /// floor beside an object that it saw as clusters read 2-3% too bright in a closed
-    /// furnace, issue 20). Along the kink of a nearly planar cluster seen edge-on it is
+    /// furnace, `tests/furnace_property.rs`). Along the kink of a nearly planar cluster seen
+    /// edge-on it is
     /// looser, so the smaller of it and the cone's bound (exact for a planar cluster) is
     /// returned. A cluster of at most
     /// [`DIRECT_SUM`] triangles has no table: its sum is taken over them, exactly.
@@ -524,12 +529,49 @@ fn build_cluster(
     mid
 }
 
+/// How many levels below a linked cluster its radiance is read apart
+/// ([`Ctx::cluster_seen`](super::context::Ctx::cluster_seen)),
+/// and so into how many parts at most.
+pub(super) const READ_DEPTH: u32 = 2;
+
+pub(super) const READ_PARTS: usize = 1 << READ_DEPTH;
+
+/// The parts of cluster `c` that a link to it reads apart
+/// ([`Ctx::cluster_seen`](super::context::Ctx::cluster_seen)): its
+/// descendants [`READ_DEPTH`] levels down, a root triangle met on the way standing for
+/// itself; and how many there are.
+pub(super) fn read_parts(clusters: &ClusterTree, c: u32) -> ([ClusterChild; READ_PARTS], u8) {
+    let mut parts = [ClusterChild::Cluster(c); READ_PARTS];
+    let mut count = 1;
+    for _ in 0..READ_DEPTH {
+        let mut next = parts;
+        let mut n = 0;
+        for part in &parts[..count] {
+            match *part {
+                ClusterChild::Cluster(x) => {
+                    for ch in clusters.clusters[x as usize].children {
+                        next[n] = ch;
+                        n += 1;
+                    }
+                }
+                root => {
+                    next[n] = root;
+                    n += 1;
+                }
+            }
+        }
+        parts = next;
+        count = n;
+    }
+    (parts, count as u8)
+}
+
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
     /// The 12 triangles of the box from `lo` to `hi`, wound to face out (or in).
-    fn box_tris(lo: Vec3, hi: Vec3, inward: bool) -> Vec<[Vec3; 3]> {
+    pub(in crate::radiosity) fn box_tris(lo: Vec3, hi: Vec3, inward: bool) -> Vec<[Vec3; 3]> {
         let c = |i: u32| Vec3::select(glam::BVec3::new(i & 1 != 0, i & 2 != 0, i & 4 != 0), hi, lo);
         // Each face as four corners counter-clockwise seen from outside.
         let faces = [
@@ -578,7 +620,7 @@ mod tests {
     /// The front-facing projected area of a closed cluster, seen from many directions: never
     /// below the truth (it bounds a form factor from above, which the visibility rays then
     /// cut), and within 16% of it for a sphere and 42% for an octahedron (seen along an edge),
-    /// where the per-axis sums alone are 73% and 100% too large (issue 20: a room in a closed
+    /// where the per-axis sums alone are 73% and 100% too large (a room in a closed
     /// furnace read 1-2% too bright where it saw such objects as clusters).
     #[test]
     fn projected_area_of_closed_clusters_is_close_from_every_side() {

@@ -114,7 +114,7 @@ pub fn stratified_points(tri: [Vec3; 3], level: u32) -> Vec<Vec3> {
     for _ in 0..level {
         tris = tris
             .iter()
-            .flat_map(|&t| crate::element::split(t))
+            .flat_map(|&t| super::element::split(t))
             .collect();
     }
     tris.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect()
@@ -122,6 +122,7 @@ pub fn stratified_points(tri: [Vec3; 3], level: u32) -> Vec<Vec3> {
 
 /// Area-to-area form factor from triangle `recv` to triangle `src`, unoccluded: the
 /// point-to-polygon form factor averaged over `4^level` stratified receiver points.
+#[cfg(test)]
 pub fn triangle_to_triangle(recv: [Vec3; 3], src: [Vec3; 3], level: u32) -> f32 {
     let n = (recv[1] - recv[0]).cross(recv[2] - recv[0]).normalize();
     let pts = stratified_points(recv, level);
@@ -134,6 +135,7 @@ pub fn triangle_to_triangle(recv: [Vec3; 3], src: [Vec3; 3], level: u32) -> f32 
 
 /// Area-to-area form factor between two triangulated patches (area-weighted over the receiver
 /// triangles, summed over the source triangles).
+#[cfg(test)]
 pub fn patch_to_patch(recv: &[[Vec3; 3]], src: &[[Vec3; 3]], level: u32) -> f32 {
     let area = |t: &[Vec3; 3]| f64::from((t[1] - t[0]).cross(t[2] - t[0]).length() * 0.5);
     let total: f64 = recv.iter().map(area).sum();

@@ -1,0 +1,298 @@
+//! Gather and solve: each node gathers what its links bring, pushed down to the leaves, a closed
+//! leaf's sum of form factors filled or scaled to its enclosure, then pulled up as area means;
+//! Jacobi iterations until the solution stops changing.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::cluster_reading::ClusterLight;
+use super::context::Ctx;
+use super::formfactor::point_to_polygon;
+use super::links::{Link, SrcIdx, CORNERS};
+use super::tree::{corner_mean, push_linear, Tree};
+
+impl Ctx<'_> {
+    /// [`Tree::closure`] and [`Tree::self_view`] of tree `t` (root `r`), from its links.
+    pub(super) fn closure(&self, r: u32, t: &Tree) -> (Vec<f32>, Vec<f32>) {
+        if self.surface[r as usize].is_empty() {
+            return (Vec::new(), Vec::new());
+        }
+        let block = CORNERS * self.nn(r);
+        let n = t.keys.len();
+        let mut f = vec![0.0f32; n * CORNERS];
+        for link in &t.links {
+            let at = link.k_start as usize + block;
+            for c in 0..CORNERS {
+                f[link.recv as usize * CORNERS + c] += t.k[at + c];
+            }
+        }
+        push_linear(t, &mut f, 1);
+        let mut closure: Vec<f32> = (0..n)
+            .map(|i| (f[i * CORNERS] + f[i * CORNERS + 1] + f[i * CORNERS + 2]) / 3.0)
+            .collect();
+        // A refined patch sees itself where it curves inwards, which no link carries (the
+        // coarse triangle under it is flat): from each leaf's centre, the form factors of its
+        // own root's refined triangles, for its normals and the surface's.
+        let nn = self.nn(r);
+        let surf = &self.surface[r as usize];
+        let root = &self.roots[r as usize];
+        let mut view = vec![0.0f32; n * nn];
+        for i in (0..n).filter(|&i| t.child[i] == u32::MAX) {
+            let c = self.elem_corners(t.keys[i]);
+            let (p, pn) = self.on_surface(r, (c[0] + c[1] + c[2]) / 3.0);
+            let f = |n: Vec3| {
+                surf.iter()
+                    .map(|tri| point_to_polygon(p, n, tri))
+                    .sum::<f32>()
+            };
+            for (j, n) in root.normals.iter().enumerate() {
+                view[i * nn + j] = f(*n);
+            }
+            closure[i] += f(pn);
+        }
+        (closure, view)
+    }
+
+    /// One gather + push-pull for root `r`; returns the new radiance array.
+    /// Per node and normal of root `r`'s tree (`out[i * nn + j]`), the sum of the form factors
+    /// its links give it, pushed down from every receiver above it and averaged over its
+    /// corners ([`push_linear`]): of all its links, and of those from the lights'
+    /// ([`Ctx::is_light`]) elements alone. They depend on the links alone, so every iteration
+    /// of a solve reads them ([`Ctx::iterate_root`]).
+    pub(super) fn form_factor_sums(&self, r: u32, t: &Tree) -> Vec<[f32; 2]> {
+        let nn = self.nn(r);
+        let n = t.keys.len();
+        let mut ff = vec![0.0f32; n * CORNERS * nn];
+        let mut ff_lit = vec![0.0f32; n * CORNERS * nn];
+        for link in &t.links {
+            let base = link.recv as usize * CORNERS * nn;
+            let ks = &t.k[link.k_start as usize..link.k_start as usize + CORNERS * nn];
+            for (x, &k) in ks.iter().enumerate() {
+                ff[base + x] += k;
+            }
+            if self.brings_light(link) {
+                for (x, &k) in ks.iter().enumerate() {
+                    ff_lit[base + x] += k;
+                }
+            }
+        }
+        push_linear(t, &mut ff, nn);
+        push_linear(t, &mut ff_lit, nn);
+        (0..n * nn)
+            .map(|x| {
+                let (i, j) = (x / nn, x % nn);
+                [corner_mean(&ff, i, j, nn), corner_mean(&ff_lit, i, j, nn)]
+            })
+            .collect()
+    }
+
+    /// Whether `link` brings a light's own light: its source is an element of a light
+    /// ([`Ctx::is_light`]).
+    pub(super) fn brings_light(&self, link: &Link) -> bool {
+        matches!(link.src, SrcIdx::Node { root, .. } if self.is_light(root))
+    }
+
+    /// One Jacobi step for root `r`: its nodes' new radiance from what its links gather from
+    /// `trees` and `cl`; `sums` are its [`Ctx::form_factor_sums`].
+    pub(super) fn iterate_root(
+        &self,
+        r: u32,
+        trees: &[Tree],
+        cl: &[ClusterLight],
+        sums: &[[f32; 2]],
+    ) -> Vec<Vec3> {
+        let t = &trees[r as usize];
+        let nn = self.nn(r);
+        let n = t.keys.len();
+        // Direct light plus gathered radiance at each node's corners (the links are linear
+        // over their receivers), and the gathered part alone for the geometric normal.
+        // Corner-major per node: `q[(i * CORNERS + c) * nn + j]`. Apart, what comes from the
+        // lights, directly or through links from their elements (`lit`), and what the
+        // geometric normal gathers from the rest (`g0_rest`): what a closed leaf's sum leaves
+        // alone and what it fills or scales. The form factors they were gathered through are
+        // in `sums`.
+        let mut q = vec![Vec3::ZERO; n * CORNERS * nn];
+        for i in 0..n {
+            for c in 0..CORNERS {
+                let at = (i * CORNERS + c) * nn;
+                q[at..at + nn].copy_from_slice(&t.direct[i * nn..(i + 1) * nn]);
+            }
+        }
+        let mut lit = q.clone();
+        let mut g0 = vec![Vec3::ZERO; n * CORNERS];
+        let mut g0_rest = vec![Vec3::ZERO; n * CORNERS];
+        for link in &t.links {
+            let ls = match link.src {
+                SrcIdx::Cluster(c) => {
+                    self.cluster_seen(trees, cl, c, link.aim, &link.share, link.deep)
+                }
+                SrcIdx::Node { root, node } => self.seen_radiance(
+                    root,
+                    &trees[root as usize],
+                    (node as usize, link.depth),
+                    link.aim,
+                    link.facing as usize,
+                ),
+            };
+            let base = link.recv as usize * CORNERS * nn;
+            let ks = &t.k[link.k_start as usize..link.k_start as usize + CORNERS * nn];
+            for (x, &k) in ks.iter().enumerate() {
+                q[base + x] += ls * k;
+            }
+            let from_light = self.brings_light(link);
+            if from_light {
+                for (x, &k) in ks.iter().enumerate() {
+                    lit[base + x] += ls * k;
+                }
+            }
+            for c in 0..CORNERS {
+                let g = ls * ks[c * nn];
+                g0[link.recv as usize * CORNERS + c] += g;
+                if !from_light {
+                    g0_rest[link.recv as usize * CORNERS + c] += g;
+                }
+            }
+        }
+        push_linear(t, &mut q, nn);
+        push_linear(t, &mut lit, nn);
+        push_linear(t, &mut g0, 1);
+        push_linear(t, &mut g0_rest, 1);
+        // What each leaf gathers: the mean of its linear function, the value at its centroid.
+        let mut q_leaf = vec![Vec3::ZERO; n * nn];
+        for i in 0..n {
+            if t.child[i] != u32::MAX {
+                continue;
+            }
+            for j in 0..nn {
+                q_leaf[i * nn + j] = corner_mean(&q, i, j, nn);
+            }
+            // A refined patch gathers its own radiance where it sees itself.
+            let closure = t.closure.get(i).copied();
+            if closure.is_some() {
+                for j in 0..nn {
+                    q_leaf[i * nn + j] += t.l[i * nn] * t.self_view[i * nn + j];
+                }
+            }
+            // The form factors of all the leaf's links, and of the lights' alone.
+            let ff = |j: usize| sums[i * nn + j][0];
+            let ff_lit = |j: usize| sums[i * nn + j][1];
+            let f0 = ff(0);
+            if f0 <= 0.0 {
+                continue;
+            }
+            let view = |j: usize| t.self_view.get(i * nn + j).copied().unwrap_or(0.0);
+            let mean_of = |g: &[Vec3], f: f32| {
+                (g[i * CORNERS] + g[i * CORNERS + 1] + g[i * CORNERS + 2]) / 3.0 / f
+            };
+            let enclosed = t.enclosed[i];
+            if enclosed >= 0.0 {
+                // A closed leaf: its form factors sum, for every normal, to the part of its
+                // hemisphere that meets the front of a surface ([`Ctx::enclosure`]; its open
+                // fraction). The lights' links are the most carefully found (analytic form
+                // factors, many rays), so they stay as they are; the rest take up the
+                // difference. What they lack is filled with the mean radiance the geometric
+                // normal gathers from them: a normal turned away from the geometric one sees,
+                // below the element's plane, surface that the coarse scene does not have
+                // there (on a refined surface, the object's own neighbouring patches). What
+                // they have too much (visibility from a few rays, a cluster's area from a
+                // bound, linear functions pushed down from coarser receivers, up to 3% and 6%
+                // off in a closed furnace) is taken off in proportion. So a closed furnace is
+                // exact at every leaf and for every normal (SPEC.md G.1).
+                let rest0 = f0 - ff_lit(0);
+                let m_rest = if rest0 > 0.0 {
+                    mean_of(&g0_rest, rest0)
+                } else {
+                    mean_of(&g0, f0)
+                };
+                for j in 0..nn {
+                    let at = i * nn + j;
+                    let fixed = corner_mean(&lit, i, j, nn);
+                    let from_lights = ff_lit(j);
+                    let seen = ff(j) - from_lights + view(j);
+                    let due = (enclosed - from_lights).max(0.0);
+                    let rest = q_leaf[at] - fixed;
+                    q_leaf[at] = fixed
+                        + if seen > due {
+                            rest * (due / seen)
+                        } else {
+                            rest + m_rest * (due - seen)
+                        };
+                }
+            } else if nn > 1 || closure.is_some() {
+                // Elsewhere every form factor a tilted normal lacks against the geometric one
+                // is filled with the mean radiance the geometric normal gathers; on a refined
+                // surface every normal, the geometric one too, is filled against the surface's
+                // own normal at the receiver's points ([`Tree::closure`]).
+                let m = mean_of(&g0, f0);
+                let (full, first) = match closure {
+                    Some(f) => (f, 0),
+                    None => (f0, 1),
+                };
+                for j in first..nn {
+                    let missing = (full - ff(j) - view(j)).max(0.0);
+                    q_leaf[i * nn + j] += m * missing;
+                }
+            }
+        }
+        let q = q_leaf;
+        let le = self.roots[r as usize].emission;
+        let mut l = vec![Vec3::ZERO; n * nn];
+        // Pull: leaves reflect, interior nodes average their children by area.
+        for i in (0..n).rev() {
+            let c = t.child[i];
+            if c == u32::MAX {
+                for j in 0..nn {
+                    l[i * nn + j] = le + t.rho[i] * q[i * nn + j];
+                }
+            } else {
+                let c = c as usize;
+                let a: f32 = (c..c + 4).map(|ch| t.area[ch]).sum();
+                for j in 0..nn {
+                    let mut s = Vec3::ZERO;
+                    for ch in c..c + 4 {
+                        s += l[ch * nn + j] * t.area[ch];
+                    }
+                    l[i * nn + j] = s / a;
+                }
+            }
+        }
+        l
+    }
+
+    pub(super) fn solve(
+        &self,
+        trees: &mut [Tree],
+        cl: &mut Vec<ClusterLight>,
+        max_iterations: u32,
+        report: &dyn Fn(usize),
+    ) -> (u32, f32) {
+        let mut change = f32::INFINITY;
+        let mut it = 0;
+        let sums: Vec<Vec<[f32; 2]>> = (0..trees.len() as u32)
+            .into_par_iter()
+            .map(|r| self.form_factor_sums(r, &trees[r as usize]))
+            .collect();
+        while it < max_iterations {
+            it += 1;
+            report(it as usize);
+            let new: Vec<Vec<Vec3>> = (0..trees.len() as u32)
+                .into_par_iter()
+                .map(|r| self.iterate_root(r, trees, cl, &sums[r as usize]))
+                .collect();
+            let (mut num, mut den) = (0.0f64, 0.0f64);
+            for (t, l) in trees.iter_mut().zip(new) {
+                for (a, b) in t.l.iter().zip(&l) {
+                    num += f64::from((*a - *b).abs().element_sum());
+                    den += f64::from(b.abs().element_sum());
+                }
+                t.l = l;
+            }
+            *cl = self.cluster_radiance(trees);
+            change = if den > 0.0 { (num / den) as f32 } else { 0.0 };
+            if change < self.params.tolerance {
+                break;
+            }
+        }
+        (it, change)
+    }
+}

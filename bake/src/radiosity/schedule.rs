@@ -1,0 +1,207 @@
+//! The bake's passes: direct light, then `refine_passes` times link refinement and a solve,
+//! each pass's work run in parallel per root (within a root's refinement, in the parts of
+//! [`parallel_walk`](super::parallel_walk)), so that the result does not depend on the thread
+//! count.
+
+use std::time::Instant;
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::cluster_reading::ClusterLight;
+use super::context::{lum, Ctx};
+use super::element::ElemKey;
+use super::links::{Link, RawLink, Source, SrcIdx};
+use super::params::BakeParams;
+use super::refine::Judge;
+use super::solution::{BakeResult, BakeStats, ObjectSolution, TriangleSolution};
+use super::source_variation::DIM_RECEIVER_FLOOR;
+use super::tree::Tree;
+use crate::scene::Scene;
+use crate::BakeError;
+
+/// Progress callback: `(phase, done, total)`, e.g. `("refine 1", 1200, 20000)` coarse
+/// triangles, or `("solve 2", 3, 200)` iterations (the total is the iteration cap). Called
+/// from worker threads; it only reports and never changes the result.
+pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
+
+/// Bakes the scene: direct light, link refinement, solve, repeated `refine_passes` times.
+pub fn bake(scene: &Scene, params: &BakeParams) -> Result<BakeResult, BakeError> {
+    bake_with_progress(scene, params, &|_: &str, _: usize, _: usize| {})
+}
+
+/// [`bake`] with a progress report per phase (for progress bars).
+pub fn bake_with_progress(
+    scene: &Scene,
+    params: &BakeParams,
+    progress: Progress<'_>,
+) -> Result<BakeResult, BakeError> {
+    scene.validate()?;
+    params.validate()?;
+    let mut stats = BakeStats::default();
+    let t0 = Instant::now();
+    let ctx = Ctx::new(scene, params)?;
+    stats.coarse_triangles = ctx.roots.len();
+    stats
+        .phase_seconds
+        .push(("setup".into(), t0.elapsed().as_secs_f64()));
+
+    // Direct light, first at the roots to fix the reference power, then refined.
+    let t1 = Instant::now();
+    let n_roots = ctx.roots.len() as u32;
+    let root_q: Vec<Vec<Vec3>> = (0..n_roots)
+        .into_par_iter()
+        .map(|r| ctx.direct(ElemKey::root(r)))
+        .collect();
+    let mut ref_power = 0.0f64;
+    for (r, (root, q)) in ctx.roots.iter().zip(&root_q).enumerate() {
+        let rho = lum(ctx.reflectance(ElemKey::root(r as u32)));
+        let r = root;
+        ref_power +=
+            f64::from(r.area) * std::f64::consts::PI * f64::from(lum(r.emission) + rho * lum(q[0]));
+    }
+    let eps_power = (ref_power * f64::from(params.bf_epsilon)) as f32;
+    let counter = std::sync::atomic::AtomicUsize::new(0);
+    let direct: Vec<Vec<(ElemKey, Vec<Vec3>)>> = root_q
+        .into_par_iter()
+        .enumerate()
+        .map(|(r, q)| {
+            let out = ctx.direct_tree(r as u32, q, eps_power);
+            let done = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress("direct", done, n_roots as usize);
+            out
+        })
+        .collect();
+    let mut trees: Vec<Tree> = (0..n_roots)
+        .into_par_iter()
+        .map(|r| ctx.build_tree(r, Vec::new(), &direct[r as usize]))
+        .collect();
+    let mut cl = vec![ClusterLight::default(); ctx.clusters.clusters.len()];
+    // Without links one pass gives L = Le + ρ H/π.
+    ctx.solve(&mut trees, &mut cl, 1, &|_| {});
+    stats
+        .phase_seconds
+        .push(("direct".into(), t1.elapsed().as_secs_f64()));
+
+    for pass in 0..params.refine_passes.max(1) {
+        let t2 = Instant::now();
+        let phase = format!("refine {}", pass + 1);
+        counter.store(0, std::sync::atomic::Ordering::Relaxed);
+        let spreads: Vec<Vec<f32>> = (0..n_roots)
+            .into_par_iter()
+            .map(|r| ctx.spreads(r, &trees[r as usize]))
+            .collect();
+        let mean_radiance = ctx.mean_radiance(&trees);
+        let judge = Judge {
+            mean_radiance,
+            dark_floor: if pass == 0 && params.refine_passes > 1 {
+                DIM_RECEIVER_FLOOR * mean_radiance
+            } else {
+                0.0
+            },
+            last_pass: pass + 1 >= params.refine_passes.max(1),
+        };
+        let refined: Vec<(Vec<RawLink>, Vec<f32>)> = (0..n_roots)
+            .into_par_iter()
+            .map(|r| {
+                let out = ctx.refine_root(r, &trees, &cl, &spreads, eps_power, judge);
+                let done = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                progress(&phase, done, n_roots as usize);
+                out
+            })
+            .collect();
+        // Every source element must exist in its tree: collect keys per root in fixed order.
+        let mut needed: Vec<Vec<ElemKey>> = vec![Vec::new(); n_roots as usize];
+        for (links, _) in &refined {
+            for l in links {
+                needed[l.recv.root as usize].push(l.recv);
+                if let Source::Elem(k) = l.src {
+                    needed[k.root as usize].push(k);
+                }
+            }
+        }
+        let mut new_trees: Vec<Tree> = needed
+            .into_par_iter()
+            .enumerate()
+            .map(|(r, keys)| ctx.build_tree(r as u32, keys, &direct[r]))
+            .collect();
+        stats.links = 0;
+        for (r, (links, ks)) in refined.into_iter().enumerate() {
+            stats.links += links.len();
+            let resolved: Vec<Link> = links
+                .iter()
+                .map(|l| Link {
+                    recv: new_trees[r].index_of(l.recv).expect("receiver present"),
+                    src: match l.src {
+                        Source::Cluster(c) => SrcIdx::Cluster(c),
+                        Source::Elem(k) => SrcIdx::Node {
+                            root: k.root,
+                            node: new_trees[k.root as usize]
+                                .index_of(k)
+                                .expect("source present"),
+                        },
+                    },
+                    aim: l.aim,
+                    share: l.share,
+                    deep: l.deep,
+                    facing: l.facing,
+                    depth: l.depth,
+                    k_start: l.k_start,
+                    visible: l.visible,
+                    bend: l.bend,
+                })
+                .collect();
+            new_trees[r].links = resolved;
+            new_trees[r].k = ks;
+            (new_trees[r].closure, new_trees[r].self_view) = ctx.closure(r as u32, &new_trees[r]);
+        }
+        // Start from the previous solution where it exists so that the solve converges fast.
+        for (nt, ot) in new_trees.iter_mut().zip(&trees) {
+            let nn = nt.l.len() / nt.keys.len();
+            for i in 0..nt.keys.len() {
+                let j = ot.deepest_toward(nt.keys[i]) as usize;
+                nt.l[i * nn..(i + 1) * nn].copy_from_slice(&ot.l[j * nn..(j + 1) * nn]);
+            }
+        }
+        trees = new_trees;
+        stats
+            .phase_seconds
+            .push((format!("refine {}", pass + 1), t2.elapsed().as_secs_f64()));
+        let t3 = Instant::now();
+        let phase = format!("solve {}", pass + 1);
+        let cap = params.max_iterations as usize;
+        let (it, change) = ctx.solve(&mut trees, &mut cl, params.max_iterations, &|i| {
+            progress(&phase, i, cap)
+        });
+        stats.iterations += it;
+        stats.final_change = change;
+        stats
+            .phase_seconds
+            .push((format!("solve {}", pass + 1), t3.elapsed().as_secs_f64()));
+    }
+
+    stats.elements = trees.iter().map(|t| t.keys.len()).sum();
+    let mut objects: Vec<ObjectSolution> = scene
+        .objects
+        .iter()
+        .map(|o| ObjectSolution {
+            name: o.name.clone(),
+            multires: o.multires,
+            triangles: Vec::with_capacity(o.triangles.len()),
+        })
+        .collect();
+    for (r, t) in trees.iter().enumerate() {
+        let root = &ctx.roots[r];
+        objects[root.object].triangles.push(TriangleSolution {
+            normals: root.normals.iter().map(|n| n.to_array()).collect(),
+            nodes: t.keys.iter().map(|k| (k.level, k.path)).collect(),
+            subdivided: t.child.iter().map(|&c| c != u32::MAX).collect(),
+            colours: ctx
+                .shown(r as u32, t)
+                .iter()
+                .map(|v| v.to_array())
+                .collect(),
+        });
+    }
+    Ok(BakeResult { objects, stats })
+}
