@@ -4,7 +4,7 @@ export { readContainer, geometryHash, crc32 } from './container.js';
 export { loadAsset } from './asset.js';
 export { checkObject, MAX_LOOP_LEVEL, MAX_PATH_LEVEL } from './tables.js';
 export { lightingWords, rgb9e5 } from './lighting.js';
-export { fetchWgsl, KernelSources, WgShape, WGSL_FILES } from './wgsl.js';
+export { fetchWgsl, importOrder, KernelSources, loadWgsl, WgShape, WGSL_ROOTS } from './wgsl.js';
 export { everyKernel } from './pipelines.js';
 export { Kernels, destroyRefined, destroyUploaded } from './kernels.js';
 export { HceScene, Renderer, FLAT_MAX_LEVEL, FLAT_MAX_TRIANGLES, flatLevel } from './scene.js';

@@ -81,10 +81,25 @@ export class Kernels {
   /**
    * @param {GPUDevice} device
    * @param {Record<string, GPUComputePipeline>} pipelines
+   * @param {Record<string, number>} bindings the shared bindings' numbers by WGSL name
+   *   (`KernelSources.bindings`)
    */
-  constructor(device, pipelines) {
+  constructor(device, pipelines, bindings) {
     this.device = device;
     this.pipelines = pipelines;
+    /** @private */
+    this.bindings = bindings;
+  }
+
+  /**
+   * The number of shared binding `name` (hce_bindings.wgsl).
+   * @private
+   * @param {string} name
+   */
+  at(name) {
+    const b = this.bindings[name];
+    if (b === undefined) throw new HceError('', `hce_bindings.wgsl declares no binding ${name}`);
+    return b;
   }
 
   /**
@@ -121,7 +136,7 @@ export class Kernels {
       done += 1;
       progress(done, wanted.length, entryPoint);
     }
-    return new Kernels(device, pipelines);
+    return new Kernels(device, pipelines, sources.bindings());
   }
 
   /**
@@ -265,8 +280,11 @@ export class Kernels {
     const n = 2 ** level;
     const t = u.topology;
     const encoder = d.createCommandEncoder({ label: 'hce refine' });
-    /** @type {[GPUComputePipeline, [number, GPUBuffer][], [number, number]][]} */
+    // The buffers of each step by their names in hce_bindings.wgsl; binding 0 is the uniform.
+    /** @type {[GPUComputePipeline, [string, GPUBuffer][], [number, number]][]} */
     let steps;
+    /** @type {[string, GPUBuffer][]} */
+    const tree = [['hce_records', b.records], ['hce_bits', b.bits], ['hce_normals', b.normals], ['hce_colours', b.colours]];
     let uniform;
     if (!isLoop) {
       const params = new Uint32Array([
@@ -281,9 +299,9 @@ export class Kernels {
       const fg = this.dispatchSize(f);
       const p = this.pipelines;
       steps = [
-        [p.flat_positions, [[0, uniform], [1, b.positions], [2, b.topo], [7, o.positions]], vg],
-        [p.flat_faces, [[0, uniform], [2, b.topo], [3, b.records], [4, b.bits], [5, b.normals], [6, b.colours], [7, o.positions], [8, o.indices], [9, o.faces]], fg],
-        [p.flat_colours, [[0, uniform], [2, b.topo], [9, o.faces], [10, o.colours], [11, b.light]], vg],
+        [p.flat_positions, [['coarse_positions', b.positions], ['topo', b.topo], ['out_positions', o.positions]], vg],
+        [p.flat_faces, [['topo', b.topo], ...tree, ['out_positions', o.positions], ['out_indices', o.indices], ['out_faces', o.faces]], fg],
+        [p.flat_colours, [['topo', b.topo], ['out_faces', o.faces], ['out_colours', o.colours], ['hce_light', b.light]], vg],
       ];
     } else {
       const loop = /** @type {NonNullable<UploadedObject['loop']>} */ (u.loop);
@@ -311,16 +329,19 @@ export class Kernels {
       const p = this.pipelines;
       const normals = /** @type {GPUBuffer} */ (o.normals);
       steps = [
-        [p.loop_patch, [[0, uniform], [1, b.positions], [2, b.topo], [7, o.scratch], [8, o.positions], [9, normals]], this.dispatchSize(slots)],
-        [p.loop_faces, [[0, uniform], [2, b.topo], [3, b.records], [4, b.bits], [5, b.normals], [6, b.colours], [8, o.positions], [10, o.indices], [11, o.faces]], this.dispatchSize(f)],
-        [p.loop_colours, [[0, uniform], [2, b.topo], [8, o.positions], [9, normals], [11, o.faces], [12, o.colours], [13, b.light]], this.dispatchSize(v)],
+        [p.loop_patch, [['coarse_positions', b.positions], ['topo', b.topo], ['scratch', o.scratch], ['out_positions', o.positions], ['out_normals', normals]], this.dispatchSize(slots)],
+        [p.loop_faces, [['topo', b.topo], ...tree, ['out_positions', o.positions], ['out_indices', o.indices], ['out_faces', o.faces]], this.dispatchSize(f)],
+        [p.loop_colours, [['topo', b.topo], ['out_positions', o.positions], ['out_normals', normals], ['out_faces', o.faces], ['out_colours', o.colours], ['hce_light', b.light]], this.dispatchSize(v)],
       ];
     }
     // One pass per step: each sees the previous one's writes.
     for (const [pipeline, entries, size] of steps) {
       const group = d.createBindGroup({
         layout: pipeline.getBindGroupLayout(0),
-        entries: entries.map(([binding, buffer]) => ({ binding, resource: { buffer } })),
+        entries: [
+          { binding: 0, resource: { buffer: uniform } },
+          ...entries.map(([name, buffer]) => ({ binding: this.at(name), resource: { buffer } })),
+        ],
       });
       const pass = encoder.beginComputePass();
       pass.setPipeline(pipeline);

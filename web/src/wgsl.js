@@ -1,50 +1,117 @@
 // The WGSL sources of the kernels, fetched from the directory the Rust runtime compiles them
-// from (runtime/src/gpu/) and assembled exactly as runtime/src/gpu/wgsl.rs assembles them:
-// shared modules prepended in dependency order, and the `loop_normals.wgsl` template
-// instantiated once per patch memory. There is no copy of any WGSL in web/.
+// from (runtime/src/gpu/) and assembled exactly as runtime/src/gpu/wgsl.rs assembles them: each
+// module names the modules it needs in its own file (`// #import hce_tree`), and a kernel's
+// source is its module after every module it imports, each once, in the order of a
+// depth-first walk of those declarations; the `loop_normals.wgsl` template is instantiated once
+// per patch memory. There is no copy of any WGSL in web/, and no list of its modules either.
 
-/** The files the kernels are assembled from, all in runtime/src/gpu/. */
-export const WGSL_FILES = /** @type {const} */ ([
-  'hce_constants.wgsl',
-  'hce_tree.wgsl',
-  'hce_light.wgsl',
-  'hce_lattice.wgsl',
-  'hce_gather.wgsl',
-  'loop.wgsl',
-  'loop_workgroup.wgsl',
-  'loop_normals.wgsl',
-  'flat.wgsl',
-  'decode.wgsl',
-  'render.wgsl',
-  'fill.wgsl',
+/**
+ * The modules the browser compiles (the kernels, the renderer, the bandwidth reference) and the
+ * normals template: every other file is found through their imports.
+ */
+export const WGSL_ROOTS = /** @type {const} */ ([
+  'flat',
+  'loop',
+  'loop_workgroup',
+  'loop_normals',
+  'decode',
+  'render',
+  'fill',
 ]);
 
-/** @typedef {Record<string, string>} WgslFiles file name → text */
+/** @typedef {Record<string, string>} WgslFiles file name (`hce_tree.wgsl`) → text */
 
 /** The placeholder of `loop_normals.wgsl`: the prefix of a patch memory's accessors. */
 const PATCH = '{patch}';
 
+/** The line that starts an import declaration. */
+const IMPORT = '// #import ';
+
 /**
- * Fetches every file of {@link WGSL_FILES} from `base` (a URL of the runtime/src/gpu/
+ * The modules a module's `text` imports, in the order it declares them (`wgsl.rs` `imports`).
+ * @param {string} text
+ * @returns {string[]}
+ */
+export function imports(text) {
+  return text
+    .split('\n')
+    .map((line) => line.trim())
+    .filter((line) => line.startsWith(IMPORT))
+    .map((line) => line.slice(IMPORT.length).trim());
+}
+
+/**
+ * `root` and every module it imports, directly or not, each once, every module after the
+ * modules it imports (`wgsl.rs` `import_order`). Throws, naming the modules, on an import of a
+ * module that `text` does not have or on a circular import.
+ * @param {string} root
+ * @param {(name: string) => string | undefined} text a module's file, by name
+ * @returns {string[]}
+ */
+export function importOrder(root, text) {
+  /** @type {string[]} */
+  const order = [];
+  /** @type {string[]} */
+  const path = [];
+  const visit = (/** @type {string} */ module) => {
+    if (order.includes(module)) return;
+    const at = path.indexOf(module);
+    if (at >= 0) throw new Error(`circular import: ${[...path.slice(at), module].join(' -> ')}`);
+    const source = text(module);
+    if (source === undefined) {
+      const importer = path[path.length - 1];
+      throw new Error(
+        importer === undefined
+          ? `no module ${module} (${module}.wgsl)`
+          : `${importer}.wgsl imports ${module}, which is not a module (no ${module}.wgsl)`,
+      );
+    }
+    path.push(module);
+    for (const i of imports(source)) visit(i);
+    path.pop();
+    order.push(module);
+  };
+  visit(root);
+  return order;
+}
+
+/**
+ * Reads every file of {@link WGSL_ROOTS} and, following their imports, every module they
+ * need, with `read` (a file name to its text).
+ * @param {(file: string) => Promise<string>} read
+ * @returns {Promise<WgslFiles>}
+ */
+export async function loadWgsl(read) {
+  /** @type {WgslFiles} */
+  const files = {};
+  /** @type {string[]} */
+  let wanted = [...WGSL_ROOTS];
+  while (wanted.length > 0) {
+    const texts = await Promise.all(wanted.map((m) => read(`${m}.wgsl`)));
+    wanted.forEach((m, i) => {
+      files[`${m}.wgsl`] = texts[i];
+    });
+    wanted = [...new Set(texts.flatMap(imports))].filter((m) => files[`${m}.wgsl`] === undefined);
+  }
+  return files;
+}
+
+/**
+ * Fetches the kernels' files ({@link loadWgsl}) from `base` (a URL of the runtime/src/gpu/
  * directory, ending in `/`).
  * @param {string | URL} base
  * @param {typeof fetch} [fetchImpl]
  * @returns {Promise<WgslFiles>}
  */
 export async function fetchWgsl(base, fetchImpl = fetch) {
-  /** @type {WgslFiles} */
-  const files = {};
-  await Promise.all(
-    WGSL_FILES.map(async (name) => {
-      const url = new URL(name, base);
-      const response = await fetchImpl(url);
-      if (!response.ok) {
-        throw new Error(`cannot load the kernel source ${url}: HTTP ${response.status}`);
-      }
-      files[name] = await response.text();
-    }),
-  );
-  return files;
+  return loadWgsl(async (name) => {
+    const url = new URL(name, base);
+    const response = await fetchImpl(url);
+    if (!response.ok) {
+      throw new Error(`cannot load the kernel source ${url}: HTTP ${response.status}`);
+    }
+    return response.text();
+  });
 }
 
 /**
@@ -53,21 +120,33 @@ export async function fetchWgsl(base, fetchImpl = fetch) {
 export class KernelSources {
   /** @param {WgslFiles} files */
   constructor(files) {
-    for (const name of WGSL_FILES) {
-      if (typeof files[name] !== 'string') throw new Error(`kernel source ${name} is missing`);
-    }
     /** @private */
     this.files = files;
+    // Every import resolves, or the error names the module now rather than at compile time.
+    for (const root of WGSL_ROOTS) importOrder(root, (m) => this.text(m));
   }
 
   /**
-   * The shared modules of a refinement kernel (flat and Loop), in dependency order, followed
-   * by `kernel` (`wgsl.rs` `refinement_source`).
-   * @param {string} kernel
+   * The text of module `name`, `undefined` where there is none.
+   * @private
+   * @param {string} name
    */
-  refinement(kernel) {
-    const f = this.files;
-    return `${f['hce_constants.wgsl']}\n${f['hce_tree.wgsl']}\n${f['hce_light.wgsl']}\n${f['hce_lattice.wgsl']}\n${f['hce_gather.wgsl']}\n${kernel}`;
+  text(name) {
+    const t = this.files[`${name}.wgsl`];
+    return typeof t === 'string' ? t : undefined;
+  }
+
+  /**
+   * The source of kernel `root`: its modules in import order, each passed through `expand`
+   * (what a module is assembled with, given its name and text), joined by newlines.
+   * @private
+   * @param {string} root
+   * @param {(name: string, text: string) => string} [expand]
+   */
+  assemble(root, expand = (_, text) => text) {
+    return importOrder(root, (m) => this.text(m))
+      .map((m) => expand(m, /** @type {string} */ (this.text(m))))
+      .join('\n');
   }
 
   /**
@@ -75,17 +154,45 @@ export class KernelSources {
    * @param {string} prefix
    */
   patchNormals(prefix) {
-    return this.files['loop_normals.wgsl'].replaceAll(PATCH, prefix);
+    return /** @type {string} */ (this.text('loop_normals')).replaceAll(PATCH, prefix);
+  }
+
+  /**
+   * `loop.wgsl` with the normals of its scratch patch kernel; `loop_workgroup.wgsl` after
+   * `header` with the normals of workgroup memory (`wgsl.rs` `loop_module`).
+   * @private
+   * @param {string} name
+   * @param {string} text
+   * @param {string} header
+   */
+  loopModule(name, text, header) {
+    if (name === 'loop') return `${text}\n${this.patchNormals('')}`;
+    if (name === 'loop_workgroup') return `${header}\n${text}\n${this.patchNormals('wg_')}`;
+    return text;
+  }
+
+  /**
+   * The binding numbers of `hce_bindings.wgsl`, the storage buffers the kernels share, by
+   * their WGSL names (`bindings.rs` is the Rust twin): read from the file, so that the numbers
+   * are written there alone.
+   * @returns {Record<string, number>}
+   */
+  bindings() {
+    /** @type {Record<string, number>} */
+    const out = {};
+    const text = this.text('hce_bindings') ?? '';
+    for (const m of text.matchAll(/@binding\((\d+)\)\s*var(?:<[^>]*>)?\s+(\w+)/g)) out[m[2]] = Number(m[1]);
+    return out;
   }
 
   /** The flat kernel's module (`flat.rs`). */
   flat() {
-    return this.refinement(this.files['flat.wgsl']);
+    return this.assemble('flat');
   }
 
   /** The Loop kernel's module: its three steps, with the scratch patch kernel (`loop_source`). */
   loop() {
-    return this.refinement(`${this.files['loop.wgsl']}\n${this.patchNormals('')}`);
+    return this.assemble('loop', (name, text) => this.loopModule(name, text, ''));
   }
 
   /**
@@ -94,22 +201,22 @@ export class KernelSources {
    * @param {string} header
    */
   loopWorkgroup(header) {
-    return `${this.loop()}\n${header}\n${this.files['loop_workgroup.wgsl']}\n${this.patchNormals('wg_')}`;
+    return this.assemble('loop_workgroup', (name, text) => this.loopModule(name, text, header));
   }
 
   /** The colour-decoding kernel of the tests (`decode.rs`). */
   decode() {
-    return `${this.files['hce_constants.wgsl']}\n${this.files['hce_tree.wgsl']}\n${this.files['decode.wgsl']}`;
+    return this.assemble('decode');
   }
 
   /** The headless renderer's module (`render.rs`). */
   render() {
-    return this.files['render.wgsl'];
+    return this.assemble('render');
   }
 
   /** The bandwidth reference of `hce bench-gpu` (`bench.rs`). */
   fill() {
-    return this.files['fill.wgsl'];
+    return this.assemble('fill');
   }
 }
 

@@ -4,18 +4,62 @@ import test from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
-import { KernelSources, WGSL_FILES, WgShape } from '../src/wgsl.js';
+import { importOrder, KernelSources, loadWgsl, WgShape } from '../src/wgsl.js';
 import { REPO } from './browser.js';
 
-function sources() {
-  /** @type {Record<string, string>} */
-  const files = {};
-  for (const f of WGSL_FILES) files[f] = fs.readFileSync(path.join(REPO, 'runtime/src/gpu', f), 'utf8');
-  return new KernelSources(files);
+const GPU = path.join(REPO, 'runtime/src/gpu');
+
+async function sources() {
+  return new KernelSources(await loadWgsl(async (f) => fs.readFileSync(path.join(GPU, f), 'utf8')));
 }
 
-test('the normals template is instantiated once per patch memory', () => {
-  const s = sources();
+test('modules come once each, after the modules they import (wgsl.rs)', async () => {
+  // The cases of wgsl.rs `imports_come_once_each_before_the_modules_that_import_them` and
+  // `a_missing_or_circular_import_names_the_modules`.
+  /** @type {Record<string, string>} */
+  const files = {
+    kernel: '// #import b\n// #import a\nfn main() {}\n',
+    a: '  // #import c\n',
+    b: '// #import c\n// #import a\n',
+    c: '// imports nothing: `#import` only starts a line\n',
+  };
+  const text = (/** @type {string} */ m) => files[m];
+  assert.deepEqual(importOrder('kernel', text), ['c', 'a', 'b', 'kernel']);
+  /** @type {Record<string, string>} */
+  const bad = { kernel: '// #import a\n', a: '// #import b\n', b: '// #import kernel\n', lone: '// #import hce_nothing\n' };
+  const badText = (/** @type {string} */ m) => bad[m];
+  assert.throws(() => importOrder('kernel', badText), { message: 'circular import: kernel -> a -> b -> kernel' });
+  assert.throws(() => importOrder('lone', badText), { message: 'lone.wgsl imports hce_nothing, which is not a module (no hce_nothing.wgsl)' });
+  // The kernels' modules are found through their imports, in wgsl.rs's order.
+  const s = await sources();
+  const shared = ['hce_constants', 'hce_bindings', 'hce_tree', 'hce_light', 'hce_lattice', 'hce_gather'];
+  const files2 = await loadWgsl(async (f) => fs.readFileSync(path.join(GPU, f), 'utf8'));
+  const own = (/** @type {string} */ m) => files2[`${m}.wgsl`];
+  assert.deepEqual(importOrder('flat', own), [...shared, 'flat']);
+  assert.deepEqual(importOrder('loop_workgroup', own), [...shared, 'loop', 'loop_workgroup']);
+  assert.ok(s.flat().startsWith(fs.readFileSync(path.join(GPU, 'hce_constants.wgsl'), 'utf8')));
+  // A file that is gone is named.
+  await assert.rejects(
+    loadWgsl(async (f) => {
+      if (f === 'hce_lattice.wgsl') throw new Error(`cannot load ${f}`);
+      return fs.readFileSync(path.join(GPU, f), 'utf8');
+    }),
+    { message: 'cannot load hce_lattice.wgsl' },
+  );
+});
+
+test('the shared bindings are read from hce_bindings.wgsl', async () => {
+  const b = (await sources()).bindings();
+  // The numbers of bindings.rs.
+  assert.deepEqual(b, {
+    coarse_positions: 1, topo: 2, hce_records: 3, hce_bits: 4, hce_normals: 5, hce_colours: 6,
+    out_positions: 7, out_indices: 8, out_faces: 9, out_colours: 10, hce_light: 11,
+    out_normals: 12, scratch: 13,
+  });
+});
+
+test('the normals template is instantiated once per patch memory', async () => {
+  const s = await sources();
   const scratch = s.loop();
   const workgroup = s.loopWorkgroup('');
   for (const src of [scratch, workgroup]) {

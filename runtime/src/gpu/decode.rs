@@ -8,8 +8,8 @@
 use hce_format::Object;
 
 use super::util::{
-    bind_buffers, check_size, dispatch_size, read_back, storage_init, storage_output,
-    LightingBuffers,
+    bind_buffers_at, check_size, compute_pipeline, dispatch_size, read_back, shader_module,
+    storage_init, storage_output, LightingBuffers,
 };
 use super::wgsl::decode_source;
 use super::{GpuContext, GpuError};
@@ -70,39 +70,24 @@ pub fn decode_colours(
         "decoded colours",
         (queries.len() * std::mem::size_of::<DecodedColour>()) as u64,
     )?;
-    let source = decode_source();
-    let module = ctx
-        .device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("hce decode"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
-    let pipeline = ctx
-        .device
-        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("hce decode"),
-            layout: None,
-            module: &module,
-            entry_point: Some("decode_main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+    let module = shader_module(ctx, "hce decode", decode_source());
+    let pipeline = compute_pipeline(ctx, &module, "decode_main");
     let queries_buf = storage_init(ctx, "queries", queries);
     let results = storage_output(ctx, "decoded", out_bytes, wgpu::BufferUsages::empty());
     // The paper's rule reads the stored colours, not the lighting table.
     let lighting = LightingBuffers::upload(ctx, object, Reconstruction::NearestNormal)?;
-    let bind_group = bind_buffers(
+    // The queries and results are the kernel's own bindings; the rest hce_bindings.wgsl's.
+    let mut bindings = vec![
+        (super::bindings::UNIFORM, queries_buf),
+        (super::bindings::KERNEL_OWN, results.clone()),
+    ];
+    bindings.extend(lighting.tree_bindings());
+    let bindings: Vec<(u32, &wgpu::Buffer)> = bindings.iter().map(|(b, buf)| (*b, buf)).collect();
+    let bind_group = bind_buffers_at(
         ctx,
         "hce decode",
         &pipeline.get_bind_group_layout(0),
-        &[
-            &queries_buf,
-            &results,
-            &lighting.records,
-            &lighting.bits,
-            &lighting.normals,
-            &lighting.colours,
-        ],
+        &bindings,
     );
     let (x, y) = dispatch_size(ctx, queries.len() as u64)?;
     let mut encoder = ctx

@@ -3,7 +3,9 @@
 // A query names a coarse triangle, a level, a path and the subtriangle's normal; the answer is
 // the tree node reached, the normal chosen and the decoded linear colour. The flat-refinement
 // kernel runs the same functions (hce_tree.wgsl) inline; this batch form exists so the decoding
-// can be tested against the CPU on its own.
+// can be tested against the CPU on its own. The arrays it decodes from are hce_bindings.wgsl's.
+
+// #import hce_tree
 
 struct Query {
     triangle: u32,
@@ -25,11 +27,7 @@ struct Decoded {
 }
 
 @group(0) @binding(0) var<storage, read> queries: array<Query>;
-@group(0) @binding(1) var<storage, read_write> results: array<Decoded>;
-@group(0) @binding(2) var<storage, read> hce_records: array<TriRecord>;
-@group(0) @binding(3) var<storage, read> hce_bits: array<u32>;
-@group(0) @binding(4) var<storage, read> hce_normals: array<f32>;
-@group(0) @binding(5) var<storage, read> hce_colours: array<u32>;
+@group(0) @binding(14) var<storage, read_write> results: array<Decoded>;
 
 @compute @workgroup_size(64)
 fn decode_main(@builtin(global_invocation_id) gid: vec3<u32>,

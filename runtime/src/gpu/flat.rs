@@ -10,9 +10,13 @@
 
 use hce_format::Object;
 
+use super::bindings::{
+    COARSE_POSITIONS, HCE_LIGHT, OUT_COLOURS, OUT_FACES, OUT_INDICES, OUT_POSITIONS, TOPO,
+};
 use super::job::{Lanes, RefineJob, Step};
+use super::outputs::{OutputShape, RefinedOutput};
 use super::util::{
-    check_size, pack_sections, read_back, storage_init, storage_output, LightingBuffers,
+    check_size, compute_pipeline, pack_sections, shader_module, storage_init, LightingBuffers,
 };
 use super::wgsl::flat_source;
 use super::{GpuContext, GpuError};
@@ -76,42 +80,8 @@ pub struct FlatObject {
     pub(super) lighting: LightingBuffers,
 }
 
-/// Output buffers of a refinement: drawable as they are (`positions` and `colours` as vertex
-/// buffers, `indices` as an index buffer).
-pub struct FlatOutput {
-    pub level: u32,
-    pub vertex_count: u32,
-    pub triangle_count: u32,
-    /// `x, y, z` f32 per vertex (stride 12).
-    pub positions: wgpu::Buffer,
-    /// Linear `r, g, b, 1` f32 per vertex (stride 16).
-    pub colours: wgpu::Buffer,
-    /// `u32` ×3 per fine triangle.
-    pub indices: wgpu::Buffer,
-    /// Linear `r, g, b`, area per fine triangle.
-    pub faces: wgpu::Buffer,
-}
-
-impl FlatOutput {
-    /// Copies the refined mesh back to the CPU.
-    pub fn read_back(&self, ctx: &GpuContext) -> Result<RefinedMesh, GpuError> {
-        let v = self.vertex_count as usize;
-        let f = self.triangle_count as usize;
-        Ok(RefinedMesh {
-            level: self.level,
-            positions: read_back(ctx, &self.positions, 3 * v)?,
-            colours: read_back(ctx, &self.colours, 4 * v)?,
-            indices: read_back(ctx, &self.indices, 3 * f)?,
-            face_colours: read_back(ctx, &self.faces, 4 * f)?,
-        })
-    }
-
-    /// Bytes the kernel writes for this output.
-    #[cfg_attr(not(feature = "bench"), allow(dead_code))]
-    pub(crate) fn bytes_written(&self) -> u64 {
-        u64::from(self.vertex_count) * (12 + 16) + u64::from(self.triangle_count) * (12 + 16)
-    }
-}
+/// Output buffers of a flat refinement: [`RefinedOutput`] without normals.
+pub type FlatOutput = RefinedOutput;
 
 /// Timing of one refinement, when asked for.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -126,24 +96,18 @@ pub struct KernelTiming {
 
 impl FlatKernel {
     pub fn new(ctx: &GpuContext) -> Self {
-        let source = flat_source();
-        let module = ctx
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("hce flat"),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            });
+        let module = shader_module(ctx, "hce flat", flat_source());
         Self {
-            positions: pipeline(ctx, &module, "positions_main"),
-            faces: pipeline(ctx, &module, "faces_main"),
-            colours: pipeline(ctx, &module, "colours_main"),
+            positions: compute_pipeline(ctx, &module, "positions_main"),
+            faces: compute_pipeline(ctx, &module, "faces_main"),
+            colours: compute_pipeline(ctx, &module, "colours_main"),
             module,
         }
     }
 
     /// The pipeline of one of the module's entry points (the batched ones included).
     pub(super) fn pipeline(&self, ctx: &GpuContext, entry: &str) -> wgpu::ComputePipeline {
-        pipeline(ctx, &self.module, entry)
+        compute_pipeline(ctx, &self.module, entry)
     }
 
     /// Validates `object` (tables and topology) and uploads it.
@@ -192,48 +156,6 @@ impl FlatKernel {
         })
     }
 
-    /// Output buffers sized for `level`, checked against the device limits.
-    fn allocate(
-        &self,
-        ctx: &GpuContext,
-        object: &FlatObject,
-        level: u32,
-    ) -> Result<FlatOutput, GpuError> {
-        let (v, f) = counts(object, level)?;
-        // Written by the kernel, or copied in from the pooled outputs of a batch.
-        let copied = wgpu::BufferUsages::COPY_DST;
-        let vertex = wgpu::BufferUsages::VERTEX | copied;
-        Ok(FlatOutput {
-            level,
-            vertex_count: v,
-            triangle_count: f,
-            positions: storage_output(
-                ctx,
-                "refined positions",
-                check_size(ctx, "refined positions", u64::from(v) * 12)?,
-                vertex,
-            ),
-            colours: storage_output(
-                ctx,
-                "refined colours",
-                check_size(ctx, "refined colours", u64::from(v) * 16)?,
-                vertex,
-            ),
-            indices: storage_output(
-                ctx,
-                "refined indices",
-                check_size(ctx, "refined indices", u64::from(f) * 12)?,
-                wgpu::BufferUsages::INDEX | copied,
-            ),
-            faces: storage_output(
-                ctx,
-                "refined faces",
-                check_size(ctx, "refined faces", u64::from(f) * 16)?,
-                copied,
-            ),
-        })
-    }
-
     /// Refines `object` to `level` into `out`, reallocating only when `out` is too small (or
     /// absent), in one submission. With `measure`, returns the GPU time of the three
     /// dispatches when the adapter has timestamp queries (this waits for the GPU).
@@ -264,20 +186,9 @@ impl FlatKernel {
         level: u32,
         out: &mut Option<FlatOutput>,
     ) -> Result<RefineJob, GpuError> {
-        let (v, f) = counts(object, level)?;
-        let fits = out.as_ref().is_some_and(|o| {
-            o.positions.size() >= u64::from(v) * 12
-                && o.colours.size() >= u64::from(v) * 16
-                && o.indices.size() >= u64::from(f) * 12
-                && o.faces.size() >= u64::from(f) * 16
-        });
-        if !fits {
-            *out = Some(self.allocate(ctx, object, level)?);
-        }
-        let o = out.as_mut().expect("allocated above");
-        o.level = level;
-        o.vertex_count = v;
-        o.triangle_count = f;
+        let shape = shape(object, level)?;
+        let o = RefinedOutput::prepare(ctx, out, level, shape)?;
+        let (v, f) = (shape.vertices, shape.triangles);
 
         let t = &object.topology;
         let n = 1u32 << level;
@@ -306,41 +217,39 @@ impl FlatKernel {
             range_first: 0,
             range_end: u32::MAX,
         };
-        // The bindings of `flat.wgsl` each step reads or writes, by number.
+        // The bindings (hce_bindings.wgsl) each step reads or writes.
         let lit = &object.lighting;
+        let mut faces = vec![
+            (TOPO, object.topo.clone()),
+            (OUT_POSITIONS, o.positions.clone()),
+            (OUT_INDICES, o.indices.clone()),
+            (OUT_FACES, o.faces.clone()),
+        ];
+        faces.extend(lit.tree_bindings());
         let steps = vec![
             Step {
                 pipeline: self.positions.clone(),
                 bindings: vec![
-                    (1, object.coarse_positions.clone()),
-                    (2, object.topo.clone()),
-                    (7, o.positions.clone()),
+                    (COARSE_POSITIONS, object.coarse_positions.clone()),
+                    (TOPO, object.topo.clone()),
+                    (OUT_POSITIONS, o.positions.clone()),
                 ],
                 items: u64::from(v),
                 lanes: Lanes::PerItem,
             },
             Step {
                 pipeline: self.faces.clone(),
-                bindings: vec![
-                    (2, object.topo.clone()),
-                    (3, lit.records.clone()),
-                    (4, lit.bits.clone()),
-                    (5, lit.normals.clone()),
-                    (6, lit.colours.clone()),
-                    (7, o.positions.clone()),
-                    (8, o.indices.clone()),
-                    (9, o.faces.clone()),
-                ],
+                bindings: faces,
                 items: u64::from(f),
                 lanes: Lanes::PerItem,
             },
             Step {
                 pipeline: self.colours.clone(),
                 bindings: vec![
-                    (2, object.topo.clone()),
-                    (9, o.faces.clone()),
-                    (10, o.colours.clone()),
-                    (11, lit.light.clone()),
+                    (TOPO, object.topo.clone()),
+                    (OUT_FACES, o.faces.clone()),
+                    (OUT_COLOURS, o.colours.clone()),
+                    (HCE_LIGHT, lit.light.clone()),
                 ],
                 items: u64::from(v),
                 lanes: Lanes::PerItem,
@@ -357,40 +266,19 @@ impl FlatKernel {
     }
 }
 
-/// Each entry point gets the layout of the bindings it uses (`layout: None`), as the Loop
-/// kernel's do, which keeps every step within WebGPU's default limit of 8 storage buffers per
-/// stage: the three steps bind 3, 8 and 4 of the module's 11 (the batched ones one more uniform).
-fn pipeline(ctx: &GpuContext, module: &wgpu::ShaderModule, entry: &str) -> wgpu::ComputePipeline {
-    ctx.device
-        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry),
-            layout: None,
-            module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            cache: None,
-        })
-}
-
-/// Output vertex and triangle counts at `level`, checked to fit 32-bit indices.
-fn counts(object: &FlatObject, level: u32) -> Result<(u32, u32), GpuError> {
+/// What a refinement of `object` to `level` writes, checked to fit 32-bit indices.
+fn shape(object: &FlatObject, level: u32) -> Result<OutputShape, GpuError> {
     if level > MAX_PATH_LEVEL {
         return Err(GpuError::LevelTooHigh {
             level,
             max: MAX_PATH_LEVEL,
         });
     }
-    let v = object.topology.refined_vertex_count(level) + object.split.appended(level);
-    let f = object.topology.refined_triangle_count(level);
-    let too_large = |what, needed| GpuError::TooLarge {
-        what,
-        needed,
-        limit: u64::from(u32::MAX),
-    };
-    Ok((
-        u32::try_from(v).map_err(|_| too_large("refined vertex count", v))?,
-        u32::try_from(f).map_err(|_| too_large("refined triangle count", f))?,
-    ))
+    OutputShape::new(
+        object.topology.refined_vertex_count(level) + object.split.appended(level),
+        object.topology.refined_triangle_count(level),
+        false,
+    )
 }
 
 /// One-shot convenience: upload `object`, refine it to `level` and read the mesh back.

@@ -5,9 +5,16 @@
 // vertices that join. Three dispatches, each a pure gather with one writer per
 // output element, so the result does not depend on scheduling (no float atomics).
 //
-// The lattice and the output numbering are those of hce_lattice.wgsl (prepended, with
-// hce_tree.wgsl, hce_light.wgsl and the vertex-colour gather of hce_gather.wgsl); a point
-// (b, c) of coarse triangle (v0, v1, v2) lies at (a p0 + b p1 + c p2) / n.
+// The lattice and the output numbering are those of hce_lattice.wgsl, the vertex colours the
+// gather of hce_gather.wgsl; a point (b, c) of coarse triangle (v0, v1, v2) lies at
+// (a p0 + b p1 + c p2) / n.
+
+// #import hce_constants
+// #import hce_bindings
+// #import hce_tree
+// #import hce_light
+// #import hce_lattice
+// #import hce_gather
 
 struct Params {
     level: u32,
@@ -45,20 +52,10 @@ struct Params {
 }
 
 // The parameters every function reads: the uniform's, copied at the start of the per-object
-// entry points; the object's entry of the batch table in the batched ones (below).
+// entry points; the object's entry of the batch table in the batched ones (below). The other
+// bindings are hce_bindings.wgsl's.
 @group(0) @binding(0) var<uniform> params_in: Params;
 var<private> params: Params;
-@group(0) @binding(1) var<storage, read> coarse_positions: array<f32>;
-@group(0) @binding(2) var<storage, read> topo: array<u32>;
-@group(0) @binding(3) var<storage, read> hce_records: array<TriRecord>;
-@group(0) @binding(4) var<storage, read> hce_bits: array<u32>;
-@group(0) @binding(5) var<storage, read> hce_normals: array<f32>;
-@group(0) @binding(6) var<storage, read> hce_colours: array<u32>;
-@group(0) @binding(7) var<storage, read_write> out_positions: array<f32>;
-@group(0) @binding(8) var<storage, read_write> out_indices: array<u32>;
-@group(0) @binding(9) var<storage, read_write> out_faces: array<vec4<f32>>;
-@group(0) @binding(10) var<storage, read_write> out_colours: array<vec4<f32>>;
-@group(0) @binding(11) var<storage, read> hce_light: array<u32>;
 
 // (a p0 + b p1 + c p2) / n, the same operations in the same order as the CPU reference.
 fn lattice_position(p0: vec3<f32>, p1: vec3<f32>, p2: vec3<f32>, b: i32, c: i32) -> vec3<f32> {
@@ -239,7 +236,7 @@ struct Batch {
     fine_total: u32,
 }
 
-@group(0) @binding(12) var<uniform> batch: Batch;
+@group(0) @binding(14) var<uniform> batch: Batch;
 
 // The object k (of batch.count) whose items first[k] .. first[k + 1] hold item g (< the total).
 fn batch_object(first: u32, g: u32) -> u32 {

@@ -275,31 +275,33 @@ impl FlatPool {
             let colours = make("pooled refined colours", vertices * 16)?;
             let indices = make("pooled refined indices", faces * 12)?;
             let face_colours = make("pooled refined faces", faces * 16)?;
-            // The bindings of `flat.wgsl` each batched step reads or writes, by number.
+            // The bindings (hce_bindings.wgsl, and `batch`: the kernel's own) each batched step
+            // reads or writes.
+            use super::bindings::*;
             let bindings: [Vec<(u32, &wgpu::Buffer)>; 3] = [
                 vec![
-                    (1, &self.coarse_positions),
-                    (2, &self.topo),
-                    (7, &positions),
-                    (12, &self.uniform),
+                    (COARSE_POSITIONS, &self.coarse_positions),
+                    (TOPO, &self.topo),
+                    (OUT_POSITIONS, &positions),
+                    (KERNEL_OWN, &self.uniform),
                 ],
                 vec![
-                    (2, &self.topo),
-                    (3, &self.records),
-                    (4, &self.bits),
-                    (5, &self.normals),
-                    (6, &self.colours),
-                    (7, &positions),
-                    (8, &indices),
-                    (9, &face_colours),
-                    (12, &self.uniform),
+                    (TOPO, &self.topo),
+                    (HCE_RECORDS, &self.records),
+                    (HCE_BITS, &self.bits),
+                    (HCE_NORMALS, &self.normals),
+                    (HCE_COLOURS, &self.colours),
+                    (OUT_POSITIONS, &positions),
+                    (OUT_INDICES, &indices),
+                    (OUT_FACES, &face_colours),
+                    (KERNEL_OWN, &self.uniform),
                 ],
                 vec![
-                    (2, &self.topo),
-                    (9, &face_colours),
-                    (10, &colours),
-                    (11, &self.light),
-                    (12, &self.uniform),
+                    (TOPO, &self.topo),
+                    (OUT_FACES, &face_colours),
+                    (OUT_COLOURS, &colours),
+                    (HCE_LIGHT, &self.light),
+                    (KERNEL_OWN, &self.uniform),
                 ],
             ];
             let groups = std::array::from_fn(|k| {

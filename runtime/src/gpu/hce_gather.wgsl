@@ -3,16 +3,18 @@
 // geometry/src/lattice.rs `incident_paths`), shared by flat.wgsl and loop.wgsl. A pure gather with one
 // writer per vertex and a fixed order of summation, so the result does not depend on scheduling.
 //
-// This file is prepended after hce_tree.wgsl, hce_light.wgsl and hce_lattice.wgsl to a kernel
-// that provides lattice_split_base() (the first vertex the split where the surface folds
-// appends, SPEC.md F.5; the vertex count where nothing is split) and lattice_split_copies() (its
-// corner copies X), and declares, with these names:
-//   params:     the kernel's uniform, with `level`, `coarse_vertices`, `edge_count`, `edges_off`,
-//               `edge_side_offsets_off`, `edge_sides_off`, `vertex_corner_offsets_off`,
-//               `vertex_corners_off`, `corner_copy_off`, `edge_copy_off` (sections of `topo`:
-//               the split's slot lists and copy ranks, geometry/src/split.rs) and `smooth_light`
-//   topo:       array<u32>
-//   out_faces:  array<vec4<f32>>   per fine triangle: its colour and, in w, its area
+// It reads `topo` and `out_faces` (hce_bindings.wgsl) and calls lattice_split_base() (the first
+// vertex the split where the surface folds appends, SPEC.md F.5; the vertex count where nothing
+// is split) and lattice_split_copies() (its corner copies X), which the importing kernel
+// provides with `params`, its uniform, with `level`, `coarse_vertices`, `edge_count`,
+// `edges_off`, `edge_side_offsets_off`, `edge_sides_off`, `vertex_corner_offsets_off`,
+// `vertex_corners_off`, `corner_copy_off`, `edge_copy_off` (sections of `topo`: the split's slot
+// lists and copy ranks, geometry/src/split.rs) and `smooth_light`.
+
+// #import hce_constants
+// #import hce_bindings
+// #import hce_light
+// #import hce_lattice
 
 // Where `out_faces` pools many objects' fine triangles (the batched entry points of flat.wgsl),
 // the object's first; zero (a private variable's initial value) in every other kernel.

@@ -9,16 +9,17 @@
 // (C0, σ, s): corners C0, C0 + σ s e_b, C0 + σ s e_c; the children Top, Left, Center, Right
 // keep σ except Center, which flips it.
 //
-// This file is prepended to a kernel that declares, with these names:
-//   topo:           array<u32>   the packed tables; `params.tri_off` its corner section
-//   coarse_positions, out_positions: array<f32>   x y z packed
-// and provides the functions in which the kernels differ:
+// It reads `topo`, `coarse_positions` and `out_positions` (hce_bindings.wgsl), the corner
+// section of `topo` at `params.tri_off` (the importing kernel's uniform), and calls the
+// functions in which the kernels differ, which the importing kernel provides:
 //   lattice_level() -> u32                 L
 //   lattice_n() -> u32                     n = 2^L
 //   edge_from_owner(t, e) -> bool          whether edge e of triangle t starts at the vertex
 //                                          its owner counts the edge's points from
 //   lattice_edge_base(t, e) -> u32         output index of the first point of t's edge e
 //   lattice_interior_base(t) -> u32        output index of t's first interior point
+
+// #import hce_bindings
 
 // Step 1: the invocation's index in a dispatch of 64-wide workgroups spread over x and y (the
 // Rust side splits dispatches larger than the 65535-group limit of one dimension).

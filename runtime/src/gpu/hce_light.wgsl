@@ -1,15 +1,17 @@
 // Smooth reconstruction of the baked lighting (SPEC.md, Appendix G), shared by the kernels that
-// colour refined vertices. Prepended to a kernel that declares, with this name:
-//   hce_light: array<u32>   the object's lighting table (geometry/src/lighting.rs `to_words`):
-//                           word 0 where the point indices start, word 1 where the models
-//                           start; then per coarse triangle the word of its tree's node 0; the
-//                           node words (a subdivided node: its first child's number; a leaf:
-//                           LEAF | its index); three point indices per leaf; 12 f32 (bit
-//                           patterns) per point: c (RGB), then the red, green, blue gradients.
-// The Rust side builds the table from the validated object, so every index stays in bounds.
-
+// colour refined vertices. It reads `hce_light` (hce_bindings.wgsl), the object's lighting
+// table (geometry/src/lighting.rs `to_words`): word 0 where the point indices start, word 1
+// where the models start; then per coarse triangle the word of its tree's node 0; the node
+// words (a subdivided node: its first child's number; a leaf: LEAF | its index); three point
+// indices per leaf; 12 f32 (bit patterns) per point: c (RGB), then the red, green, blue
+// gradients. The Rust side builds the table from the validated object, so every index stays in
+// bounds.
+//
 // HCE_EVAL_BITS (the bits of the lattice in which points are evaluated) and HCE_LEAF (a leaf's
 // node word) come from hce_constants.wgsl, generated from lighting.rs's constants.
+
+// #import hce_constants
+// #import hce_bindings
 
 // Where the object's table starts when `hce_light` pools many objects' tables (the batched
 // entry points of flat.wgsl); zero (a private variable's initial value) in every other kernel.

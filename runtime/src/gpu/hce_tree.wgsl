@@ -1,20 +1,13 @@
 // HCE colour decoding, shared by the kernels that colour subtriangles.
 //
 // Concheiro et al., "Synthesis of multiresolution scenes with global illumination on a GPU"
-// (GRAPP 2012), section 4. This file is prepended to a kernel that declares, with these names:
-//   hce_records: array<TriRecord>   one per coarse triangle
-//   hce_bits:    array<u32>         the HCE bitstream, least significant bit first
-//   hce_normals: array<f32>         representative normals, x y z packed (no vec3 padding)
-//   hce_colours: array<u32>         RGB9E5 colours, [node][normal] per triangle
+// (GRAPP 2012), section 4. It reads the object's records, bitstream, representative normals
+// and colours (`hce_records`, `hce_bits`, `hce_normals`, `hce_colours` of hce_bindings.wgsl).
 // The Rust side validates every record against those arrays before upload, so the indices
 // below stay in bounds for any input that reaches the GPU.
 
-struct TriRecord {
-    bits_start: u32,
-    colour_start: u32,
-    normal_start: u32,
-    normal_count: u32,
-}
+// #import hce_constants
+// #import hce_bindings
 
 // Step 1: read one bit of the stream.
 fn hce_bit(i: u32) -> u32 {

@@ -42,7 +42,8 @@ impl SplitMix {
 /// Shape of the random HCE data [`random_object`] attaches to a mesh.
 #[derive(Clone, Copy, Debug)]
 pub struct RandomTrees {
-    /// Deepest tree level. Default 4.
+    /// Deepest tree level, at most [`hce_format::MAX_TREE_DEPTH`] (deeper is taken as that).
+    /// Default 4.
     pub max_depth: u32,
     /// Probability that a node above `max_depth` is subdivided. Default 0.6.
     pub split_probability: f32,
@@ -79,36 +80,41 @@ pub fn random_object(
         edges,
         ..Default::default()
     };
+    let max_depth = shape.max_depth.min(hce_format::MAX_TREE_DEPTH);
     let mut records = Vec::new();
     let mut normals = Vec::new();
-    let mut bit_list: Vec<bool> = Vec::new();
+    let mut bits = hce_format::BitWriter::new();
     let mut colours = Vec::new();
     for t in 0..mesh.triangle_count() {
         let p = mesh.triangle(t).map(|v| mesh.position(v));
         let (geometric, _) = hce_geometry::flat::normal_and_area(p);
         let normal_count = 1 + rng.below(shape.max_extra_normals + 1);
-        let record = TriangleRecord {
-            bits_start: bit_list.len() as u32,
-            colour_start: colours.len() as u32,
-            normal_start: normals.len() as u32,
-            normal_count,
-        };
+        let normal_start = normals.len() as u32;
         normals.push(geometric);
         for _ in 1..normal_count {
             normals.push(rng.unit_vector());
         }
-        // Breadth-first: a node's bit, then its children queued behind the current level.
+        // Breadth-first: a node's flag, then its children queued behind the current level.
         let mut queue = std::collections::VecDeque::from([0u32]);
-        let mut nodes = 0u32;
+        let mut flags = Vec::new();
         while let Some(depth) = queue.pop_front() {
-            nodes += 1;
-            let split = depth < shape.max_depth && rng.unit() < shape.split_probability;
-            bit_list.push(split);
+            let split = depth < max_depth && rng.unit() < shape.split_probability;
+            flags.push(split);
             if split {
                 queue.extend([depth + 1; 4]);
             }
         }
-        for _ in 0..nodes * normal_count {
+        // Complete by construction and no deeper than the format allows.
+        let bits_start = bits
+            .push_tree(&flags)
+            .expect("a breadth-first tree within MAX_TREE_DEPTH");
+        let record = TriangleRecord {
+            bits_start: bits_start as u32,
+            colour_start: colours.len() as u32,
+            normal_start,
+            normal_count,
+        };
+        for _ in 0..flags.len() as u32 * normal_count {
             let scale = 4.0 * rng.unit();
             colours.push(rgb9e5::encode([
                 scale * rng.unit(),
@@ -118,12 +124,7 @@ pub fn random_object(
         }
         records.push(record);
     }
-    let mut bits = vec![0u32; bit_list.len().div_ceil(32)];
-    for (i, &b) in bit_list.iter().enumerate() {
-        if b {
-            bits[i / 32] |= 1 << (i % 32);
-        }
-    }
+    let (bits, bit_len) = bits.finish();
     Object {
         name: name.to_string(),
         kind: ObjectKind::Flat,
@@ -132,7 +133,7 @@ pub fn random_object(
         triangles: records,
         normals,
         bits,
-        bit_len: bit_list.len() as u64,
+        bit_len,
         colours,
     }
 }

@@ -206,7 +206,7 @@ impl RefineJob {
             params[self.range_at] = first as u32;
             params[self.range_at + 1] = (first + n) as u32;
             let uniform = uniform_words(ctx, self.label, &params);
-            let mut entries: Vec<(u32, &wgpu::Buffer)> = vec![(0, &uniform)];
+            let mut entries: Vec<(u32, &wgpu::Buffer)> = vec![(super::bindings::UNIFORM, &uniform)];
             entries.extend(step.bindings.iter().map(|(b, buf)| (*b, buf)));
             let group = bind_buffers_at(
                 ctx,

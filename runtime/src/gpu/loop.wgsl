@@ -5,7 +5,7 @@
 // Three dispatches, each a pure gather or an owned write, so the result does not depend on
 // scheduling (no atomics):
 //   step 1       the patches, by one of two kernels (loop_kernel.rs chooses, `PatchScheme`):
-//                patch_wg_main (loop_workgroup.wgsl, appended to this file) refines 1 to 16
+//                patch_wg_main (loop_workgroup.wgsl, which imports this file) refines 1 to 16
 //                coarse triangles per workgroup in workgroup memory, the lattice points of each
 //                level spread over the invocations; patch_main, below, runs one invocation per
 //                coarse triangle (grid-stride over scratch slots) with the patch in a scratch
@@ -27,6 +27,13 @@
 // every product by a factor that is not a power of two goes through `keep`, a select on a
 // uniform the compiler cannot see through; products by 0.5, 0.25 and 0.125 are exact and need
 // no guard (a fused and an unfused sum of an exact product round alike).
+
+// #import hce_constants
+// #import hce_bindings
+// #import hce_tree
+// #import hce_light
+// #import hce_lattice
+// #import hce_gather
 
 struct Params {
     level: u32,
@@ -82,22 +89,10 @@ struct Params {
 
 // The bits of the per-triangle flags word (OWNS_EDGE, OWNS_VERTEX, INTERIOR, SHARP) and of the
 // file's flags (RULE_CREASE, RULE_CORNER, SPOKE_SHARP, VERTEX_BOUNDARY) come from
-// hce_constants.wgsl, generated from the Rust constants and prepended first.
+// hce_constants.wgsl, generated from the Rust constants.
 
+// The kernel's uniform; the other bindings are hce_bindings.wgsl's.
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> coarse_positions: array<f32>;
-@group(0) @binding(2) var<storage, read> topo: array<u32>;
-@group(0) @binding(3) var<storage, read> hce_records: array<TriRecord>;
-@group(0) @binding(4) var<storage, read> hce_bits: array<u32>;
-@group(0) @binding(5) var<storage, read> hce_normals: array<f32>;
-@group(0) @binding(6) var<storage, read> hce_colours: array<u32>;
-@group(0) @binding(7) var<storage, read_write> scratch: array<f32>;
-@group(0) @binding(8) var<storage, read_write> out_positions: array<f32>;
-@group(0) @binding(9) var<storage, read_write> out_normals: array<f32>;
-@group(0) @binding(10) var<storage, read_write> out_indices: array<u32>;
-@group(0) @binding(11) var<storage, read_write> out_faces: array<vec4<f32>>;
-@group(0) @binding(12) var<storage, read_write> out_colours: array<vec4<f32>>;
-@group(0) @binding(13) var<storage, read> hce_light: array<u32>;
 
 // ---------------------------------------------------------------------------------------------
 // The Loop rules, in the CPU's order of arithmetic.

@@ -40,14 +40,20 @@
 
 use hce_format::{Object, ObjectKind};
 
+use super::bindings::{
+    COARSE_POSITIONS, HCE_LIGHT, OUT_COLOURS, OUT_FACES, OUT_INDICES, OUT_NORMALS, OUT_POSITIONS,
+    SCRATCH, TOPO,
+};
 use super::flat::KernelTiming;
 use super::job::{Lanes, RefineJob, Step};
+use super::outputs::{OutputShape, RefinedOutput};
 use super::util::{
-    check_size, pack_sections, read_back, storage_init, storage_output, LightingBuffers, WORKGROUP,
+    check_size, compute_pipeline, compute_pipeline_with, pack_sections, shader_module,
+    storage_init, storage_output, LightingBuffers, WORKGROUP,
 };
 use super::wgsl::{loop_source, loop_workgroup_source};
 use super::{AdapterKind, GpuContext, GpuError};
-use hce_geometry::flat::{FlatTopology, RefinedMesh};
+use hce_geometry::flat::FlatTopology;
 use hce_geometry::lighting::Reconstruction;
 use hce_geometry::split::SplitTables;
 use hce_geometry::subdivide::{prepare, MAX_LOOP_LEVEL};
@@ -232,54 +238,11 @@ pub struct LoopObject {
     lighting: LightingBuffers,
 }
 
-/// Output buffers of a refinement: drawable as they are (`positions`, `normals` and `colours` as
-/// vertex buffers, `indices` as an index buffer), in the numbering of [`hce_geometry::subdivide`].
+/// Output buffers of a Loop refinement: [`RefinedOutput`] with normals, in the numbering of
+/// [`hce_geometry::subdivide`].
 ///
 /// [`hce_geometry::subdivide`]: mod@hce_geometry::subdivide
-pub struct LoopOutput {
-    pub level: u32,
-    pub vertex_count: u32,
-    pub triangle_count: u32,
-    /// `x, y, z` f32 per vertex (stride 12).
-    pub positions: wgpu::Buffer,
-    /// Unit `x, y, z` f32 per vertex (stride 12), as [`hce_geometry::subdivide::Refined::normals`].
-    pub normals: wgpu::Buffer,
-    /// Linear `r, g, b, 1` f32 per vertex (stride 16).
-    pub colours: wgpu::Buffer,
-    /// `u32` ×3 per fine triangle.
-    pub indices: wgpu::Buffer,
-    /// Linear `r, g, b`, area per fine triangle.
-    pub faces: wgpu::Buffer,
-    /// The patches of the coarse triangles in flight (kernel-private).
-    scratch: wgpu::Buffer,
-}
-
-impl LoopOutput {
-    /// Copies the refined mesh (without normals) back to the CPU.
-    pub fn read_back(&self, ctx: &GpuContext) -> Result<RefinedMesh, GpuError> {
-        let v = self.vertex_count as usize;
-        let f = self.triangle_count as usize;
-        Ok(RefinedMesh {
-            level: self.level,
-            positions: read_back(ctx, &self.positions, 3 * v)?,
-            colours: read_back(ctx, &self.colours, 4 * v)?,
-            indices: read_back(ctx, &self.indices, 3 * f)?,
-            face_colours: read_back(ctx, &self.faces, 4 * f)?,
-        })
-    }
-
-    /// Copies the vertex normals back to the CPU (`x, y, z` per vertex).
-    pub fn read_back_normals(&self, ctx: &GpuContext) -> Result<Vec<f32>, GpuError> {
-        read_back(ctx, &self.normals, 3 * self.vertex_count as usize)
-    }
-
-    /// Bytes the kernel writes to its outputs (positions, normals, colours, indices, face
-    /// colours); the scratch traffic of the patches is not counted.
-    #[cfg_attr(not(feature = "bench"), allow(dead_code))]
-    pub(crate) fn bytes_written(&self) -> u64 {
-        u64::from(self.vertex_count) * (12 + 12 + 16) + u64::from(self.triangle_count) * (12 + 16)
-    }
-}
+pub type LoopOutput = RefinedOutput;
 
 /// Floats of one scratch square at `level` and of one slot (two squares, two ring sets).
 fn slot_floats(level: u32, max_valence: u32) -> (u64, u64) {
@@ -295,31 +258,12 @@ impl LoopKernel {
     }
 
     pub fn with_scheme(ctx: &GpuContext, scheme: PatchScheme) -> Self {
-        let source = loop_source();
-        let module = ctx
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("hce loop"),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            });
-        // Each entry point gets the layout of the bindings it uses, which keeps every step
-        // within the default limit of 8 storage buffers per stage.
-        let make = |entry: &str| {
-            ctx.device
-                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(entry),
-                    layout: None,
-                    module: &module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
-        };
+        let module = shader_module(ctx, "hce loop", loop_source());
         Self {
             scheme,
-            patch: make("patch_main"),
-            faces: make("faces_main"),
-            colours: make("colours_main"),
+            patch: compute_pipeline(ctx, &module, "patch_main"),
+            faces: compute_pipeline(ctx, &module, "faces_main"),
+            colours: compute_pipeline(ctx, &module, "colours_main"),
             workgroup: Default::default(),
         }
     }
@@ -386,29 +330,24 @@ impl LoopKernel {
         cache
             .entry(shape)
             .or_insert_with(|| {
-                let source = loop_workgroup_source(&shape.header());
-                let module = ctx
-                    .device
-                    .create_shader_module(wgpu::ShaderModuleDescriptor {
-                        label: Some("hce loop workgroup"),
-                        source: wgpu::ShaderSource::Wgsl(source.into()),
-                    });
-                ctx.device
-                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                        label: Some("patch_wg_main"),
-                        layout: None,
-                        module: &module,
-                        entry_point: Some("patch_wg_main"),
-                        compilation_options: wgpu::PipelineCompilationOptions {
-                            // Every point the kernel reads was written before a barrier in the
-                            // same workgroup (band points only on edges with a neighbour, which
-                            // are the only ones read), so zeroing 10 KiB per workgroup first
-                            // would be pure cost.
-                            zero_initialize_workgroup_memory: false,
-                            ..Default::default()
-                        },
-                        cache: None,
-                    })
+                let module = shader_module(
+                    ctx,
+                    "hce loop workgroup",
+                    loop_workgroup_source(&shape.header()),
+                );
+                compute_pipeline_with(
+                    ctx,
+                    &module,
+                    "patch_wg_main",
+                    wgpu::PipelineCompilationOptions {
+                        // Every point the kernel reads was written before a barrier in the same
+                        // workgroup (band points only on edges with a neighbour, which are the
+                        // only ones read), so zeroing 10 KiB per workgroup first would be pure
+                        // cost.
+                        zero_initialize_workgroup_memory: false,
+                        ..Default::default()
+                    },
+                )
             })
             .clone()
     }
@@ -526,63 +465,14 @@ impl LoopKernel {
         })
     }
 
-    /// Output buffers (and scratch) sized for `level`, checked against the device limits.
-    fn allocate(
+    /// The scratch buffer of `slots` slots of `slot_bytes`.
+    fn scratch_buffer(
         &self,
         ctx: &GpuContext,
-        object: &LoopObject,
-        level: u32,
-    ) -> Result<LoopOutput, GpuError> {
-        let (v, f) = counts(object, level)?;
-        let vertex = wgpu::BufferUsages::VERTEX;
-        let scratch = self.scratch_buffer(ctx, &self.plan(ctx, object, level)?)?;
-        Ok(LoopOutput {
-            level,
-            vertex_count: v,
-            triangle_count: f,
-            positions: storage_output(
-                ctx,
-                "loop positions",
-                check_size(ctx, "refined positions", u64::from(v) * 12)?,
-                vertex,
-            ),
-            normals: storage_output(
-                ctx,
-                "loop normals",
-                check_size(ctx, "refined normals", u64::from(v) * 12)?,
-                vertex,
-            ),
-            colours: storage_output(
-                ctx,
-                "loop colours",
-                check_size(ctx, "refined colours", u64::from(v) * 16)?,
-                vertex,
-            ),
-            indices: storage_output(
-                ctx,
-                "loop indices",
-                check_size(ctx, "refined indices", u64::from(f) * 12)?,
-                wgpu::BufferUsages::INDEX,
-            ),
-            faces: storage_output(
-                ctx,
-                "loop faces",
-                check_size(ctx, "refined faces", u64::from(f) * 16)?,
-                wgpu::BufferUsages::empty(),
-            ),
-            scratch,
-        })
-    }
-
-    /// The scratch buffer `plan` needs: one word for the workgroup kernel, which keeps its
-    /// patches in workgroup memory (wgpu rejects empty buffers).
-    fn scratch_buffer(&self, ctx: &GpuContext, plan: &PatchPlan) -> Result<wgpu::Buffer, GpuError> {
-        let bytes = match *plan {
-            PatchPlan::Workgroup(_) => 4,
-            PatchPlan::Scratch {
-                slot_bytes, slots, ..
-            } => check_size(ctx, "subdivision scratch", slot_bytes * u64::from(slots))?,
-        };
+        slot_bytes: u64,
+        slots: u32,
+    ) -> Result<wgpu::Buffer, GpuError> {
+        let bytes = check_size(ctx, "subdivision scratch", slot_bytes * u64::from(slots))?;
         Ok(storage_output(
             ctx,
             "loop scratch",
@@ -625,24 +515,14 @@ impl LoopKernel {
         level: u32,
         out: &mut Option<LoopOutput>,
     ) -> Result<RefineJob, GpuError> {
-        let (v, f) = counts(object, level)?;
+        let shape = shape(object, level)?;
         let plan = self.plan(ctx, object, level)?;
-        let fits = out.as_ref().is_some_and(|o| {
-            o.positions.size() >= u64::from(v) * 12
-                && o.normals.size() >= u64::from(v) * 12
-                && o.colours.size() >= u64::from(v) * 16
-                && o.indices.size() >= u64::from(f) * 12
-                && o.faces.size() >= u64::from(f) * 16
-        });
-        if !fits {
-            *out = Some(self.allocate(ctx, object, level)?);
-        }
-        let o = out.as_mut().expect("allocated above");
-        o.level = level;
-        o.vertex_count = v;
-        o.triangle_count = f;
-        // The scratch kernel needs room for at least one slot; the buffer of a workgroup-kernel
-        // refinement has none. A reused buffer may hold fewer slots than a fresh one would.
+        let o = RefinedOutput::prepare(ctx, out, level, shape)?;
+        let (v, f) = (shape.vertices, shape.triangles);
+        let normals = o.normals.clone().expect("a Loop output has normals");
+        // The scratch kernel needs room for at least one slot; the workgroup kernel keeps its
+        // patches in workgroup memory. A reused buffer may hold fewer slots than a fresh one
+        // would.
         let (square_floats, slots) = match plan {
             PatchPlan::Workgroup(_) => (0, 0),
             PatchPlan::Scratch {
@@ -650,13 +530,13 @@ impl LoopKernel {
                 slot_bytes,
                 slots,
             } => {
-                if o.scratch.size() < slot_bytes {
-                    o.scratch = self.scratch_buffer(ctx, &plan)?;
-                }
-                (
-                    square_floats,
-                    slots.min((o.scratch.size() / slot_bytes) as u32).max(1),
-                )
+                let scratch = match o.scratch.take() {
+                    Some(s) if s.size() >= slot_bytes => s,
+                    _ => self.scratch_buffer(ctx, slot_bytes, slots)?,
+                };
+                let slots = slots.min((scratch.size() / slot_bytes) as u32).max(1);
+                o.scratch = Some(scratch);
+                (square_floats, slots)
             }
         };
 
@@ -685,55 +565,53 @@ impl LoopKernel {
         let triangles = u64::from(object.triangle_count);
         // Step 1: the workgroup kernel (no scratch binding), a workgroup per `tris` triangles,
         // or the scratch kernel, an invocation per slot.
+        // The bindings (hce_bindings.wgsl) each step reads or writes.
+        let mut patch_bindings = vec![
+            (COARSE_POSITIONS, object.coarse_positions.clone()),
+            (TOPO, object.topo.clone()),
+            (OUT_POSITIONS, o.positions.clone()),
+            (OUT_NORMALS, normals.clone()),
+        ];
         let patch = match plan {
             PatchPlan::Workgroup(shape) => Step {
                 pipeline: self.workgroup_pipeline(ctx, shape),
-                bindings: vec![
-                    (1, object.coarse_positions.clone()),
-                    (2, object.topo.clone()),
-                    (8, o.positions.clone()),
-                    (9, o.normals.clone()),
-                ],
+                bindings: patch_bindings,
                 items: triangles,
                 lanes: Lanes::Groups(shape.tris),
             },
             PatchPlan::Scratch { .. } => Step {
                 pipeline: self.patch.clone(),
-                bindings: vec![
-                    (1, object.coarse_positions.clone()),
-                    (2, object.topo.clone()),
-                    (7, o.scratch.clone()),
-                    (8, o.positions.clone()),
-                    (9, o.normals.clone()),
-                ],
+                bindings: {
+                    let scratch = o.scratch.clone().expect("placed above");
+                    patch_bindings.push((SCRATCH, scratch));
+                    patch_bindings
+                },
                 items: triangles,
                 lanes: Lanes::Slots(slots),
             },
         };
+        let mut faces_bindings = vec![
+            (TOPO, object.topo.clone()),
+            (OUT_POSITIONS, o.positions.clone()),
+            (OUT_INDICES, o.indices.clone()),
+            (OUT_FACES, o.faces.clone()),
+        ];
+        faces_bindings.extend(object.lighting.tree_bindings());
         let faces = Step {
             pipeline: self.faces.clone(),
-            bindings: vec![
-                (2, object.topo.clone()),
-                (3, object.lighting.records.clone()),
-                (4, object.lighting.bits.clone()),
-                (5, object.lighting.normals.clone()),
-                (6, object.lighting.colours.clone()),
-                (8, o.positions.clone()),
-                (10, o.indices.clone()),
-                (11, o.faces.clone()),
-            ],
+            bindings: faces_bindings,
             items: u64::from(f),
             lanes: Lanes::PerItem,
         };
         let colours = Step {
             pipeline: self.colours.clone(),
             bindings: vec![
-                (2, object.topo.clone()),
-                (8, o.positions.clone()),
-                (9, o.normals.clone()),
-                (11, o.faces.clone()),
-                (12, o.colours.clone()),
-                (13, object.lighting.light.clone()),
+                (TOPO, object.topo.clone()),
+                (OUT_POSITIONS, o.positions.clone()),
+                (OUT_NORMALS, normals),
+                (OUT_FACES, o.faces.clone()),
+                (OUT_COLOURS, o.colours.clone()),
+                (HCE_LIGHT, object.lighting.light.clone()),
             ],
             items: u64::from(v),
             lanes: Lanes::PerItem,
@@ -781,14 +659,16 @@ fn scratch_shape(
     Ok((square, slot_bytes, slots as u32))
 }
 
-/// Output vertex and triangle counts at `level`, checked to fit 32-bit indices as
-/// [`hce_geometry::subdivide`] checks them.
 /// Vertices the split at sharp edges appends at `level` (SPEC.md F.5): `X + S (2^level − 1)`.
 fn split_appended(object: &LoopObject, level: u32) -> u64 {
     u64::from(object.split_copies) + u64::from(object.split_edges) * ((1u64 << level) - 1)
 }
 
-fn counts(object: &LoopObject, level: u32) -> Result<(u32, u32), GpuError> {
+/// What a refinement of `object` to `level` writes, checked to fit 32-bit indices as
+/// [`hce_geometry::subdivide`] checks them.
+///
+/// [`hce_geometry::subdivide`]: mod@hce_geometry::subdivide
+fn shape(object: &LoopObject, level: u32) -> Result<OutputShape, GpuError> {
     if level > MAX_LOOP_LEVEL {
         return Err(GpuError::LevelTooHigh {
             level,
@@ -801,19 +681,7 @@ fn counts(object: &LoopObject, level: u32) -> Result<(u32, u32), GpuError> {
         + u64::from(object.edge_count) * (m - 1)
         + u64::from(object.triangle_count) * per_tri
         + split_appended(object, level);
-    let f = u64::from(object.triangle_count) << (2 * level);
-    let too_large = |what, needed| GpuError::TooLarge {
-        what,
-        needed,
-        limit: u64::from(u32::MAX),
-    };
-    if f > u64::from(u32::MAX / 3) {
-        return Err(too_large("refined index count", f * 3));
-    }
-    Ok((
-        u32::try_from(v).map_err(|_| too_large("refined vertex count", v))?,
-        f as u32,
-    ))
+    OutputShape::new(v, u64::from(object.triangle_count) << (2 * level), true)
 }
 
 #[cfg(test)]

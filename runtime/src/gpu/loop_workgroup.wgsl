@@ -1,7 +1,7 @@
 // Step 1 of loop.wgsl, cooperative: a workgroup refines WG_TRIS coarse triangles at once, each
 // triangle's patch in workgroup memory and its lattice points spread over WG_LANES
-// invocations, with a barrier between the Loop steps. This file is appended to loop.wgsl (whose
-// rules, tables and bindings it uses) after a header that loop_kernel.rs generates per variant:
+// invocations, with a barrier between the Loop steps. It imports loop.wgsl (whose rules, tables
+// and bindings it uses) and expects a header that loop_kernel.rs generates per variant:
 //
 //   WG_LEVEL  the level L the variant refines to (the number of steps),
 //   WG_TRIS   coarse triangles per workgroup (a power of two; 64 / WG_TRIS lanes each),
@@ -25,6 +25,8 @@
 // position for its whole ring, the new corners for the grid). Both apply the same rules of
 // loop.wgsl (`mid`, `odd_smooth`, `even_crease`, `even_smooth`, with `keep`), and
 // tests/gpu_loop.rs checks that the two kernels agree bit for bit.
+
+// #import loop
 
 const WG_LANES: u32 = 64u / WG_TRIS;
 const WG_SLOT: u32 = WG_SQ_A + WG_SQ_B + 2u * WG_RING;

@@ -27,9 +27,11 @@
 // features.
 #[cfg(feature = "bench")]
 pub mod bench;
+mod bindings;
 mod context;
 #[cfg(feature = "testing")]
 mod decode;
+mod draw;
 mod flat;
 mod flat_batch;
 mod framing;
@@ -38,6 +40,7 @@ mod inputs;
 mod job;
 mod lod;
 mod loop_kernel;
+mod outputs;
 mod render;
 mod scene;
 #[cfg(feature = "testing")]
@@ -46,6 +49,7 @@ mod util;
 mod wgsl;
 
 pub use context::{AdapterDescription, AdapterKind, ContextOptions, GpuContext};
+pub use draw::{colour_pass, read_texture, render_pipeline, target_texture, PipelineSpec};
 pub use flat::{refine_flat, refine_flat_with, FlatKernel, FlatObject, FlatOutput, KernelTiming};
 pub use flat_batch::BATCH_MAX_FINE;
 pub use framing::{auto_scene_camera, Placement};
@@ -53,6 +57,7 @@ pub use hce_geometry::flat::RefinedMesh;
 pub use job::{Encoded, RefineJob};
 pub use lod::{choose_level, Camera, LodParams};
 pub use loop_kernel::{LoopKernel, LoopObject, LoopOutput, PatchScheme};
+pub use outputs::RefinedOutput;
 pub use render::{
     mesh_bounds, render_gpu_mesh, render_mesh, sample_positions, supported_samples, tone_map_aces,
     view_projection, Framing, GpuMesh, MeshDraw, MeshPipeline, RenderParams, RenderedImage,

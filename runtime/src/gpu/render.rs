@@ -19,6 +19,7 @@
 
 use glam::{Mat4, Vec3, Vec4};
 
+use super::draw::{colour_pass, read_texture, render_pipeline, target_texture, PipelineSpec};
 use super::framing::auto_camera;
 use super::lod::Camera;
 use super::util::{bind_buffers, uniform_init};
@@ -340,8 +341,9 @@ pub struct MeshPipeline {
 }
 
 impl MeshPipeline {
-    /// The depth attachment's format; clear it to 1.0 (nearer surfaces have smaller depths).
-    pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+    /// The depth attachment's format ([`super::draw::DEPTH_FORMAT`]); clear it to 1.0 (nearer
+    /// surfaces have smaller depths).
+    pub const DEPTH_FORMAT: wgpu::TextureFormat = super::draw::DEPTH_FORMAT;
 
     /// `samples`: the colour and depth targets' sample count (1, or one that
     /// [`supported_samples`] gives).
@@ -352,57 +354,29 @@ impl MeshPipeline {
                 label: Some("hce render"),
                 source: wgpu::ShaderSource::Wgsl(include_str!("render.wgsl").into()),
             });
-        let pipeline = ctx
-            .device
-            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("hce render"),
+        let pipeline = render_pipeline(
+            ctx,
+            &PipelineSpec {
+                label: "hce render",
+                module: &module,
                 layout: None,
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[
-                        Some(wgpu::VertexBufferLayout {
-                            array_stride: 12,
-                            step_mode: wgpu::VertexStepMode::Vertex,
-                            attributes: &wgpu::vertex_attr_array![0 => Float32x3],
-                        }),
-                        Some(wgpu::VertexBufferLayout {
-                            array_stride: 16,
-                            step_mode: wgpu::VertexStepMode::Vertex,
-                            attributes: &wgpu::vertex_attr_array![1 => Float32x4],
-                        }),
-                    ],
-                },
-                primitive: wgpu::PrimitiveState {
-                    // Baked assets may be open surfaces: draw both sides.
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: Self::DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: wgpu::MultisampleState {
-                    count: samples,
-                    ..Default::default()
-                },
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
+                buffers: &[
+                    Some(wgpu::VertexBufferLayout {
+                        array_stride: 12,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+                    }),
+                    Some(wgpu::VertexBufferLayout {
+                        array_stride: 16,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &wgpu::vertex_attr_array![1 => Float32x4],
+                    }),
+                ],
+                format,
+                depth: true,
+                samples,
+            },
+        );
         Self { pipeline }
     }
 
@@ -475,11 +449,6 @@ pub(crate) fn render_draws(
     }
     let view_proj = view_projection(&camera, lo, hi, aspect);
 
-    let extent = wgpu::Extent3d {
-        width: w,
-        height: h,
-        depth_or_array_layers: 1,
-    };
     // The resolve writes one storage buffer of the whole image; an image too large for one
     // binding is drawn with one sample.
     let image_bytes = u64::from(w) * u64::from(h) * 16;
@@ -491,18 +460,7 @@ pub(crate) fn render_draws(
     } else {
         supported_samples(ctx, params.samples)
     };
-    let target = |label, format, usage| {
-        ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: extent,
-            mip_level_count: 1,
-            sample_count: samples,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage,
-            view_formats: &[],
-        })
-    };
+    let target = |label, format, usage| target_texture(ctx, label, (w, h), format, samples, usage);
     let colour_target = target(
         "hce colour target",
         COLOUR_FORMAT,
@@ -527,35 +485,19 @@ pub(crate) fn render_draws(
         .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
     {
         let [r, g, b] = params.background.map(f64::from);
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("hce render"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &colour_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a: 1.0 }),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = colour_pass(
+            &mut encoder,
+            "hce render",
+            &colour_view,
+            Some(wgpu::Color { r, g, b, a: 1.0 }),
+            Some(&depth_view),
+        );
         pipeline.draw(ctx, &mut pass, view_proj, draws);
     }
     let pixels = if samples > 1 {
         resolve(ctx, encoder, &colour_view, w, h, samples)?
     } else {
-        read_single(ctx, encoder, &colour_target, w, h)?
+        bytemuck::pod_collect_to_vec(&read_texture(ctx, encoder, &colour_target, 16)?)
     };
     Ok(RenderedImage {
         width: w,
@@ -563,49 +505,6 @@ pub(crate) fn render_draws(
         pixels,
         camera,
         samples,
-    })
-}
-
-/// Copies a one-sample colour target back (rows padded as copies require).
-fn read_single(
-    ctx: &GpuContext,
-    mut encoder: wgpu::CommandEncoder,
-    colour_target: &wgpu::Texture,
-    w: u32,
-    h: u32,
-) -> Result<Vec<f32>, GpuError> {
-    let row_bytes = u64::from(w) * 16;
-    let padded_row = row_bytes.next_multiple_of(u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT));
-    let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("hce image read-back"),
-        size: padded_row * u64::from(h),
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    encoder.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo {
-            texture: colour_target,
-            mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
-            aspect: wgpu::TextureAspect::All,
-        },
-        wgpu::TexelCopyBufferInfo {
-            buffer: &readback,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(padded_row as u32),
-                rows_per_image: Some(h),
-            },
-        },
-        colour_target.size(),
-    );
-    ctx.queue.submit([encoder.finish()]);
-    super::util::map_and_copy(ctx, &readback, readback.size(), |bytes| {
-        let mut out = Vec::with_capacity((w * h * 4) as usize);
-        for row in bytes.chunks_exact(padded_row as usize) {
-            out.extend_from_slice(bytemuck::cast_slice::<u8, f32>(&row[..row_bytes as usize]));
-        }
-        out
     })
 }
 

@@ -870,7 +870,7 @@ impl GpuScene {
                 vertex_count: o.vertex_count,
                 triangle_count: o.triangle_count,
                 positions: &o.positions,
-                normals: Some(&o.normals),
+                normals: o.normals.as_ref(),
                 colours: &o.colours,
                 indices: &o.indices,
             }),
@@ -993,13 +993,7 @@ trait Leveled {
     fn level(&self) -> u32;
 }
 
-impl Leveled for FlatOutput {
-    fn level(&self) -> u32 {
-        self.level
-    }
-}
-
-impl Leveled for LoopOutput {
+impl Leveled for super::RefinedOutput {
     fn level(&self) -> u32 {
         self.level
     }

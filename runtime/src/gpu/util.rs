@@ -67,6 +67,45 @@ pub fn storage_output(
     })
 }
 
+/// A module of WGSL `source` (an assembled kernel of `wgsl.rs`).
+pub fn shader_module(ctx: &GpuContext, label: &str, source: String) -> wgpu::ShaderModule {
+    ctx.device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        })
+}
+
+/// The pipeline of compute entry point `entry` of `module`, with the layout of the bindings it
+/// uses (`layout: None`): that keeps every step of the kernels within WebGPU's default limit of
+/// 8 storage buffers per stage (the flat kernel's steps bind 3, 8 and 4 of its module's 11, the
+/// batched ones one more uniform), as the browser's `layout: 'auto'` does.
+pub fn compute_pipeline(
+    ctx: &GpuContext,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+) -> wgpu::ComputePipeline {
+    compute_pipeline_with(ctx, module, entry, Default::default())
+}
+
+/// [`compute_pipeline`] with the compilation options chosen.
+pub fn compute_pipeline_with(
+    ctx: &GpuContext,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    options: wgpu::PipelineCompilationOptions<'_>,
+) -> wgpu::ComputePipeline {
+    ctx.device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: None,
+            module,
+            entry_point: Some(entry),
+            compilation_options: options,
+            cache: None,
+        })
+}
+
 /// Workgroup counts covering `threads` invocations: a 2-D grid when one dimension is not
 /// enough (kernels rebuild the linear index from `num_workgroups.x`).
 pub fn dispatch_size(ctx: &GpuContext, threads: u64) -> Result<(u32, u32), GpuError> {
@@ -346,6 +385,18 @@ impl LightingBuffers {
             colours: storage_init(ctx, "colours", &object.colours),
             light: storage_init(ctx, "lighting table", &light),
         })
+    }
+
+    /// The buffers of the paper's rule (`hce_tree.wgsl`) at their bindings of
+    /// `hce_bindings.wgsl`: the records, bits, normals and colours.
+    pub fn tree_bindings(&self) -> [(u32, wgpu::Buffer); 4] {
+        use super::bindings::{HCE_BITS, HCE_COLOURS, HCE_NORMALS, HCE_RECORDS};
+        [
+            (HCE_RECORDS, self.records.clone()),
+            (HCE_BITS, self.bits.clone()),
+            (HCE_NORMALS, self.normals.clone()),
+            (HCE_COLOURS, self.colours.clone()),
+        ]
     }
 
     /// The `smooth_light` word of the kernels' parameters: 0 for the nearest-normal rule (the

@@ -1,10 +1,20 @@
 //! The WGSL sources of the kernels, assembled at load so that each function of the GPU side is
-//! written once: shared modules prepended to the kernels that use them, in dependency order,
-//! and one template instantiated per memory.
+//! written once. Each module names the modules it needs in its own file, one line each, as
+//! naga_oil's `#import` does (a comment, so that the file stays plain WGSL):
+//!
+//! ```wgsl
+//! // #import hce_tree
+//! ```
+//!
+//! and a kernel's source is its module after every module it imports, directly or not, each
+//! once, in the order of a depth-first walk of the declarations ([`import_order`]).
+//! `web/src/wgsl.js` walks the same declarations, so that the order is written nowhere else.
 //!
 //! * `hce_constants.wgsl`: the constants the kernels share with the Rust side, generated from
 //!   the Rust constants (the list `CONSTANTS`; a test fails while the checked-in file differs, and
-//!   `HCE_WRITE_WGSL=1` rewrites it), prepended first to every kernel, here and in the browser;
+//!   `HCE_WRITE_WGSL=1` rewrites it);
+//! * `hce_bindings.wgsl`: the storage buffers of the refinement and decoding kernels, one
+//!   numbering for all (its Rust twin is `bindings.rs`);
 //! * `hce_tree.wgsl`: the walk of a breadth-first HCE tree and the paper's face colour;
 //! * `hce_light.wgsl`: the smooth reconstruction of baked lighting (SPEC.md Appendix G);
 //! * `hce_lattice.wgsl`: the 1-to-4 lattice of a refined triangle and its vertex numbering;
@@ -13,22 +23,107 @@
 //!   (WGSL has no pointer that reaches both storage and workgroup memory), instantiated for the
 //!   scratch kernel of `loop.wgsl` and for the workgroup kernel of `loop_workgroup.wgsl`.
 
-/// The generated constants, prepended first (see `CONSTANTS`).
-const CONSTANTS_WGSL: &str = include_str!("hce_constants.wgsl");
-/// The shared tree-walking functions, prepended to every kernel that colours subtriangles.
-const TREE_WGSL: &str = include_str!("hce_tree.wgsl");
-const LIGHT_WGSL: &str = include_str!("hce_light.wgsl");
-const LATTICE_WGSL: &str = include_str!("hce_lattice.wgsl");
-const GATHER_WGSL: &str = include_str!("hce_gather.wgsl");
-const LOOP_WGSL: &str = include_str!("loop.wgsl");
-const LOOP_WORKGROUP_WGSL: &str = include_str!("loop_workgroup.wgsl");
+/// Every module a kernel may import or be, by name (its file without `.wgsl`).
+const MODULES: &[(&str, &str)] = &[
+    ("hce_constants", include_str!("hce_constants.wgsl")),
+    ("hce_bindings", include_str!("hce_bindings.wgsl")),
+    ("hce_tree", include_str!("hce_tree.wgsl")),
+    ("hce_light", include_str!("hce_light.wgsl")),
+    ("hce_lattice", include_str!("hce_lattice.wgsl")),
+    ("hce_gather", include_str!("hce_gather.wgsl")),
+    ("flat", include_str!("flat.wgsl")),
+    ("loop", include_str!("loop.wgsl")),
+    ("loop_workgroup", include_str!("loop_workgroup.wgsl")),
+    #[cfg(any(test, feature = "testing"))]
+    ("decode", include_str!("decode.wgsl")),
+];
+
 const LOOP_NORMALS_TEMPLATE: &str = include_str!("loop_normals.wgsl");
-const FLAT_WGSL: &str = include_str!("flat.wgsl");
-#[cfg(any(test, feature = "testing"))]
-const DECODE_WGSL: &str = include_str!("decode.wgsl");
 
 /// The placeholder of `loop_normals.wgsl`: the prefix of a patch memory's accessors.
 const PATCH: &str = "{patch}";
+
+/// The line that starts an import declaration.
+const IMPORT: &str = "// #import ";
+
+/// Why a kernel's modules cannot be put in order.
+#[derive(Debug, PartialEq, Eq, thiserror::Error)]
+pub(crate) enum ImportError {
+    #[error("{module}.wgsl imports {import}, which is not a module (no {import}.wgsl)")]
+    Missing { module: String, import: String },
+    #[error("no module {module} ({module}.wgsl)")]
+    Unknown { module: String },
+    #[error("circular import: {}", .cycle.join(" -> "))]
+    Circular { cycle: Vec<String> },
+}
+
+/// The modules a module's `text` imports, in the order it declares them.
+pub(crate) fn imports(text: &str) -> impl Iterator<Item = &str> {
+    text.lines()
+        .filter_map(|line| line.trim().strip_prefix(IMPORT.trim_start()))
+        .map(str::trim)
+}
+
+/// `root` and every module it imports, directly or not, each once, every module after the
+/// modules it imports (a depth-first walk of the declarations, in their order). `text` gives a
+/// module's file, `None` where there is none.
+pub(crate) fn import_order<'a>(
+    root: &'a str,
+    text: &impl Fn(&str) -> Option<&'a str>,
+) -> Result<Vec<&'a str>, ImportError> {
+    fn visit<'a>(
+        module: &'a str,
+        text: &impl Fn(&str) -> Option<&'a str>,
+        path: &mut Vec<&'a str>,
+        order: &mut Vec<&'a str>,
+    ) -> Result<(), ImportError> {
+        if order.contains(&module) {
+            return Ok(());
+        }
+        if let Some(at) = path.iter().position(|&m| m == module) {
+            let mut cycle: Vec<String> = path[at..].iter().map(|m| m.to_string()).collect();
+            cycle.push(module.to_string());
+            return Err(ImportError::Circular { cycle });
+        }
+        let source = text(module).ok_or_else(|| match path.last() {
+            Some(importer) => ImportError::Missing {
+                module: importer.to_string(),
+                import: module.to_string(),
+            },
+            None => ImportError::Unknown {
+                module: module.to_string(),
+            },
+        })?;
+        path.push(module);
+        for import in imports(source) {
+            visit(import, text, path, order)?;
+        }
+        path.pop();
+        order.push(module);
+        Ok(())
+    }
+    let mut order = Vec::new();
+    visit(root, text, &mut Vec::new(), &mut order)?;
+    Ok(order)
+}
+
+/// The text of module `name` of [`MODULES`].
+fn module_text(name: &str) -> Option<&'static str> {
+    MODULES.iter().find(|(n, _)| *n == name).map(|(_, t)| *t)
+}
+
+/// The source of kernel `root`: its modules in [`import_order`], each passed through `expand`
+/// (which adds what a module is assembled with, given its name and text), joined by newlines.
+fn assemble(root: &'static str, expand: impl Fn(&str, &str) -> String) -> String {
+    // The modules are this crate's own files: the test of every assembled module fails on a
+    // missing or circular import before any build ships it.
+    let order = import_order(root, &module_text).unwrap_or_else(|e| panic!("{e}"));
+    order
+        .iter()
+        .map(|m| expand(m, module_text(m).expect("import_order found it")))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
 
 /// The one list of the constants the WGSL shares with the Rust side: WGSL name, value (the Rust
 /// constant itself) and what it is. `hce_constants.wgsl` is generated from it
@@ -113,22 +208,15 @@ fn constants_wgsl() -> String {
     out
 }
 
-/// The shared modules of a refinement kernel (flat and Loop), in dependency order, followed by
-/// `kernel`.
-pub(crate) fn refinement_source(kernel: &str) -> String {
-    format!("{CONSTANTS_WGSL}\n{TREE_WGSL}\n{LIGHT_WGSL}\n{LATTICE_WGSL}\n{GATHER_WGSL}\n{kernel}")
-}
-
 /// The flat (linear 1-to-4) refinement kernel.
 pub(crate) fn flat_source() -> String {
-    refinement_source(FLAT_WGSL)
+    assemble("flat", |_, text| text.to_string())
 }
 
-/// The colour-decoding kernel (`gpu::testing`): the constants, the tree walk, then
-/// `decode.wgsl`.
+/// The colour-decoding kernel (`gpu::testing`).
 #[cfg(any(test, feature = "testing"))]
 pub(crate) fn decode_source() -> String {
-    format!("{CONSTANTS_WGSL}\n{TREE_WGSL}\n{DECODE_WGSL}")
+    assemble("decode", |_, text| text.to_string())
 }
 
 /// `loop_normals.wgsl` for the patch memory whose accessors start with `prefix` (`sq_at`,
@@ -138,19 +226,27 @@ fn patch_normals(prefix: &str) -> String {
     LOOP_NORMALS_TEMPLATE.replace(PATCH, prefix)
 }
 
+/// `loop.wgsl` with the normals of its scratch patch kernel; `loop_workgroup.wgsl` after
+/// `header` (the variant's constants) with the normals of workgroup memory.
+fn loop_module(name: &str, text: &str, header: &str) -> String {
+    match name {
+        "loop" => format!("{text}\n{}", patch_normals("")),
+        "loop_workgroup" => format!("{header}\n{text}\n{}", patch_normals("wg_")),
+        _ => text.to_string(),
+    }
+}
+
 /// The Loop kernel's module: its three steps, with the scratch patch kernel (`patch_main`).
 pub(crate) fn loop_source() -> String {
-    refinement_source(&format!("{LOOP_WGSL}\n{}", patch_normals("")))
+    assemble("loop", |name, text| loop_module(name, text, ""))
 }
 
 /// A variant of the workgroup patch kernel (`patch_wg_main`): the Loop kernel's module, then
 /// `header` (the variant's constants) and `loop_workgroup.wgsl` with its normals.
 pub(crate) fn loop_workgroup_source(header: &str) -> String {
-    format!(
-        "{}\n{header}\n{LOOP_WORKGROUP_WGSL}\n{}",
-        loop_source(),
-        patch_normals("wg_")
-    )
+    assemble("loop_workgroup", |name, text| {
+        loop_module(name, text, header)
+    })
 }
 
 #[cfg(test)]
@@ -174,6 +270,90 @@ mod tests {
             modules.push((name, loop_workgroup_source(&header)));
         }
         modules
+    }
+
+    /// A module table of `files` for [`import_order`].
+    fn table<'a>(files: &'a [(&'a str, &'a str)]) -> impl Fn(&str) -> Option<&'a str> + 'a {
+        move |name| files.iter().find(|(n, _)| *n == name).map(|(_, t)| *t)
+    }
+
+    #[test]
+    fn imports_come_once_each_before_the_modules_that_import_them() {
+        let files = [
+            ("kernel", "// #import b\n// #import a\nfn main() {}\n"),
+            ("a", "  // #import c\n"),
+            ("b", "// #import c\n// #import a\n"),
+            ("c", "// imports nothing: `#import` only starts a line\n"),
+        ];
+        assert_eq!(
+            import_order("kernel", &table(&files)),
+            Ok(vec!["c", "a", "b", "kernel"])
+        );
+        assert_eq!(import_order("c", &table(&files)), Ok(vec!["c"]));
+    }
+
+    #[test]
+    fn a_missing_or_circular_import_names_the_modules() {
+        let files = [
+            ("kernel", "// #import a\n"),
+            ("a", "// #import b\n"),
+            ("b", "// #import kernel\n"),
+            ("lone", "// #import hce_nothing\n"),
+        ];
+        let cycle = import_order("kernel", &table(&files)).unwrap_err();
+        assert_eq!(
+            cycle.to_string(),
+            "circular import: kernel -> a -> b -> kernel"
+        );
+        let missing = import_order("lone", &table(&files)).unwrap_err();
+        assert_eq!(
+            missing.to_string(),
+            "lone.wgsl imports hce_nothing, which is not a module (no hce_nothing.wgsl)"
+        );
+        assert_eq!(
+            import_order("absent", &table(&files)),
+            Err(ImportError::Unknown {
+                module: "absent".into()
+            })
+        );
+    }
+
+    /// The refinement kernels see the shared modules in one order, from their own declarations,
+    /// and every file of this folder imports only files of it, without a cycle.
+    #[test]
+    fn every_file_declares_imports_that_resolve() {
+        let shared = [
+            "hce_constants",
+            "hce_bindings",
+            "hce_tree",
+            "hce_light",
+            "hce_lattice",
+            "hce_gather",
+        ];
+        let flat = import_order("flat", &module_text).unwrap();
+        assert_eq!(flat[..shared.len()], shared);
+        assert_eq!(flat[shared.len()..], ["flat"]);
+        let workgroup = import_order("loop_workgroup", &module_text).unwrap();
+        assert_eq!(workgroup[..shared.len()], shared);
+        assert_eq!(workgroup[shared.len()..], ["loop", "loop_workgroup"]);
+        let files: Vec<(String, String)> = every_file()
+            .into_iter()
+            .map(|(name, text)| (name.trim_end_matches(".wgsl").to_string(), text))
+            .collect();
+        let text = |name: &str| {
+            files
+                .iter()
+                .find(|(n, _)| n == name)
+                .map(|(_, t)| t.as_str())
+        };
+        for (name, _) in &files {
+            let order = import_order(name, &text).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(order.last(), Some(&name.as_str()));
+        }
+        // What the kernels compile is every module of this folder but the standalone shaders.
+        for (name, _) in MODULES {
+            assert!(text(name).is_some(), "{name}");
+        }
     }
 
     /// Every `.wgsl` file of this folder, by name, with its text.
@@ -215,6 +395,39 @@ mod tests {
         for (name, source) in &modules {
             let module = parse(name, source);
             assert!(!module.entry_points.is_empty(), "{name}: no entry point");
+        }
+    }
+
+    /// `hce_bindings.wgsl` and `bindings.rs` name the same buffers at the same numbers, and
+    /// the kernels that import it bind nothing else but their own (binding 0 and from
+    /// `KERNEL_OWN` on).
+    #[test]
+    fn the_shared_bindings_match_their_rust_twin() {
+        use super::super::bindings::{KERNEL_OWN, SHARED, UNIFORM};
+        let bound = |module: &naga::Module| -> Vec<(String, u32)> {
+            module
+                .global_variables
+                .iter()
+                .filter_map(|(_, v)| Some((v.name.clone()?, v.binding.as_ref()?.binding)))
+                .collect()
+        };
+        let shared = bound(&parse("hce_bindings", module_text("hce_bindings").unwrap()));
+        let twin: Vec<(String, u32)> = SHARED.iter().map(|(n, b)| (n.to_string(), *b)).collect();
+        assert_eq!(shared, twin);
+        for (kernel, source) in [
+            ("flat", flat_source()),
+            ("loop", loop_source()),
+            ("decode", decode_source()),
+        ] {
+            for (name, binding) in bound(&parse(kernel, &source)) {
+                match SHARED.iter().find(|(n, _)| *n == name) {
+                    Some((_, b)) => assert_eq!(binding, *b, "{kernel}: {name}"),
+                    None => assert!(
+                        binding == UNIFORM || binding >= KERNEL_OWN,
+                        "{kernel}: {name} at {binding} is among the shared bindings' numbers"
+                    ),
+                }
+            }
         }
     }
 

@@ -4,9 +4,12 @@
 //! with egui. A screenshot draws the same passes into a texture of the window's format and reads
 //! it back.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use glam::Mat4;
-use hce_runtime::gpu::{GpuContext, MeshDraw, MeshPipeline};
+use hce_runtime::gpu::{
+    colour_pass, read_texture, render_pipeline, target_texture, GpuContext, MeshDraw, MeshPipeline,
+    PipelineSpec,
+};
 
 /// The linear image format the scene is drawn in: `hce render`'s, so that the window shows the
 /// values `hce render` writes.
@@ -73,31 +76,19 @@ impl FrameRenderer {
             bind_group_layouts: &[Some(&tone_layout)],
             immediate_size: 0,
         });
-        let tone = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("hce view tone map"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
+        // A full-screen triangle (no vertex buffers) over the window.
+        let tone = render_pipeline(
+            ctx,
+            &PipelineSpec {
+                label: "hce view tone map",
                 module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
+                layout: Some(&layout),
                 buffers: &[],
+                format,
+                depth: false,
+                samples: 1,
             },
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        );
         let tone_params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("hce view tone map"),
             size: 16,
@@ -118,25 +109,10 @@ impl FrameRenderer {
 
     fn ensure_targets(&mut self, ctx: &GpuContext, size: (u32, u32)) {
         if self.targets.as_ref().is_none_or(|t| t.size != size) {
-            let extent = wgpu::Extent3d {
-                width: size.0,
-                height: size.1,
-                depth_or_array_layers: 1,
-            };
             let texture = |label, format| {
-                ctx.device
-                    .create_texture(&wgpu::TextureDescriptor {
-                        label: Some(label),
-                        size: extent,
-                        mip_level_count: 1,
-                        sample_count: 1,
-                        dimension: wgpu::TextureDimension::D2,
-                        format,
-                        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                            | wgpu::TextureUsages::TEXTURE_BINDING,
-                        view_formats: &[],
-                    })
-                    .create_view(&Default::default())
+                let usage =
+                    wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+                target_texture(ctx, label, size, format, 1, usage).create_view(&Default::default())
             };
             let hdr = texture("hce view scene", HDR_FORMAT);
             let depth = texture("hce view depth", MeshPipeline::DEPTH_FORMAT);
@@ -196,50 +172,25 @@ impl FrameRenderer {
         } = self;
         let t = targets.as_ref().expect("ensure_targets made them");
         {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("hce view scene"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &t.hdr,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &t.depth,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = colour_pass(
+                encoder,
+                "hce view scene",
+                &t.hdr,
+                Some(wgpu::Color::BLACK),
+                Some(&t.depth),
+            );
             let x = scene_x.min(size.0 - 1);
             pass.set_viewport(x as f32, 0.0, (size.0 - x) as f32, size.1 as f32, 0.0, 1.0);
             scene.draw(ctx, &mut pass, view_proj, draws);
         }
         {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("hce view tone map"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: target,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = colour_pass(
+                encoder,
+                "hce view tone map",
+                target,
+                Some(wgpu::Color::BLACK),
+                None,
+            );
             pass.set_pipeline(tone);
             pass.set_bind_group(0, &t.tone_bind, &[]);
             pass.draw(0..3, 0..1);
@@ -254,22 +205,7 @@ impl FrameRenderer {
             if !extra.is_empty() {
                 ctx.queue.submit(extra);
             }
-            let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("hce view panel"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: target,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let pass = colour_pass(encoder, "hce view panel", target, None, None);
             egui.render(&mut pass.forget_lifetime(), o.primitives, &screen);
         }
     }
@@ -287,30 +223,14 @@ impl FrameRenderer {
         exposure: f32,
         overlay: Option<&Overlay<'_>>,
     ) -> Result<Vec<u8>> {
-        let (w, h) = size;
-        let extent = wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        };
-        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("hce view screenshot"),
-            size: extent,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: self.format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
-        let row = u64::from(w) * 4;
-        let padded = row.next_multiple_of(u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT));
-        let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("hce view screenshot"),
-            size: padded * u64::from(h),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let texture = target_texture(
+            ctx,
+            "hce view screenshot",
+            size,
+            self.format,
+            1,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        );
         let mut encoder = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
@@ -326,53 +246,20 @@ impl FrameRenderer {
             exposure,
             overlay,
         );
-        encoder.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture: &texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer: &buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(padded as u32),
-                    rows_per_image: Some(h),
-                },
-            },
-            extent,
-        );
-        ctx.queue.submit([encoder.finish()]);
-        let slice = buffer.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        ctx.wait()?;
-        rx.recv()
-            .context("the screenshot's read-back was dropped")?
-            .context("mapping the screenshot for reading")?;
+        let bytes = read_texture(ctx, encoder, &texture, 4)?;
         let bgra = matches!(
             self.format,
             wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
         );
-        let mut out = Vec::with_capacity((row * u64::from(h)) as usize);
-        {
-            let bytes = slice
-                .get_mapped_range()
-                .map_err(|e| anyhow::anyhow!("reading the screenshot back: {e}"))?;
-            for line in bytes.chunks_exact(padded as usize) {
-                for p in line[..row as usize].chunks_exact(4) {
-                    if bgra {
-                        out.extend([p[2], p[1], p[0], 255]);
-                    } else {
-                        out.extend([p[0], p[1], p[2], 255]);
-                    }
+        Ok(bytes
+            .chunks_exact(4)
+            .flat_map(|p| {
+                if bgra {
+                    [p[2], p[1], p[0], 255]
+                } else {
+                    [p[0], p[1], p[2], 255]
                 }
-            }
-        }
-        buffer.unmap();
-        Ok(out)
+            })
+            .collect())
     }
 }
