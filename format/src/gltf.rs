@@ -927,13 +927,18 @@ fn push_error(p: &mut crate::validate::Problems, e: GltfError) {
     }
 }
 
-/// The root object, `extensionsUsed` / `extensionsRequired` and the container's buffer view
-/// (SPEC.md 3.2, 3.3); then the container itself. Returns the container when it could be read.
-fn validate_root(
-    json: &Value,
-    buffers: &[Vec<u8>],
-    p: &mut crate::validate::Problems,
-) -> Option<crate::Container> {
+/// The rules of the root object that need no buffer (SPEC.md 3.2, 3.3): `extensionsUsed` and
+/// `extensionsRequired`, the root object and its version, the container's buffer view's keys and
+/// alignment, as [`validate_asset`] reports them. A loader that reads the container itself
+/// (the browser's) checks these first.
+pub fn root_problems(json: &Value) -> Vec<crate::Problem> {
+    let mut p = crate::validate::Problems::default();
+    let _ = check_root(json, &mut p);
+    p.finish()
+}
+
+/// [`root_problems`] into `p`; the root link when there is one.
+fn check_root(json: &Value, p: &mut crate::validate::Problems) -> Option<RootLink> {
     let root_at = format!("extensions.{EXTENSION_NAME}");
     let listed = |key: &str| {
         json.get(key)
@@ -1002,6 +1007,18 @@ fn validate_root(
             );
         }
     }
+    Some(link)
+}
+
+/// The root object, `extensionsUsed` / `extensionsRequired` and the container's buffer view
+/// (SPEC.md 3.2, 3.3); then the container itself. Returns the container when it could be read.
+fn validate_root(
+    json: &Value,
+    buffers: &[Vec<u8>],
+    p: &mut crate::validate::Problems,
+) -> Option<crate::Container> {
+    let root_at = format!("extensions.{EXTENSION_NAME}");
+    let link = check_root(json, p)?;
     let bytes = match buffer_view_bytes(json, buffers, link.buffer_view) {
         Ok(b) => b,
         Err(e) => {

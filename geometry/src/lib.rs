@@ -10,6 +10,8 @@
 //!   ids (every refinement), rings and neighbours (Loop), records and trees (colouring).
 //! * [`lattice`]: the 1-to-4 lattice of a refined triangle and its vertex numbering.
 //! * [`subdivide`](mod@subdivide): Loop subdivision, the CPU reference of the GPU Loop kernel.
+//! * [`loop_tables`]: the per-triangle flags, crease spokes and weights the GPU Loop kernel
+//!   reads beside the control mesh.
 //! * [`incidence`]: the triangles around each edge and vertex ([`flat::FlatTopology`]), which
 //!   flat refinement and the split read.
 //! * [`flat`]: flat (linear) refinement, the CPU reference of the GPU flat kernel.
@@ -36,6 +38,8 @@ pub mod incidence;
 pub mod lattice;
 #[forbid(unsafe_code)]
 pub mod lighting;
+#[forbid(unsafe_code)]
+pub mod loop_tables;
 #[forbid(unsafe_code)]
 pub mod normal;
 mod os;

@@ -147,6 +147,29 @@ pub enum AssetFormat {
     Hce,
 }
 
+impl AssetFormat {
+    /// The format of a file's bytes: from its first bytes (GLB and container identifiers),
+    /// else from `path`'s extension (`.gltf` JSON; `.hce`, whose reader then says what is wrong
+    /// with the identifier). `None` for anything else.
+    pub fn detect(path: &Path, bytes: &[u8]) -> Option<AssetFormat> {
+        let extension_is = |ext: &str| {
+            path.extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case(ext))
+        };
+        if bytes.starts_with(b"glTF") {
+            Some(AssetFormat::Glb)
+        } else if bytes.starts_with(HCE_IDENTIFIER) {
+            Some(AssetFormat::Hce)
+        } else if extension_is("gltf") || bytes.first() == Some(&b'{') {
+            Some(AssetFormat::Gltf)
+        } else if extension_is("hce") {
+            Some(AssetFormat::Hce)
+        } else {
+            None
+        }
+    }
+}
+
 /// An axis-aligned box.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bounds {
@@ -413,24 +436,8 @@ impl Asset {
             error,
         })?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        let is_gltf_ext = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("gltf"));
-        let format = if bytes.starts_with(b"glTF") {
-            AssetFormat::Glb
-        } else if bytes.starts_with(HCE_IDENTIFIER) {
-            AssetFormat::Hce
-        } else if is_gltf_ext || bytes.first() == Some(&b'{') {
-            AssetFormat::Gltf
-        } else if path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("hce"))
-        {
-            // Let the container reader say what is wrong with the identifier.
-            AssetFormat::Hce
-        } else {
-            return Err(AssetError::UnknownFormat { path: shown });
-        };
+        let format =
+            AssetFormat::detect(path, &bytes).ok_or(AssetError::UnknownFormat { path: shown })?;
         Self::from_bytes(path, format, &bytes, buffer_files(&dir), options)
     }
 

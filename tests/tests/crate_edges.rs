@@ -55,6 +55,11 @@ const RULES: &[(&str, &[&str], &[&str])] = &[
         &["hce-tools", "hce-runtime"],
     ),
     (
+        "hce-wasm",
+        &["hce-bake", "hce-reference", "hce-tools"],
+        &["hce-bake", "hce-reference", "hce-tools"],
+    ),
+    (
         "hce-samples",
         &[
             "hce-format",

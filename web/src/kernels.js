@@ -4,12 +4,10 @@
 // bind-group layout per entry point ('auto'), so every step stays within WebGPU's default
 // limit of 8 storage buffers per stage.
 import { HceError } from './errors.js';
-import { checkObject, MAX_LOOP_LEVEL, MAX_PATH_LEVEL } from './tables.js';
-import { flatTopology, loopTables, splitTables } from './topology.js';
-import { lightingWords } from './lighting.js';
+import { MAX_LOOP_LEVEL, MAX_PATH_LEVEL, objectTables } from './native.js';
 
-/** @typedef {import('./container.js').HceObject} HceObject */
-/** @typedef {'smooth' | 'nearest' | 'gouraud'} Reconstruction */
+/** @typedef {import('./native.js').HceObject} HceObject */
+/** @typedef {import('./native.js').Reconstruction} Reconstruction */
 
 /** Threads per workgroup of every 1-D kernel. */
 const WORKGROUP = 64;
@@ -66,9 +64,9 @@ const recordsWords = (o) => o.records;
  * @property {HceObject} object
  * @property {Reconstruction} reconstruction
  * @property {number} treeDepth
- * @property {import('./topology.js').FlatTopology} topology
- * @property {ReturnType<typeof loopTables> | null} loop
- * @property {import('./topology.js').SplitTables} split the split where the surface folds (F.5)
+ * @property {import('./native.js').ObjectTables['topology']} topology
+ * @property {import('./native.js').ObjectTables['loop']} loop
+ * @property {import('./native.js').ObjectTables['split']} split the split where the surface folds (F.5)
  * @property {number[]} offsets where the packed sections start in `topo`
  * @property {Record<string, GPUBuffer>} buffers
  */
@@ -167,16 +165,13 @@ export class Kernels {
    * @returns {UploadedObject}
    */
   upload(object, reconstruction = 'smooth') {
-    const checked = checkObject(object);
-    const topology = flatTopology(object, checked);
+    // Checked and built by the Rust of the native upload (hce.wasm): the same words.
+    const { treeDepth, topology, split, loop, light } = objectTables(object, reconstruction);
     const m = object.mesh;
-    let loop = null;
     // The split where the surface folds (SPEC.md F.5): its slot lists replace the vertex and
     // edge incidence, as loop_kernel.rs and flat.rs `upload_with` pack them.
-    const split = splitTables(object, topology);
     let packed;
-    if (object.kind === 'multiresolution') {
-      loop = loopTables(object, checked);
+    if (loop) {
       packed = packSections([
         m.triangles, m.ringOffsets, m.ring, m.spokeFlags, m.vertexFlags, m.cornerSpokes, m.edges,
         loop.triFlags, loop.crease, loop.weights, split.edgeSlotOffsets, split.edgeSlotSides,
@@ -189,16 +184,10 @@ export class Kernels {
         split.cornerSlotOffsets, split.cornerSlotCorners, split.cornerCopy, split.edgeCopy,
       ]);
     }
-    let light;
-    try {
-      light = reconstruction === 'nearest' ? new Uint32Array(1) : lightingWords(object, { gouraud: reconstruction === 'gouraud' });
-    } catch (e) {
-      throw new HceError(`objects[${object.index}]`, `'${object.name}': ${/** @type {Error} */ (e).message}`);
-    }
     return {
       object,
       reconstruction,
-      treeDepth: checked.treeDepth,
+      treeDepth,
       topology,
       loop,
       split,

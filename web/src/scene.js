@@ -6,12 +6,12 @@
 import { destroyRefined, destroyUploaded } from './kernels.js';
 import { multiply } from './math.js';
 import { DEFAULT_LOD, objectLevel, viewProjection } from './view.js';
-import { MAX_PATH_LEVEL } from './tables.js';
+import { MAX_PATH_LEVEL } from './native.js';
 
 /**
  * @typedef {import('./kernels.js').Kernels} Kernels
  * @typedef {import('./kernels.js').Reconstruction} Reconstruction
- * @typedef {import('./asset.js').Asset} Asset
+ * @typedef {import('./native.js').Asset} Asset
  * @typedef {import('./view.js').Camera} Camera
  */
 
@@ -38,7 +38,7 @@ export const DEFAULT_TRIANGLE_BUDGET = 16_000_000;
 
 /**
  * @typedef {object} SceneObject
- * @property {import('./asset.js').AssetObject} source
+ * @property {import('./native.js').AssetObject} source
  * @property {import('./kernels.js').UploadedObject | null} uploaded
  * @property {import('./kernels.js').RefinedBuffers | null} refined
  * @property {number | null} forced a level set by the user, or null for automatic

@@ -43,7 +43,7 @@ export function chooseLevel(bounds, meanEdgeLength, camera, viewportHeight, lod 
 
 /**
  * The level of an object over all its instances: the largest (scene.rs `level_for`).
- * @param {import('./asset.js').AssetObject} o
+ * @param {import('./native.js').AssetObject} o
  * @param {Camera} camera
  * @param {number} viewportHeight
  * @param {LodParams} [lod]
@@ -59,7 +59,7 @@ export function objectLevel(o, camera, viewportHeight, lod = DEFAULT_LOD) {
 
 /**
  * World bounds of everything drawn, or null when nothing is.
- * @param {import('./asset.js').Asset} asset
+ * @param {import('./native.js').Asset} asset
  * @returns {Bounds | null}
  */
 export function assetBounds(asset) {
@@ -113,7 +113,7 @@ function rayHits(o, d, t) {
 /**
  * The automatic camera of a scene (framing.rs `auto_scene_camera`): inside a closed room, in
  * front of a box open on one side, else from outside.
- * @param {import('./asset.js').Asset} asset
+ * @param {import('./native.js').Asset} asset
  * @param {Bounds} b world bounds
  * @param {number} aspect
  * @returns {{ camera: Camera, placement: 'outside' | 'inside' | 'opening' }}
@@ -156,7 +156,7 @@ export function autoSceneCamera(asset, b, aspect) {
 
 /**
  * The file's camera, else the automatic one (scene.rs `resolve_camera`, `SceneOrAuto`).
- * @param {import('./asset.js').Asset} asset
+ * @param {import('./native.js').Asset} asset
  * @param {number} aspect
  * @param {'scene-or-auto' | 'auto'} [choice]
  * @returns {{ camera: Camera, source: string } | null} null when nothing is drawn

@@ -183,7 +183,7 @@ async function open(bytes, name, resolveUri) {
   setStatus(`reading ${name}…`);
   scene?.destroy();
   scene = null;
-  const asset = await loadAsset(bytes, { resolveUri });
+  const asset = await loadAsset(bytes, { name, resolveUri });
   const next = new HceScene(runtime.kernels, asset, { reconstruction: /** @type {any} */ ($('recon')).value });
   next.upload();
   const forced = q.get('level');

@@ -55,8 +55,9 @@ use super::wgsl::{loop_source, loop_workgroup_source};
 use super::{AdapterKind, GpuContext, GpuError};
 use hce_geometry::flat::FlatTopology;
 use hce_geometry::lighting::Reconstruction;
+use hce_geometry::loop_tables::LoopKernelTables;
 use hce_geometry::split::SplitTables;
-use hce_geometry::subdivide::{prepare, MAX_LOOP_LEVEL};
+use hce_geometry::subdivide::MAX_LOOP_LEVEL;
 use hce_geometry::tables::validate_tables;
 
 /// Upper bound of the scratch buffer (bytes): the number of coarse triangles refined at once is
@@ -96,11 +97,10 @@ pub(super) struct Params {
 /// Sections packed into the `topo` buffer, in this order (see [`LoopKernel::upload`]).
 pub(super) const SECTIONS: usize = 17;
 
-/// Bits of the per-triangle flags word (`OWNS_EDGE` … in `loop.wgsl`).
-pub(super) const OWNS_EDGE: u32 = 1;
-pub(super) const OWNS_VERTEX: u32 = 8;
-pub(super) const INTERIOR: u32 = 64;
-pub(super) const SHARP: u32 = 512;
+/// Bits of the per-triangle flags word (`OWNS_EDGE` … in `loop.wgsl`), for the constants that
+/// `hce_constants.wgsl` is checked against.
+#[cfg(test)]
+pub(super) use hce_geometry::loop_tables::{INTERIOR, OWNS_EDGE, OWNS_VERTEX, SHARP};
 
 /// Triangles per workgroup the cooperative kernel aims for at levels 0 to 5 (halved while their
 /// patches do not fit the workgroup memory): enough triangles that the 64 lanes have work at the
@@ -374,58 +374,17 @@ impl LoopKernel {
         };
         validate_tables(object)?;
         let mesh = &object.mesh;
-        let prep = prepare(mesh).map_err(|e| invalid(e.to_string()))?;
+        let LoopKernelTables {
+            tri_flags,
+            crease,
+            weights,
+            max_valence,
+            ring_points,
+        } = LoopKernelTables::new(mesh).map_err(|e| invalid(e.to_string()))?;
         let topology = FlatTopology::new(&object.name, mesh)?;
         // The split at sharp edges (SPEC.md F.5): its slot lists replace the topology's vertex
         // and edge incidence, so that each region of a split vertex gathers its own side only.
         let split = SplitTables::from_topology(mesh, &topology, ObjectKind::Multiresolution);
-        let nv = mesh.vertex_count();
-        let nf = mesh.triangle_count();
-        let max_valence = (0..nv)
-            .map(|v| mesh.ring_offsets[v + 1] - mesh.ring_offsets[v])
-            .max()
-            .unwrap_or(0);
-        let valence = |v: u32| mesh.ring_offsets[v as usize + 1] - mesh.ring_offsets[v as usize];
-        let ring_points = (0..nf)
-            .map(|t| mesh.triangle(t).iter().map(|&v| valence(v)).sum::<u32>())
-            .max()
-            .unwrap_or(0)
-            .next_multiple_of(8)
-            .max(8);
-        let mut tri_flags = vec![0u32; nf];
-        for (t, flags) in tri_flags.iter_mut().enumerate() {
-            let tri = mesh.triangle(t);
-            // `e` is both a corner and an edge index (edge e starts at corner e).
-            #[allow(clippy::needless_range_loop)]
-            for e in 0..3 {
-                let s = 3 * t + e;
-                if prep.owns_edge[s] {
-                    *flags |= OWNS_EDGE << e;
-                }
-                if prep.vertex_owner[tri[e] as usize] == s as u32 {
-                    *flags |= OWNS_VERTEX << e;
-                }
-                if mesh.neighbours[s] != hce_format::NO_NEIGHBOUR {
-                    *flags |= INTERIOR << e;
-                }
-                let spoke = mesh.ring_offsets[tri[e] as usize] + mesh.corner_spokes[s];
-                if mesh.spoke_flags[spoke as usize] & hce_format::SPOKE_SHARP != 0 {
-                    *flags |= SHARP << e;
-                }
-            }
-        }
-        let crease: Vec<u32> = prep.crease_spokes.iter().flatten().copied().collect();
-        // Per valence k: cf(k) and 0.75 / k, both rounded on the CPU exactly as subdivide.rs
-        // rounds them (a WGSL division need not be correctly rounded).
-        let weights: Vec<u32> = (0..=max_valence.max(6) as usize)
-            .flat_map(|k| {
-                let w = if k < 2 { 0.0 } else { 0.75 / k as f32 };
-                [
-                    prep.cf.get(k).copied().unwrap_or(0.0).to_bits(),
-                    w.to_bits(),
-                ]
-            })
-            .collect();
         let (packed, offsets) = pack_sections(
             ctx,
             [

@@ -8,8 +8,7 @@
 //
 // Nothing global: the plugin works on the parser it is given and the meshes it built.
 import { BufferAttribute, BufferGeometry, MeshBasicMaterial } from 'three';
-import { readContainer } from '../container.js';
-import { checkObject } from '../tables.js';
+import { loadAsset } from '../native.js';
 import { fetchWgsl, KernelSources } from '../wgsl.js';
 import { Kernels, destroyRefined, destroyUploaded } from '../kernels.js';
 import { flatLevel } from '../scene.js';
@@ -18,7 +17,7 @@ const EXT = 'EXT_hce_baked_lighting';
 
 /**
  * @typedef {object} PluginOptions
- * @property {number | ((object: import('../container.js').HceObject) => number)} [level] the Loop
+ * @property {number | ((object: import('../native.js').HceObject) => number)} [level] the Loop
  *   level of multiresolution objects (default 3); flat objects are split to their tree depth
  * @property {import('../kernels.js').Reconstruction} [reconstruction] default 'smooth'
  * @property {boolean} [unlit] replace each refined mesh's material by an unlit one showing the
@@ -61,8 +60,9 @@ export class HceGLTFPlugin {
     const root = json.extensions?.[EXT];
     if (!root) return;
     const view = await this.parser.getDependency('bufferView', root.bufferView);
-    const container = readContainer(new Uint8Array(view));
-    /** @type {Map<string, { object: import('../container.js').HceObject, first: number }>} */
+    // The container alone, read and checked by hce.wasm as `hce` reads a `.hce` file.
+    const container = { objects: (await loadAsset(new Uint8Array(view), { name: 'container.hce' })).objects.map((o) => o.object) };
+    /** @type {Map<string, { object: import('../native.js').HceObject, first: number }>} */
     const links = new Map();
     (json.meshes ?? []).forEach((/** @type {any} */ mesh, /** @type {number} */ m) => {
       (mesh.primitives ?? []).forEach((/** @type {any} */ prim, /** @type {number} */ p) => {
@@ -74,12 +74,12 @@ export class HceGLTFPlugin {
     // One refinement per object, shared by its primitives and instances.
     /** @type {Map<number, Promise<{ level: number, positions: Float32Array, normals: Float32Array | null, colours: Float32Array, indices: Uint32Array }>>} */
     const refined = new Map();
-    const refine = (/** @type {import('../container.js').HceObject} */ object) => {
+    const refine = (/** @type {import('../native.js').HceObject} */ object) => {
       let p = refined.get(object.index);
       if (!p) {
         p = (async () => {
           const level = object.kind === 'flat'
-            ? flatLevel(checkObject(object).treeDepth, object.records.length / 4)
+            ? flatLevel(object.treeDepth, object.records.length / 4)
             : typeof this.options.level === 'function' ? this.options.level(object) : this.options.level ?? 3;
           const uploaded = this.kernels.upload(object, this.options.reconstruction ?? 'smooth');
           const buffers = this.kernels.refine(uploaded, level);

@@ -1,0 +1,130 @@
+//! The interface natively: what `load` and `tables` return for the conformance suite's files,
+//! against the crates they wrap called directly, and damaged input as an error value.
+
+use std::path::{Path, PathBuf};
+
+use hce_geometry::lighting::{LightingTable, Reconstruction};
+use hce_geometry::loop_tables::LoopKernelTables;
+use hce_runtime::Asset;
+use hce_wasm::{load, tables, Reader, Writer};
+
+fn conformance(file: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../conformance")
+        .join(file)
+}
+
+fn load_request(name: &str, bytes: &[u8]) -> Vec<u32> {
+    let mut w = Writer::default();
+    w.string(name);
+    w.u32(1);
+    w.bytes(bytes);
+    w.u32(0);
+    w.finish()
+}
+
+#[test]
+fn a_damaged_container_is_the_loaders_error_without_the_file_name() {
+    let path = conformance("valid/triangle.hce");
+    let mut bytes = std::fs::read(&path).unwrap();
+    bytes[40] ^= 1;
+    let dir = tempfile_dir();
+    let damaged = dir.join("t.hce");
+    std::fs::write(&damaged, &bytes).unwrap();
+    let native = Asset::open(&damaged).unwrap_err().to_string();
+    let got = load(&load_request("t.hce", &bytes)).unwrap_err();
+    assert_eq!(format!("{}: {got}", damaged.display()), native);
+    assert!(got.contains("checksum"), "{got}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+fn tempfile_dir() -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("hce-wasm-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn truncated_requests_are_errors_not_traps() {
+    let request = load_request("a.glb", b"glTF\x02\0\0\0");
+    for n in 0..request.len() {
+        assert!(load(&request[..n]).is_err(), "{n} words");
+    }
+    assert!(tables(&[]).is_err());
+    assert!(tables(&[0, 5]).is_err());
+}
+
+#[test]
+fn tables_are_the_crates_own() {
+    let bytes = std::fs::read(conformance("valid/cornell-box.glb")).unwrap();
+    let asset = Asset::open(conformance("valid/cornell-box.glb")).unwrap();
+    let out = load(&load_request("cornell-box.glb", &bytes)).unwrap();
+    let mut r = Reader::new(&out);
+    assert_eq!(r.u32().unwrap(), 1, "GLB");
+    r.string().unwrap();
+    for _ in 0..r.u32().unwrap() {
+        r.string().unwrap();
+    }
+    assert_eq!(r.u32().unwrap(), 1, "a camera");
+    r.string().unwrap();
+    for _ in 0..3 {
+        r.floats().unwrap();
+    }
+    r.f32_bits().unwrap();
+    r.u32().unwrap();
+    r.f32_bits().unwrap();
+    assert_eq!(r.u32().unwrap() as usize, asset.objects.len());
+    for o in &asset.objects {
+        assert_eq!(r.u32().unwrap(), o.index);
+        // The object as `tables` reads it: the same words, then a reconstruction.
+        let start = r.position();
+        assert_eq!(r.string().unwrap(), o.object.name);
+        // Kind, geometry hash and bit length.
+        for _ in 0..5 {
+            r.u32().unwrap();
+        }
+        r.floats().unwrap();
+        for _ in 0..12 {
+            r.words().unwrap();
+        }
+        let object_words = &out[start..r.position()];
+        assert_eq!(r.u32().unwrap(), o.tree_depth);
+        r.floats().unwrap();
+        r.f32_bits().unwrap();
+        for _ in 0..r.u32().unwrap() {
+            r.u32().unwrap();
+            r.string().unwrap();
+            r.floats().unwrap();
+        }
+        let mut w = Writer::default();
+        w.u32(o.index);
+        let mut request = w.finish();
+        request.extend_from_slice(object_words);
+        request.push(0);
+        let t = tables(&request).unwrap();
+        let mut r = Reader::new(&t);
+        assert_eq!(r.u32().unwrap(), o.tree_depth);
+        for _ in 0..3 {
+            r.u32().unwrap();
+        }
+        r.words().unwrap();
+        r.u32().unwrap();
+        r.u32().unwrap();
+        for _ in 0..7 {
+            r.words().unwrap();
+        }
+        if r.u32().unwrap() == 1 {
+            let native = LoopKernelTables::new(&o.object.mesh).unwrap();
+            assert_eq!(r.words().unwrap(), native.tri_flags);
+            assert_eq!(r.words().unwrap(), native.crease);
+            assert_eq!(r.words().unwrap(), native.weights);
+            assert_eq!(r.u32().unwrap(), native.max_valence);
+            assert_eq!(r.u32().unwrap(), native.ring_points);
+        }
+        let light = LightingTable::build_with(&o.object, Reconstruction::Smooth)
+            .unwrap()
+            .to_words()
+            .unwrap();
+        assert_eq!(r.words().unwrap(), light, "{}", o.object.name);
+    }
+}
