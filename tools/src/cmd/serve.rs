@@ -44,19 +44,15 @@ macro_rules! embed {
 /// `web/src/` and every `.wgsl` of `runtime/src/gpu/` is here.
 const EMBEDDED: &[Embedded] = embed! {
     "/web/viewer.html" => "web/viewer.html",
-    "/web/src/asset.js" => "web/src/asset.js",
-    "/web/src/container.js" => "web/src/container.js",
     "/web/src/device.js" => "web/src/device.js",
     "/web/src/errors.js" => "web/src/errors.js",
     "/web/src/index.js" => "web/src/index.js",
     "/web/src/kernels.js" => "web/src/kernels.js",
-    "/web/src/lighting.js" => "web/src/lighting.js",
     "/web/src/math.js" => "web/src/math.js",
+    "/web/src/native.js" => "web/src/native.js",
     "/web/src/pipelines.js" => "web/src/pipelines.js",
     "/web/src/present.wgsl" => "web/src/present.wgsl",
     "/web/src/scene.js" => "web/src/scene.js",
-    "/web/src/tables.js" => "web/src/tables.js",
-    "/web/src/topology.js" => "web/src/topology.js",
     "/web/src/view.js" => "web/src/view.js",
     "/web/src/viewer.js" => "web/src/viewer.js",
     "/web/src/wgsl.js" => "web/src/wgsl.js",
@@ -76,6 +72,24 @@ const EMBEDDED: &[Embedded] = embed! {
     "/runtime/src/gpu/render.wgsl" => "runtime/src/gpu/render.wgsl",
     "/runtime/src/gpu/render_resolve.wgsl" => "runtime/src/gpu/render_resolve.wgsl",
 };
+
+/// Where the page's `hce.wasm` is served from. It is a build output (`web/build-wasm.sh`), not a
+/// source file, so it cannot be embedded at compile time: `HCE_WASM` names it, else an
+/// `hce.wasm` beside the executable, else the one the script writes in this source tree.
+fn wasm_path() -> Option<PathBuf> {
+    let candidates = [
+        std::env::var_os("HCE_WASM").map(PathBuf::from),
+        std::env::current_exe()
+            .ok()
+            .and_then(|e| e.parent().map(|d| d.join("hce.wasm"))),
+        Some(Path::new(env!("CARGO_MANIFEST_DIR")).join("../web/src/hce.wasm")),
+    ];
+    candidates.into_iter().flatten().find(|p| p.is_file())
+}
+
+const WASM_URL: &str = "/web/src/hce.wasm";
+const WASM_MISSING: &str =
+    "hce.wasm not found: build it with web/build-wasm.sh and name it in HCE_WASM (or put it beside the hce executable)";
 
 /// The longest request head read before the request is refused.
 const MAX_HEAD: u64 = 16 * 1024;
@@ -98,6 +112,8 @@ fn content_type(path: &str) -> &'static str {
         "wgsl" => "text/plain; charset=utf-8",
         "gltf" => "model/gltf+json",
         "glb" => "model/gltf-binary",
+        // WebAssembly.instantiateStreaming insists on this type.
+        "wasm" => "application/wasm",
         _ => "application/octet-stream",
     }
 }
@@ -142,6 +158,12 @@ fn route(target: &str, asset: &Asset) -> Reply {
     }
     if let Some(&(url, bytes)) = EMBEDDED.iter().find(|(url, _)| *url == path) {
         return Reply::Embedded(bytes, content_type(url));
+    }
+    if path == WASM_URL {
+        return match wasm_path() {
+            Some(p) => Reply::File(p, content_type(WASM_URL)),
+            None => Reply::Status(404, WASM_MISSING),
+        };
     }
     let Some(rest) = path.strip_prefix("/file/") else {
         return Reply::Status(404, "not found");
@@ -279,6 +301,9 @@ pub fn run(args: ServeArgs) -> Result<()> {
         asset.url()
     );
     println!("(127.0.0.1 only; Ctrl-C stops it)");
+    if wasm_path().is_none() {
+        eprintln!("warning: {WASM_MISSING}; the page cannot read the file without it");
+    }
     std::io::stdout().flush()?;
     for (served, stream) in (1u64..).zip(listener.incoming()) {
         // A client that misbehaves affects its own connection only.
