@@ -404,6 +404,18 @@ mod tests {
     }
 
     #[test]
+    fn the_wasm_is_served_from_hce_wasm_as_application_wasm() {
+        let dir = tempfile::tempdir().unwrap();
+        let wasm = dir.path().join("built.wasm");
+        std::fs::write(&wasm, b"\0asm").unwrap();
+        // Only this test sets HCE_WASM, and only `wasm_path` reads it.
+        std::env::set_var("HCE_WASM", &wasm);
+        let reply = route("/web/src/hce.wasm?v=1", &asset(false));
+        std::env::remove_var("HCE_WASM");
+        assert_eq!(reply, Reply::File(wasm, "application/wasm"));
+    }
+
+    #[test]
     fn a_real_connection_gets_the_asset_bytes() {
         let dir = tempfile::tempdir().unwrap();
         let file = dir.path().join("a.hce");
