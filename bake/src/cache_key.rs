@@ -33,8 +33,8 @@ use hce_meshio::scene::{input_files, InputFile};
 use serde_json::Value;
 use sha2::{Digest, Sha256};
 
-use crate::import::ImportError;
 use crate::pipeline::{output_format, parameters_json, PipelineError, PipelineOptions};
+use hce_meshio::scene::ImportError;
 
 /// The version of the key document's shape.
 pub const KEY_FORMAT: u32 = 1;

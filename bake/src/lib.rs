@@ -5,15 +5,14 @@
 //! Entry points: build a [`Scene`] (or import one), choose normal sets with
 //! [`select_normal_sets`], solve with [`bake`], and turn the solution into container objects with
 //! [`encode_object`]. [`bake_file`] does all of it for a glTF or OBJ file. Everything public is
-//! re-exported here by name; `import` (which re-exports the scene importer of `hce_meshio`) and
-//! `output` stay modules.
+//! re-exported here by name, and no module is public. Scenes are read by `hce_meshio::scene`
+//! (glTF and OBJ through hce's one guarded reader), whose `ToSolver` turns one into a [`Scene`].
 #![forbid(unsafe_code)]
 
 mod cache_key;
 mod encode;
-pub mod import;
 mod normal_sets;
-pub mod output;
+mod output;
 mod pipeline;
 mod radiosity;
 mod scene;
@@ -24,6 +23,7 @@ pub use encode::{encode_object, vertex_colours};
 pub use normal_sets::{
     select_normal_set, select_normal_sets, NormalSet, NormalSetParams, NormalSetReport,
 };
+pub use output::{bake_gltf, obj_to_gltf, write_baked_gltf, BakedAsset, ObjectLink, OutputError};
 pub use pipeline::{bake_file, BakeOutcome, ObjectSummary, PipelineError, PipelineOptions};
 pub use radiosity::element::{jittered_point, ElemKey, Rng};
 pub use radiosity::formfactor::{point_to_polygon, stratified_points};

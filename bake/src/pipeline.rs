@@ -49,10 +49,10 @@ use glam::{Mat3, Vec3};
 use hce_format::{Container, ControlMesh, Metadata, Object, ObjectKind};
 use hce_geometry::{build_control_mesh, subdivide, weld, Creases, TopologyConfig};
 
-use crate::import::{import_scene, ImportOptions, ImportedScene, ToSolver};
 use crate::normal_sets::{select_normal_sets, NormalSetParams};
 use crate::output::{bake_gltf, ObjectLink};
 use crate::radiosity::{BakeParams, Progress, TriangleSolution};
+use hce_meshio::scene::{import_scene, ImportOptions, ImportedScene, ToSolver};
 
 /// Everything `hce bake` can set.
 #[derive(Clone, Debug)]
@@ -84,7 +84,7 @@ impl Default for PipelineOptions {
 #[derive(Debug, thiserror::Error)]
 pub enum PipelineError {
     #[error(transparent)]
-    Import(#[from] crate::import::ImportError),
+    Import(#[from] hce_meshio::scene::ImportError),
     #[error(transparent)]
     Bake(#[from] crate::BakeError),
     #[error(transparent)]

@@ -20,8 +20,8 @@ mod common;
 use std::path::Path;
 
 use glam::Vec3;
-use hce_bake::import::{import_scene, ImportOptions, ToSolver};
 use hce_bake::{bake, BakeParams};
+use hce_meshio::scene::{import_scene, ImportOptions, ToSolver};
 use hce_reference::PathTracer;
 
 /// A planar surface: an object's triangles that share one normal.

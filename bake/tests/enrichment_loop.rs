@@ -18,13 +18,13 @@
 use std::path::Path;
 
 use glam::{Quat, Vec3};
-use hce_bake::import::{import_scene, ImportOptions, ToSolver};
 use hce_bake::NormalSetParams;
 use hce_bake::{bake, BakeParams, SolverObject};
 use hce_bake::{bake_file, PipelineOptions};
 use hce_format::{rgb9e5, Object, ObjectKind};
 use hce_geometry::colour::apply_baked_colours;
 use hce_geometry::{subdivide, Creases, Refined};
+use hce_meshio::scene::{import_scene, ImportOptions, ToSolver};
 use serde_json::json;
 
 /// The direction the sunlight travels.

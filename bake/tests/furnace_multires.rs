@@ -8,13 +8,13 @@
 
 use std::path::Path;
 
-use hce_bake::import::ImportOptions;
 use hce_bake::BakeParams;
 use hce_bake::NormalSetParams;
 use hce_bake::{bake_file, PipelineOptions};
 use hce_format::{Object, ObjectKind};
 use hce_geometry::colour::{apply_baked_colours_with, Reconstruction};
 use hce_geometry::{subdivide, Creases};
+use hce_meshio::scene::ImportOptions;
 use serde_json::json;
 
 const EMISSION: f32 = 0.4;

@@ -290,22 +290,22 @@ fn seeds_are_accepted_and_mutations_never_panic() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     // The seeds themselves import: the mutations start from inputs that reach deep.
     let cornell = sample("cornell-box.glb");
-    let s = hce_bake::import::import_scene_bytes(
-        hce_bake::import::SceneBytes::Gltf(&cornell),
+    let s = hce_meshio::scene::import_scene_bytes(
+        hce_meshio::scene::SceneBytes::Gltf(&cornell),
         &Default::default(),
     )
     .unwrap();
     assert_eq!(s.objects.len(), 8);
-    let s = hce_bake::import::import_scene_bytes(
-        hce_bake::import::SceneBytes::Gltf(quad_gltf().as_bytes()),
+    let s = hce_meshio::scene::import_scene_bytes(
+        hce_meshio::scene::SceneBytes::Gltf(quad_gltf().as_bytes()),
         &Default::default(),
     )
     .unwrap();
     assert_eq!((s.objects.len(), s.lights.len()), (1, 1));
     assert!(s.objects[0].multires, "node extras select multiresolution");
     assert_eq!(s.materials[0].emission, [4.0, 2.0, 0.0]);
-    let s = hce_bake::import::import_scene_bytes(
-        hce_bake::import::SceneBytes::Obj {
+    let s = hce_meshio::scene::import_scene_bytes(
+        hce_meshio::scene::SceneBytes::Obj {
             obj: OBJ.as_bytes(),
             mtl: Some(MTL.as_bytes()),
         },
@@ -375,8 +375,8 @@ fn regressions_still_pass() {
     // The first bug: tobj 4.0 panics on a colour line with two values; it is now a warning.
     let bug = std::fs::read(dir.join("import_obj/tobj-colour-with-two-values.bin")).unwrap();
     let (obj, mtl) = bug.split_at(bug.iter().position(|&b| b == 0).unwrap());
-    let s = hce_bake::import::import_scene_bytes(
-        hce_bake::import::SceneBytes::Obj {
+    let s = hce_meshio::scene::import_scene_bytes(
+        hce_meshio::scene::SceneBytes::Obj {
             obj,
             mtl: Some(&mtl[1..]),
         },

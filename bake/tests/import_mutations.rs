@@ -2,8 +2,8 @@
 //! extreme values): the importer and the output writer must return a value or an error, never
 //! panic or allocate without bound.
 
-use hce_bake::import::{import_scene, ImportOptions};
-use hce_bake::output::{write_baked_gltf, ObjectLink};
+use hce_bake::{write_baked_gltf, ObjectLink};
+use hce_meshio::scene::{import_scene, ImportOptions};
 use serde_json::Value;
 use std::path::Path;
 

@@ -4,10 +4,10 @@
 //!
 //! Set `HCE_KEEP_OUTPUT=DIR` to keep the baked samples (for the Khronos glTF-Validator).
 
-use hce_bake::import::{import_scene, ImportOptions, ImportedScene};
-use hce_bake::output::{bake_gltf, write_baked_gltf, ObjectLink, OutputError};
+use hce_bake::{bake_gltf, write_baked_gltf, ObjectLink, OutputError};
 use hce_format::*;
 use hce_format::{container_bytes, primitive_geometry, primitive_links, GltfAsset as Asset};
+use hce_meshio::scene::{import_scene, ImportOptions, ImportedScene};
 use std::path::{Path, PathBuf};
 
 fn sample(name: &str) -> PathBuf {

@@ -4,8 +4,8 @@
 #[path = "../../meshio/tests/common/quad.rs"]
 mod quad;
 
-use hce_bake::import::{import_scene, ImportOptions};
-use hce_bake::output::{write_baked_gltf, ObjectLink};
+use hce_bake::{write_baked_gltf, ObjectLink};
+use hce_meshio::scene::{import_scene, ImportOptions};
 use quad::quad_scene;
 use std::path::Path;
 

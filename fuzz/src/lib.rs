@@ -7,8 +7,8 @@
 //! stage (the solver's scene checks; welding, the control mesh and one Loop level) without a
 //! panic either.
 
-use hce_bake::import::{import_scene_bytes, ImportOptions, ImportedScene, SceneBytes, ToSolver};
 use hce_geometry::{build_control_mesh, subdivide, weld, TopologyConfig};
+use hce_meshio::scene::{import_scene_bytes, ImportOptions, ImportedScene, SceneBytes, ToSolver};
 
 /// Meshes larger than this are not subdivided (the subdivision's cost, not its safety, grows).
 const SUBDIVIDE_LIMIT: usize = 4096;

@@ -5,12 +5,12 @@
 
 use std::path::{Path, PathBuf};
 
-use hce_bake::import::ImportOptions;
 use hce_bake::BakeParams;
 use hce_bake::{bake_file, BakeOutcome, PipelineOptions};
 use hce_format::ObjectKind;
 use hce_format::{container_bytes, linked_geometries, primitive_links, GltfAsset as Asset};
 use hce_geometry::Creases;
+use hce_meshio::scene::ImportOptions;
 
 fn sample(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

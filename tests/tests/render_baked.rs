@@ -17,11 +17,11 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use hce_bake::import::ImportOptions;
 use hce_bake::BakeParams;
 use hce_bake::{bake_file, PipelineOptions};
 use hce_format::ObjectKind;
 use hce_geometry::Creases;
+use hce_meshio::scene::ImportOptions;
 use hce_runtime::asset::{Asset, AssetFormat, OpenOptions};
 
 /// Largest accepted mean absolute difference from the golden image, in 8-bit steps.

@@ -118,10 +118,10 @@ fn decisive(c: &(dyn std::error::Error + 'static)) -> Option<Status> {
             PipelineError::Bake(hce_bake::BakeError::InvalidParameter(_)) => Some(Status::Usage),
             PipelineError::Object { .. } => Some(Status::Invalid),
             PipelineError::Write(_) | PipelineError::FileWrite(_) => Some(Status::Io),
-            PipelineError::Output(hce_bake::output::OutputError::Write(_)) => Some(Status::Io),
+            PipelineError::Output(hce_bake::OutputError::Write(_)) => Some(Status::Io),
             PipelineError::Output(_) => Some(Status::Other),
             // Transparent variants: their inner error is not in the chain of causes.
-            PipelineError::Import(hce_bake::import::ImportError::Io { .. }) => Some(Status::Io),
+            PipelineError::Import(hce_meshio::scene::ImportError::Io { .. }) => Some(Status::Io),
             PipelineError::Import(_) | PipelineError::Bake(_) => Some(Status::Invalid),
         };
     }

@@ -4,7 +4,7 @@
 //! and `Ke`. `map_Kd` textures are used by the baker but not carried into the output.
 
 use super::{push, OutputError, ARRAY_BUFFER, FLOAT};
-use crate::import::ImportedScene;
+use hce_meshio::scene::ImportedScene;
 use serde_json::{json, Value};
 
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;

@@ -12,9 +12,9 @@ mod from_obj;
 
 pub use from_obj::obj_to_gltf;
 
-use crate::import::{ImportedScene, SourceFormat};
 use hce_format::{embed_container, link_primitive, write_glb, GltfAsset as Asset, PrimitiveLink};
 use hce_meshio::gltf_guard::{percent_encode, read_uri};
+use hce_meshio::scene::{ImportedScene, SourceFormat};
 use hce_meshio::write_atomic;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};

@@ -1,12 +1,60 @@
 //! The pieces of a render path written once, for the headless renderer (`render.rs`, `hce
 //! render`) and a windowed viewer (`hce view`): a render pipeline of a module's `vs_main` and
 //! `fs_main` into one colour target, the 2-D textures it draws into, a render pass over them,
-//! and the read-back of a texture.
+//! the bind-group layout entries of its explicit layouts (the resolve and the tone map), and the
+//! read-back of a texture.
 
 use super::{GpuContext, GpuError};
 
 /// The depth buffer's format; a pass clears it to 1.0 (nearer surfaces have smaller depths).
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// A layout entry for a uniform block at `binding`.
+pub fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// A layout entry for a read-write storage buffer at `binding`.
+pub fn storage_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: false },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// A layout entry for a 2-D floating-point texture at `binding`, read with `textureLoad` (not
+/// filterable: the linear images are `Rgba32Float`).
+pub fn float_texture_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    multisampled: bool,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled,
+        },
+        count: None,
+    }
+}
 
 /// What a render pipeline ([`render_pipeline`]) draws and into what.
 #[derive(Clone, Debug)]

@@ -49,7 +49,10 @@ mod util;
 mod wgsl;
 
 pub use context::{AdapterDescription, AdapterKind, ContextOptions, GpuContext};
-pub use draw::{colour_pass, read_texture, render_pipeline, target_texture, PipelineSpec};
+pub use draw::{
+    colour_pass, float_texture_entry, read_texture, render_pipeline, storage_entry, target_texture,
+    uniform_entry, PipelineSpec,
+};
 pub use flat::{refine_flat, refine_flat_with, FlatKernel, FlatObject, FlatOutput, KernelTiming};
 pub use flat_batch::BATCH_MAX_FINE;
 pub use framing::{auto_scene_camera, Placement};

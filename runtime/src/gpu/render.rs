@@ -19,7 +19,10 @@
 
 use glam::{Mat4, Vec3, Vec4};
 
-use super::draw::{colour_pass, read_texture, render_pipeline, target_texture, PipelineSpec};
+use super::draw::{
+    colour_pass, float_texture_entry, read_texture, render_pipeline, storage_entry, target_texture,
+    uniform_entry, PipelineSpec,
+};
 use super::framing::auto_camera;
 use super::lod::Camera;
 use super::util::{bind_buffers, uniform_init};
@@ -533,36 +536,9 @@ fn resolve(
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("hce resolve"),
         entries: &[
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 1,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: true,
-                },
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 2,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: false },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
+            uniform_entry(0, wgpu::ShaderStages::COMPUTE),
+            float_texture_entry(1, wgpu::ShaderStages::COMPUTE, true),
+            storage_entry(2, wgpu::ShaderStages::COMPUTE),
         ],
     });
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {

@@ -12,12 +12,12 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use hce_bake::import::ImportOptions;
 use hce_bake::NormalSetParams;
 use hce_bake::{bake_file, BakeOutcome, PipelineOptions};
 use hce_bake::{cache_key, BakeParams, CacheKey, KEY_FORMAT};
 use hce_format::ObjectKind;
 use hce_geometry::Creases;
+use hce_meshio::scene::ImportOptions;
 use indicatif::{ProgressBar, ProgressStyle};
 
 #[derive(Args)]

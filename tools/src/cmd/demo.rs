@@ -15,9 +15,9 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
-use hce_bake::import::ImportOptions;
 use hce_bake::{bake_file, PipelineOptions};
 use hce_geometry::Creases;
+use hce_meshio::scene::ImportOptions;
 
 use super::render::{parse_size, write_exr, write_png};
 use super::validate::{problems, ValidateArgs};

@@ -7,8 +7,8 @@
 use anyhow::Result;
 use glam::Mat4;
 use hce_runtime::gpu::{
-    colour_pass, read_texture, render_pipeline, target_texture, GpuContext, MeshDraw, MeshPipeline,
-    PipelineSpec,
+    colour_pass, float_texture_entry, read_texture, render_pipeline, target_texture, uniform_entry,
+    GpuContext, MeshDraw, MeshPipeline, PipelineSpec,
 };
 
 /// The linear image format the scene is drawn in: `hce render`'s, so that the window shows the
@@ -49,26 +49,8 @@ impl FrameRenderer {
         let tone_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("hce view tone map"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                float_texture_entry(0, wgpu::ShaderStages::FRAGMENT, false),
+                uniform_entry(1, wgpu::ShaderStages::FRAGMENT),
             ],
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
