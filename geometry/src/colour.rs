@@ -31,10 +31,12 @@
 
 use hce_format::{rgb9e5, Object};
 
+use crate::adaptive_flat::AdaptiveFlat;
 use crate::lattice::subtriangle_cells;
 pub use crate::lighting::Reconstruction;
 use crate::lighting::{
     triangle_lighting, LightingError, LightingTable, TriangleLighting, EVAL_LATTICE_BITS,
+    TREE_LATTICE_BITS,
 };
 use crate::subdivide::Refined;
 
@@ -217,6 +219,83 @@ fn smooth_colours(
     Ok(avg.finish())
 }
 
+/// Per vertex linear RGB colour of flat `object` drawn with its adaptive refinement `mesh`
+/// (SPEC.md F.7.1): the field of G.4 at each triangle corner's point (on the 4096 lattice, moved
+/// to the evaluation lattice), averaged at the vertex weighted by triangle area; with the
+/// nearest-normal rule (G.5), each triangle's leaf colour for the normal nearest its own.
+pub fn adaptive_flat_colours(
+    object: &Object,
+    mesh: &AdaptiveFlat,
+    reconstruction: Reconstruction,
+) -> Result<Vec<[f32; 3]>, ColourError> {
+    if mesh.triangle_start.len() != object.triangles.len() + 1 {
+        return Err(ColourError::TriangleCount {
+            object: object.name.clone(),
+            refined: mesh.triangle_start.len().saturating_sub(1),
+            records: object.triangles.len(),
+        });
+    }
+    let shift = EVAL_LATTICE_BITS - TREE_LATTICE_BITS;
+    let table = match reconstruction {
+        Reconstruction::Smooth | Reconstruction::Gouraud => {
+            Some(LightingTable::build_with(object, reconstruction)?)
+        }
+        Reconstruction::NearestNormal => None,
+    };
+    let mut avg = VertexAverage::new(mesh.positions.len());
+    for t in 0..object.triangles.len() {
+        let lighting = triangle_lighting(object, t)?;
+        let range = mesh.triangle_start[t] as usize..mesh.triangle_start[t + 1] as usize;
+        for f in range {
+            let tri = mesh.indices[f];
+            let p = tri.map(|i| mesh.positions[i as usize]);
+            let area = area_of(p);
+            match &table {
+                Some(table) => {
+                    for (&v, q) in tri.iter().zip(&mesh.points[f]) {
+                        let normal = mesh.normals[v as usize];
+                        let rgb = table.evaluate(t, q[0] << shift, q[1] << shift, normal);
+                        avg.add(v as usize, area, rgb.map(f64::from));
+                    }
+                }
+                None => {
+                    let c = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+                    let j = nearest_normal(lighting.normals, c);
+                    let nc = lighting.normals.len();
+                    let colour = lighting
+                        .colours
+                        .get(mesh.leaves[f] as usize * nc + j)
+                        .copied()
+                        .ok_or_else(|| ColourError::Index {
+                            object: object.name.clone(),
+                            face: f,
+                        })?;
+                    let rgb = rgb9e5::decode(colour).map(f64::from);
+                    for &i in &tri {
+                        avg.add(i as usize, area, rgb);
+                    }
+                }
+            }
+        }
+    }
+    Ok(avg.finish())
+}
+
+/// The normal of `normals` with the largest dot product with `face` (unnormalised): the same
+/// argmax as with the unit normal. Ties keep the first normal, the geometric one.
+fn nearest_normal(normals: &[[f32; 3]], face: [f64; 3]) -> usize {
+    let mut best = 0;
+    let mut best_dot = f64::NEG_INFINITY;
+    for (j, nrm) in normals.iter().enumerate() {
+        let d = dot(face, nrm.map(f64::from));
+        if d > best_dot {
+            best_dot = d;
+            best = j;
+        }
+    }
+    best
+}
+
 fn nearest_normal_colours(
     object: &Object,
     refined: &Refined,
@@ -236,17 +315,7 @@ fn nearest_normal_colours(
             let c = cross(sub(p[1], p[0]), sub(p[2], p[0]));
             let area = 0.5 * dot(c, c).sqrt();
             let (node, _) = tree.find_path(level, u64::from(refined.path(f)));
-            // Largest dot product with the (unnormalised) face normal: the same argmax as with
-            // the unit normal. Ties keep the first normal, the geometric one.
-            let mut best = 0;
-            let mut best_dot = f64::NEG_INFINITY;
-            for (j, nrm) in normals.iter().enumerate() {
-                let d = dot(c, nrm.map(f64::from));
-                if d > best_dot {
-                    best_dot = d;
-                    best = j;
-                }
-            }
+            let best = nearest_normal(normals, c);
             let rgb = rgb9e5::decode(colours[node as usize * nc + best]).map(f64::from);
             for &i in &tri {
                 avg.add(i as usize, area, rgb);

@@ -88,8 +88,9 @@ impl RefinedMesh {
     }
 }
 
-/// Position of lattice point `(b, c)` of triangle `(p0, p1, p2)`, as the kernel computes it.
-fn lattice_position(p: [[f32; 3]; 3], n: i32, b: i32, c: i32) -> [f32; 3] {
+/// Position of lattice point `(b, c)` of triangle `(p0, p1, p2)`, as the kernel computes it
+/// (SPEC.md F.7.2; the adaptive refinement calls it with `n = 4096`, F.7.1).
+pub(crate) fn lattice_position(p: [[f32; 3]; 3], n: i32, b: i32, c: i32) -> [f32; 3] {
     let inv = 1.0 / n as f32;
     let (wa, wb, wc) = ((n - b - c) as f32, b as f32, c as f32);
     std::array::from_fn(|i| (p[0][i] * wa + p[1][i] * wb + p[2][i] * wc) * inv)

@@ -15,6 +15,8 @@
 //! * [`incidence`]: the triangles around each edge and vertex ([`flat::FlatTopology`]), which
 //!   flat refinement and the split read.
 //! * [`flat`]: flat (linear) refinement, the CPU reference of the GPU flat kernel.
+//! * [`adaptive_flat`]: a flat object refined from its trees, one triangle per leaf plus those
+//!   its finer neighbours need (SPEC.md F.7.1), what `hce subdivide` writes.
 //! * [`split`]: a multiresolution object's refined vertices split at sharp edges (SPEC.md F.5).
 //! * [`decode`]: the paper's per-subtriangle colour (tree walk, nearest representative normal).
 //! * [`lighting`], [`colour`]: the reconstruction of baked lighting on a refined mesh
@@ -26,6 +28,8 @@
 //! and every other module forbids it.
 #![deny(unsafe_code)]
 
+#[forbid(unsafe_code)]
+pub mod adaptive_flat;
 #[forbid(unsafe_code)]
 pub mod colour;
 #[forbid(unsafe_code)]

@@ -57,8 +57,8 @@ use crate::split::{corner_groups, joined_sides};
 
 /// Denominator of the lattice in which leaf corners are identified: the finest split a tree can
 /// have (`hce_format::MAX_TREE_DEPTH` = 12).
-const TREE_LATTICE_BITS: u32 = 12;
-const TREE_LATTICE: i32 = 1 << TREE_LATTICE_BITS;
+pub(crate) const TREE_LATTICE_BITS: u32 = 12;
+pub(crate) const TREE_LATTICE: i32 = 1 << TREE_LATTICE_BITS;
 
 /// Denominator of the lattice in which points are evaluated: deep enough for every render level
 /// the kernels accept (15) and every tree depth (12).
@@ -203,7 +203,7 @@ pub fn triangle_lighting(object: &Object, t: usize) -> Result<TriangleLighting<'
 /// Identity of a leaf corner on the object's surface, shared by every leaf that meets there
 /// within one smooth region.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-enum PointKey {
+pub(crate) enum PointKey {
     /// A control vertex, within one group of its triangle fan joined across smooth edges.
     Vertex { vertex: u32, group: u32 },
     /// A point inside a joined coarse edge, at `param / 4096` from its lower-numbered vertex.
@@ -213,7 +213,7 @@ enum PointKey {
 }
 
 /// The coarse-mesh facts the point identities need.
-struct Surface<'a> {
+pub(crate) struct Surface<'a> {
     object: &'a Object,
     /// `joined[3t + e]`: values mix across edge `e` of triangle `t`.
     joined: Vec<bool>,
@@ -222,7 +222,7 @@ struct Surface<'a> {
 }
 
 impl<'a> Surface<'a> {
-    fn new(object: &'a Object) -> Self {
+    pub(crate) fn new(object: &'a Object) -> Self {
         let joined = joined_sides(&object.mesh, object.kind);
         let group = corner_groups(&object.mesh, &joined);
         Surface {
@@ -233,7 +233,7 @@ impl<'a> Surface<'a> {
     }
 
     /// The key of lattice point `(x, y)` (denominator 4096) of coarse triangle `t`.
-    fn key(&self, t: usize, x: i32, y: i32) -> PointKey {
+    pub(crate) fn key(&self, t: usize, x: i32, y: i32) -> PointKey {
         let m = &self.object.mesh;
         let n = TREE_LATTICE;
         match site(n, x, y) {

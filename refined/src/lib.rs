@@ -7,9 +7,9 @@
 //!
 //! # Refinement
 //!
-//! Each object is refined as the runtime refines it ([`hce_geometry::refine::refine_object`]):
-//! multiresolution objects by Loop subdivision, flat objects by the linear 1-to-4 split of the
-//! flat kernel (SPEC.md A.7), both coloured by the reconstruction of SPEC.md Appendix G. Flat objects get their vertices split at
+//! Each object is refined as the caller chose ([`hce_geometry::refine::refine_object_as`]):
+//! multiresolution objects by Loop subdivision, flat objects from their trees (SPEC.md F.7.1)
+//! or by the linear 1-to-4 split of the flat kernel (F.7.2), both coloured by the reconstruction of SPEC.md Appendix G. Flat objects get their vertices split at
 //! coarse-triangle borders so that `NORMAL` can be the face normal (they are drawn faceted);
 //! positions and colours are the runtime's: across a fold of more than 10 degrees each side's
 //! copies carry that side's light (SPEC.md F.5), across a joined edge both carry the shared
@@ -79,7 +79,6 @@ impl ObjectGeometry {
                 triangles: m.indices.clone(),
             };
         }
-        let per = 1usize << (2 * m.level);
         let mut out = Self {
             positions: Vec::new(),
             normals: Vec::new(),
@@ -90,7 +89,7 @@ impl ObjectGeometry {
             let tri = object.mesh.triangle(t).map(|v| object.mesh.position(v));
             let normal = unit_or_up(face_normal(tri));
             let mut local: HashMap<u32, u32> = HashMap::new();
-            for f in &m.indices[t * per..(t + 1) * per] {
+            for f in &m.indices[r.triangles_of(t..t + 1)] {
                 let tri = f.map(|i| {
                     *local.entry(i).or_insert_with(|| {
                         out.positions.push(m.positions[i as usize]);
@@ -329,12 +328,11 @@ pub fn write_refined_scene(
             };
             let k = l.object as usize;
             let Some(g) = geometry.get(k) else { continue };
-            let level = refined[k].mesh.level;
             let coarse = hce_format::primitive_geometry(input, buffers, m, p)
                 .map(|(_, t)| t)
                 .unwrap_or(refined[k].mesh.coarse_triangles);
-            let first = (l.first_triangle as usize) << (2 * level);
-            let triangles = first..first + (coarse << (2 * level));
+            let first = l.first_triangle as usize;
+            let triangles = refined[k].triangles_of(first..first + coarse);
             let (base, emissive) =
                 material_response(input, prim.get("material").and_then(Value::as_u64));
             let light: Vec<[f32; 3]> = g

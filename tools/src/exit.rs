@@ -136,9 +136,10 @@ fn decisive(c: &(dyn std::error::Error + 'static)) -> Option<Status> {
     if let Some(e) = c.downcast_ref::<RefineError>() {
         return Some(match e {
             RefineError::Subdiv(s) => subdiv_status(s),
-            RefineError::Object(_) | RefineError::Colour(_) | RefineError::Split(_) => {
-                Status::Invalid
-            }
+            RefineError::Object(_)
+            | RefineError::Colour(_)
+            | RefineError::Split(_)
+            | RefineError::Adaptive(_) => Status::Invalid,
         });
     }
     None

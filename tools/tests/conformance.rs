@@ -123,7 +123,16 @@ fn probes_match_hce_subdivide_at_levels_1_to_3() {
             let level = level.as_u64().unwrap();
             let out = dir.path().join(format!("l{level}.obj"));
             let status = common::command()
-                .args(["subdivide", "--merge", "-l", &level.to_string(), "-o"])
+                // The suite records the uniform refinement of flat objects (SPEC.md F.7.2).
+                .args([
+                    "subdivide",
+                    "--merge",
+                    "--flat",
+                    "uniform",
+                    "-l",
+                    &level.to_string(),
+                    "-o",
+                ])
                 .arg(&out)
                 .arg(&file)
                 .output()
@@ -242,6 +251,8 @@ fn scene_entries_match_hce_subdivide() {
         common::hce_ok(&[
             "subdivide",
             file.to_str().unwrap(),
+            "--flat",
+            "uniform",
             "-l",
             &level,
             "-o",

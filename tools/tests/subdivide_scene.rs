@@ -110,6 +110,8 @@ fn nodes_sharing_a_mesh_still_share_the_refined_mesh() {
     common::hce_ok(&[
         "subdivide",
         input.to_str().unwrap(),
+        "--flat",
+        "uniform",
         "-l",
         "1",
         "-o",

@@ -4,9 +4,11 @@
 //! A baked input (`.hce`, or `.glb`/`.gltf` carrying `EXT_hce_baked_lighting`) is loaded with
 //! [`hce_runtime::asset::Asset::open`] (or, for glTF, read once through
 //! [`hce_runtime::asset::GltfSource`] and loaded with `Asset::from_gltf`) and each object refined as the runtime refines it
-//! ([`hce_geometry::refine::refine_object`]: Loop for multiresolution objects, linear
-//! 1-to-4 for flat ones, the vertices split at sharp edges and at flat objects' folds of more
-//! than 10 degrees (SPEC.md F.5), colours from [`hce_geometry::colour::apply_baked_colours`]);
+//! ([`hce_geometry::refine::refine_object_as`]: Loop for multiresolution objects, flat ones
+//! from their trees, one triangle per leaf plus those finer neighbours need (SPEC.md F.7.1), or
+//! with `--flat uniform` linear 1-to-4 to the level (F.7.2), the vertices split at sharp edges
+//! and at flat objects' folds of more than 10 degrees (SPEC.md F.5), colours from
+//! [`hce_geometry::colour`]);
 //! the scene is written back whole ([`hce_refined::write_refined_scene`]:
 //! flat objects' vertices split further per coarse triangle, each with its face's normal), or
 //! with `--merge` as one mesh in object space (the refined vertices of SPEC.md F.5, copies
@@ -18,7 +20,7 @@ use std::time::Instant;
 use anyhow::{anyhow, Context, Result};
 use clap::Args;
 use hce_format::ObjectKind;
-use hce_geometry::refine::{refine_object_with, RefinedObject};
+use hce_geometry::refine::{refine_object_as, FlatRefinement, RefinedObject};
 use hce_geometry::topology::{Creases, NonManifold, TopologyConfig};
 use hce_refined::write_refined_scene;
 use hce_runtime::asset::{Asset, GltfSource, OpenOptions};
@@ -26,8 +28,9 @@ use hce_runtime::asset::{Asset, GltfSource, OpenOptions};
 #[derive(Args)]
 #[command(
     after_help = "A baked input (.hce, or .glb/.gltf with EXT_hce_baked_lighting) is \
-refined from every object's stored control mesh as the runtime refines it (multiresolution \
-objects by Loop subdivision, flat objects linearly; --creases, --weld-tolerance and \
+refined from every object's stored control mesh (multiresolution objects by Loop subdivision \
+to --level, flat objects from their trees, one triangle per leaf element, or with --flat uniform \
+linearly to --level as the GPU runtime draws them; --creases, --weld-tolerance and \
 --refuse-nonmanifold do not apply) and written as a .glb/.gltf scene: every node, name, \
 transform, shared mesh, material, camera and light kept, each baked primitive refined with \
 NORMAL and COLOR_0 (the baked light over the base colour, one exposure per scene, as hce bake \
@@ -69,6 +72,19 @@ pub struct SubdivideArgs {
     /// not applied) instead of the scene.
     #[arg(long)]
     pub merge: bool,
+    /// Baked input: how flat objects are refined: `adaptive` (the default: from their trees, one
+    /// triangle per leaf plus those finer neighbours need, SPEC.md F.7.1; `--level` does not
+    /// apply) or `uniform` (every coarse triangle split 1-to-4 to `--level`, F.7.2).
+    #[arg(long, default_value = "adaptive", value_parser = parse_flat)]
+    pub flat: FlatRefinement,
+}
+
+fn parse_flat(s: &str) -> Result<FlatRefinement, String> {
+    match s {
+        "adaptive" => Ok(FlatRefinement::Adaptive),
+        "uniform" => Ok(FlatRefinement::Uniform),
+        _ => Err(format!("'{s}': expected adaptive or uniform")),
+    }
 }
 
 pub fn run(mut args: SubdivideArgs) -> Result<()> {
@@ -176,27 +192,33 @@ fn run_baked(args: &SubdivideArgs, input: Baked) -> Result<()> {
         .objects
         .iter()
         .map(|o| {
-            refine_object_with(&o.object, args.level, args.reconstruction).with_context(|| {
-                format!(
-                    "{}: object {} '{}'",
-                    args.input.display(),
-                    o.index,
-                    o.name()
-                )
-            })
+            refine_object_as(&o.object, args.level, args.reconstruction, args.flat).with_context(
+                || {
+                    format!(
+                        "{}: object {} '{}'",
+                        args.input.display(),
+                        o.index,
+                        o.name()
+                    )
+                },
+            )
         })
         .collect::<Result<Vec<_>>>()?;
     let t1 = Instant::now();
     if args.stats {
         for (o, r) in asset.objects.iter().zip(&refined) {
+            let refinement = match (o.kind(), args.flat) {
+                (ObjectKind::Flat, FlatRefinement::Adaptive) => "flat, adaptive".to_string(),
+                (ObjectKind::Flat, FlatRefinement::Uniform) => {
+                    format!("flat, uniform: level {}", args.level)
+                }
+                (ObjectKind::Multiresolution, _) => {
+                    format!("multiresolution, Loop: level {}", args.level)
+                }
+            };
             println!(
-                "object '{}' ({}): level {}: {} vertices, {} triangles",
+                "object '{}' ({refinement}): {} vertices, {} triangles",
                 o.name(),
-                match o.kind() {
-                    ObjectKind::Flat => "flat, linear",
-                    ObjectKind::Multiresolution => "multiresolution, Loop",
-                },
-                args.level,
                 r.mesh.positions.len(),
                 r.mesh.indices.len()
             );
