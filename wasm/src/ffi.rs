@@ -1,7 +1,7 @@
 //! The `extern "C"` functions the module exports. The only `unsafe` of the crate: turning the
 //! caller's pointer and length back into the buffer [`hce_alloc`] handed out.
 
-use crate::{geometry_hash, load, result, tables};
+use crate::{geometry_hash, load, refine, result, tables};
 
 /// A zeroed buffer of at least `bytes` bytes, word-aligned, for a request; free it with
 /// [`hce_free`] and the same `bytes`.
@@ -62,4 +62,14 @@ pub unsafe extern "C" fn hce_tables(ptr: *const u32, bytes: usize) -> *mut u32 {
 pub unsafe extern "C" fn hce_geometry_hash(ptr: *const u32, bytes: usize) -> *mut u32 {
     // SAFETY: by the contract above.
     give(result(geometry_hash(unsafe { request(ptr, bytes) })))
+}
+
+/// [`crate::refine`] on the request frame at `ptr`.
+///
+/// # Safety
+/// As [`hce_load`].
+#[no_mangle]
+pub unsafe extern "C" fn hce_refine(ptr: *const u32, bytes: usize) -> *mut u32 {
+    // SAFETY: by the contract above.
+    give(result(refine(unsafe { request(ptr, bytes) })))
 }

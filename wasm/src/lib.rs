@@ -16,6 +16,8 @@
 //!   glTF's root rules as `hce validate` words them.
 //! * `hce_tables(ptr, bytes) -> result`: one object's kernel tables and lighting table, as
 //!   the native runtime's `upload_with` builds them.
+//! * `hce_refine(ptr, bytes) -> result`: one object refined on the CPU with its baked light, as
+//!   `hce subdivide` refines it, for pages without WebGPU.
 //! * `hce_geometry_hash(ptr, bytes) -> result`: the geometry hash (SPEC.md 2.5).
 //!
 //! A result is a word buffer `[words, status, payload…]`: `words` its length in words (free it
@@ -46,8 +48,10 @@ use hce_runtime::asset::{AssetFormat, GltfSource, OpenOptions};
 use hce_runtime::{Asset, AssetError};
 
 mod frame;
+mod refine;
 
 pub use frame::{Reader, Writer};
+pub use refine::refine;
 
 /// `node` of an instance without one (a `.hce` file's).
 pub const NO_NODE: u32 = u32::MAX;
@@ -198,6 +202,16 @@ fn kind_code(kind: ObjectKind) -> u32 {
     }
 }
 
+/// A reconstruction word: 0 smooth, 1 nearest normal, 2 Gouraud.
+fn read_reconstruction(r: &mut Reader) -> Result<Reconstruction, String> {
+    Ok(match r.u32()? {
+        0 => Reconstruction::Smooth,
+        1 => Reconstruction::NearestNormal,
+        2 => Reconstruction::Gouraud,
+        k => return Err(format!("reconstruction {k} is not 0, 1 or 2")),
+    })
+}
+
 fn read_object(r: &mut Reader) -> Result<Object, String> {
     let name = r.string()?;
     let kind = match r.u32()? {
@@ -270,12 +284,7 @@ pub fn tables(request: &[u32]) -> Result<Vec<u32>, String> {
     let mut r = Reader::new(request);
     let index = r.u32()?;
     let object = read_object(&mut r).map_err(|e| format!("objects[{index}]: {e}"))?;
-    let reconstruction = match r.u32()? {
-        0 => Reconstruction::Smooth,
-        1 => Reconstruction::NearestNormal,
-        2 => Reconstruction::Gouraud,
-        k => return Err(format!("reconstruction {k} is not 0, 1 or 2")),
-    };
+    let reconstruction = read_reconstruction(&mut r)?;
     let at = |e: &dyn std::fmt::Display| format!("objects[{index}]: {e}");
     let summary = validate_tables(&object).map_err(|e| at(&e))?;
     let mesh = &object.mesh;

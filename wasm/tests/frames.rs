@@ -5,8 +5,9 @@ use std::path::{Path, PathBuf};
 
 use hce_geometry::lighting::{LightingTable, Reconstruction};
 use hce_geometry::loop_tables::LoopKernelTables;
+use hce_geometry::refine::refine_object_with;
 use hce_runtime::Asset;
-use hce_wasm::{load, tables, Reader, Writer};
+use hce_wasm::{load, refine, tables, Reader, Writer};
 
 fn conformance(file: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -52,6 +53,101 @@ fn truncated_requests_are_errors_not_traps() {
     }
     assert!(tables(&[]).is_err());
     assert!(tables(&[0, 5]).is_err());
+    assert!(refine(&[]).is_err());
+    assert!(refine(&[0, 5]).is_err());
+}
+
+/// Each object's words as `load` writes them (from `name` to `colours`), with its index.
+fn object_frames(file: &str) -> Vec<(u32, Vec<u32>)> {
+    let bytes = std::fs::read(conformance(file)).unwrap();
+    let asset = Asset::open(conformance(file)).unwrap();
+    let out = load(&load_request(file, &bytes)).unwrap();
+    let mut r = Reader::new(&out);
+    r.u32().unwrap();
+    r.string().unwrap();
+    for _ in 0..r.u32().unwrap() {
+        r.string().unwrap();
+    }
+    if r.u32().unwrap() == 1 {
+        r.string().unwrap();
+        for _ in 0..3 {
+            r.floats().unwrap();
+        }
+        r.f32_bits().unwrap();
+        r.u32().unwrap();
+        r.f32_bits().unwrap();
+    }
+    assert_eq!(r.u32().unwrap() as usize, asset.objects.len());
+    let mut frames = Vec::new();
+    for _ in &asset.objects {
+        let index = r.u32().unwrap();
+        let start = r.position();
+        r.string().unwrap();
+        for _ in 0..5 {
+            r.u32().unwrap();
+        }
+        r.floats().unwrap();
+        for _ in 0..12 {
+            r.words().unwrap();
+        }
+        frames.push((index, out[start..r.position()].to_vec()));
+        r.u32().unwrap();
+        r.floats().unwrap();
+        r.f32_bits().unwrap();
+        for _ in 0..r.u32().unwrap() {
+            r.u32().unwrap();
+            r.string().unwrap();
+            r.floats().unwrap();
+        }
+    }
+    frames
+}
+
+/// A `refine` request: index, object words, level, reconstruction.
+fn refine_request(index: u32, object: &[u32], level: u32, reconstruction: u32) -> Vec<u32> {
+    let mut request = vec![index];
+    request.extend_from_slice(object);
+    request.extend([level, reconstruction]);
+    request
+}
+
+#[test]
+fn refine_is_hce_subdivides_refinement() {
+    // The Cornell box: flat walls and a multiresolution block.
+    let asset = Asset::open(conformance("valid/cornell-box.glb")).unwrap();
+    let frames = object_frames("valid/cornell-box.glb");
+    for ((index, words), o) in frames.iter().zip(&asset.objects) {
+        for (level, reconstruction, code) in [
+            (0, Reconstruction::Smooth, 0),
+            (2, Reconstruction::Smooth, 0),
+            (1, Reconstruction::NearestNormal, 1),
+            (1, Reconstruction::Gouraud, 2),
+        ] {
+            let out = refine(&refine_request(*index, words, level, code)).unwrap();
+            let native = refine_object_with(&o.object, level, reconstruction).unwrap();
+            let mut r = Reader::new(&out);
+            let bits = |v: &[[f32; 3]]| -> Vec<u32> {
+                v.as_flattened().iter().map(|x| x.to_bits()).collect()
+            };
+            let got = |r: &mut Reader| -> Vec<u32> {
+                r.floats().unwrap().iter().map(|x| x.to_bits()).collect()
+            };
+            assert_eq!(
+                got(&mut r),
+                bits(&native.mesh.positions),
+                "{} level {level}",
+                o.object.name
+            );
+            assert_eq!(got(&mut r), bits(&native.mesh.normals));
+            assert_eq!(got(&mut r), bits(&native.colours));
+            assert_eq!(r.words().unwrap(), native.mesh.indices.as_flattened());
+        }
+    }
+    let (index, words) = &frames[0];
+    let deep = refine(&refine_request(*index, words, 7, 0)).unwrap_err();
+    assert!(deep.contains("level 7"), "{deep}");
+    let recon = refine(&refine_request(*index, words, 1, 3)).unwrap_err();
+    assert!(recon.contains("reconstruction 3"), "{recon}");
 }
 
 #[test]

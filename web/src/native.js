@@ -26,6 +26,7 @@ async function compile() {
  * @property {(ptr: number, bytes: number) => number} hce_load
  * @property {(ptr: number, bytes: number) => number} hce_tables
  * @property {(ptr: number, bytes: number) => number} hce_geometry_hash
+ * @property {(ptr: number, bytes: number) => number} hce_refine
  */
 
 // Compiled from the moment the module is imported, but not awaited there: a top-level await
@@ -152,7 +153,7 @@ class Reader {
 
 /**
  * Calls export `name` on a request frame; the result's payload, or its error as an HceError.
- * @param {'hce_load' | 'hce_tables' | 'hce_geometry_hash'} name
+ * @param {'hce_load' | 'hce_tables' | 'hce_geometry_hash' | 'hce_refine'} name
  * @param {Uint32Array} request
  */
 function call(name, request) {
@@ -335,6 +336,28 @@ export const MAX_PATH_LEVEL = 15;
 
 /** @typedef {'smooth' | 'nearest' | 'gouraud'} Reconstruction */
 
+const RECONSTRUCTION_WORD = { smooth: 0, nearest: 1, gouraud: 2 };
+
+/**
+ * A request that starts with an object: its index, then the object as `hce_load` wrote it.
+ * @param {HceObject} object
+ */
+function objectRequest(object) {
+  const w = new Writer();
+  w.u32(object.index);
+  w.string(object.name);
+  w.u32(object.kind === 'multiresolution' ? 0 : 1);
+  w.u64hex(object.geometryHash);
+  w.u64(object.bitLen);
+  const m = object.mesh;
+  w.words(m.positions);
+  for (const table of [m.triangles, m.ringOffsets, m.ring, m.vertexFlags, m.spokeFlags, m.cornerSpokes, m.neighbours, m.edges, object.records]) w.words(table);
+  w.words(object.normals);
+  w.words(object.bits);
+  w.words(object.colours);
+  return w;
+}
+
 /**
  * @typedef {object} ObjectTables what the kernels read of one object beside its own arrays
  * @property {number} treeDepth the deepest tree
@@ -355,19 +378,8 @@ export const MAX_PATH_LEVEL = 15;
  * @returns {ObjectTables}
  */
 export function objectTables(object, reconstruction = 'smooth') {
-  const w = new Writer();
-  w.u32(object.index);
-  w.string(object.name);
-  w.u32(object.kind === 'multiresolution' ? 0 : 1);
-  w.u64hex(object.geometryHash);
-  w.u64(object.bitLen);
-  const m = object.mesh;
-  w.words(m.positions);
-  for (const table of [m.triangles, m.ringOffsets, m.ring, m.vertexFlags, m.spokeFlags, m.cornerSpokes, m.neighbours, m.edges, object.records]) w.words(table);
-  w.words(object.normals);
-  w.words(object.bits);
-  w.words(object.colours);
-  w.u32({ smooth: 0, nearest: 1, gouraud: 2 }[reconstruction]);
+  const w = objectRequest(object);
+  w.u32(RECONSTRUCTION_WORD[reconstruction]);
   const r = call('hce_tables', w.finish());
   const treeDepth = r.u32();
   const topology = { vertexCount: r.u32(), triangleCount: r.u32(), edgeCount: r.u32(), edgeVerts: r.words() };
@@ -377,4 +389,28 @@ export function objectTables(object, reconstruction = 'smooth') {
   };
   const loop = r.u32() === 1 ? { triFlags: r.words(), crease: r.words(), weights: r.words(), maxValence: r.u32(), ringPoints: r.u32() } : null;
   return { treeDepth, topology, split, loop, light: r.words() };
+}
+
+/**
+ * @typedef {object} CpuRefined one object refined on the CPU (wasm/src/refine.rs)
+ * @property {Float32Array} positions x, y, z per vertex
+ * @property {Float32Array} normals unit, x, y, z per vertex
+ * @property {Float32Array} colours linear radiance, r, g, b per vertex
+ * @property {Uint32Array} indices 3 per triangle, fine triangle `t · 4^level + path`
+ */
+
+/**
+ * Refines `object` to `level` (0 to MAX_LOOP_LEVEL, flat objects too) on the CPU with its baked
+ * light, as `hce subdivide` refines it: the same Rust, so the same positions, bit for bit.
+ * @param {HceObject} object
+ * @param {number} level
+ * @param {Reconstruction} [reconstruction]
+ * @returns {CpuRefined}
+ */
+export function refineOnCpu(object, level, reconstruction = 'smooth') {
+  const w = objectRequest(object);
+  w.u32(level);
+  w.u32(RECONSTRUCTION_WORD[reconstruction]);
+  const r = call('hce_refine', w.finish());
+  return { positions: r.floats(), normals: r.floats(), colours: r.floats(), indices: r.words() };
 }

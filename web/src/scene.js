@@ -37,6 +37,37 @@ export function flatLevel(treeDepth, coarseTriangles) {
 export const DEFAULT_TRIANGLE_BUDGET = 16_000_000;
 
 /**
+ * The level each object should be drawn at for `camera` (forced levels win; flat objects get
+ * their tree depth), lowered while the scene is over the triangle budget: the rule of
+ * HceScene.levelsFor, for any path that draws a scene (the WebGL2 one too).
+ * @param {{ source: import('./native.js').AssetObject, forced: number | null, treeDepth: number }[]} objects
+ * @param {Camera} camera
+ * @param {number} viewportHeight
+ * @param {import('./view.js').LodParams} lod
+ * @param {number} triangleBudget
+ * @returns {number[]} -1 for objects that are not drawn
+ */
+export function sceneLevels(objects, camera, viewportHeight, lod, triangleBudget) {
+  const levels = objects.map((o) => {
+    if (o.source.instances.length === 0) return -1;
+    if (o.source.object.kind === 'flat') return flatLevel(o.treeDepth, o.source.object.records.length / 4);
+    return o.forced ?? objectLevel(o.source, camera, viewportHeight, lod);
+  });
+  const tris = (/** @type {number} */ i, /** @type {number} */ l) => (objects[i].source.object.records.length / 4) * 4 ** l * objects[i].source.instances.length;
+  const total = () => levels.reduce((s, l, i) => s + (l >= 0 ? tris(i, l) : 0), 0);
+  while (total() > triangleBudget) {
+    let worst = -1;
+    for (let i = 0; i < levels.length; i++) {
+      const lowerable = levels[i] > 0 && (objects[i].forced === null || objects[i].source.object.kind === 'flat');
+      if (lowerable && (worst < 0 || tris(i, levels[i]) > tris(worst, levels[worst]))) worst = i;
+    }
+    if (worst < 0) break;
+    levels[worst] -= 1;
+  }
+  return levels;
+}
+
+/**
  * @typedef {object} SceneObject
  * @property {import('./native.js').AssetObject} source
  * @property {import('./kernels.js').UploadedObject | null} uploaded
@@ -91,23 +122,7 @@ export class HceScene {
    * @returns {number[]} -1 for objects that are not drawn
    */
   levelsFor(camera, viewportHeight, lod = DEFAULT_LOD) {
-    const levels = this.objects.map((o) => {
-      if (o.source.instances.length === 0) return -1;
-      if (o.source.object.kind === 'flat') return flatLevel(o.uploaded?.treeDepth ?? 0, o.source.object.records.length / 4);
-      return o.forced ?? objectLevel(o.source, camera, viewportHeight, lod);
-    });
-    const tris = (/** @type {number} */ i, /** @type {number} */ l) => (this.objects[i].source.object.records.length / 4) * 4 ** l * this.objects[i].source.instances.length;
-    const total = () => levels.reduce((s, l, i) => s + (l >= 0 ? tris(i, l) : 0), 0);
-    while (total() > this.triangleBudget) {
-      let worst = -1;
-      for (let i = 0; i < levels.length; i++) {
-        const lowerable = levels[i] > 0 && (this.objects[i].forced === null || this.objects[i].source.object.kind === 'flat');
-        if (lowerable && (worst < 0 || tris(i, levels[i]) > tris(worst, levels[worst]))) worst = i;
-      }
-      if (worst < 0) break;
-      levels[worst] -= 1;
-    }
-    return levels;
+    return sceneLevels(this.objects.map((o) => ({ source: o.source, forced: o.forced, treeDepth: o.uploaded?.treeDepth ?? o.source.object.treeDepth })), camera, viewportHeight, lod, this.triangleBudget);
   }
 
   /**

@@ -1,8 +1,11 @@
 // The viewer page (web/viewer.html): open a baked file (drop, picker or ?url=), refine every
 // object with the runtime's kernels at the level the view calls for (or a forced one), draw
-// every instance through the file's camera or an automatic one, orbit or fly. Every error is
-// shown on the page; none escapes.
+// every instance through the file's camera or an automatic one, orbit or fly. Without WebGPU
+// (no navigator.gpu, no adapter, or ?present=webgl2) the objects are refined on the CPU in
+// WebAssembly and drawn with WebGL2 (webgl_scene.js); the page says which path it uses. Every
+// error is shown on the page; none escapes.
 import { createRuntime, loadAsset, HceScene, resolveCamera, assetBounds, HceError } from './index.js';
+import { GlScene, webgl2Context } from './webgl_scene.js';
 import { add, cross, length, normalize, scale, sub } from './math.js';
 
 /** @typedef {import('./view.js').Camera} Camera */
@@ -25,8 +28,12 @@ function setStatus(text) {
   $('status').textContent = text;
 }
 
-/** Shows an error on the page; the viewer stays usable for the next file. @param {unknown} e */
-function showError(e) {
+/**
+ * Shows an error on the page; the viewer stays usable for the next file.
+ * @param {unknown} e
+ * @param {string} [line] the status line: what failed
+ */
+function showError(e, line = 'could not open the file') {
   console.error(e instanceof Error ? e.stack : String(e));
   const message = e instanceof HceError ? e.message : e instanceof Error ? `${e.name}: ${e.message}` : String(e);
   status.state = 'error';
@@ -34,7 +41,7 @@ function showError(e) {
   const box = $('error');
   box.textContent = message;
   box.classList.add('shown');
-  setStatus('could not open the file');
+  setStatus(line);
 }
 
 function clearError() {
@@ -69,7 +76,7 @@ const view = {
 };
 
 let runtime = /** @type {Awaited<ReturnType<typeof createRuntime>> | null} */ (null);
-let scene = /** @type {HceScene | null} */ (null);
+let scene = /** @type {HceScene | GlScene | null} */ (null);
 let bounds = /** @type {import('./math.js').Bounds | null} */ (null);
 let busy = false;
 let dirty = true;
@@ -103,11 +110,35 @@ async function canvasPresents() {
   return !lost;
 }
 
-/** How frames reach the screen: a WebGPU canvas, or a read-back drawn into a 2D canvas. */
-let present = /** @type {{ kind: 'webgpu', context: GPUCanvasContext } | { kind: '2d', context: CanvasRenderingContext2D } | null} */ (null);
+/**
+ * How frames reach the screen: a WebGPU canvas, a WebGPU read-back drawn into a 2D canvas, or
+ * WebGL2 (refined on the CPU).
+ */
+let present = /** @type {{ kind: 'webgpu', context: GPUCanvasContext } | { kind: '2d', context: CanvasRenderingContext2D } | { kind: 'webgl2', gl: WebGL2RenderingContext } | null} */ (null);
+
+/** Why WebGPU cannot be used here, or null when it can (an adapter is offered). */
+async function webgpuMissing() {
+  if (q.get('present') === 'webgl2') return 'WebGL2 asked for with ?present=webgl2';
+  if (!navigator.gpu) return 'this browser has no WebGPU (navigator.gpu)';
+  if (!(await navigator.gpu.requestAdapter())) return 'WebGPU gives no adapter on this machine';
+  return null;
+}
+
+/** @param {string} text */
+function setPath(text) {
+  $('path').textContent = text;
+}
 
 async function start() {
-  if (!navigator.gpu) throw new Error('this browser has no WebGPU; use a recent Chrome or Edge (or start Chromium with --enable-unsafe-webgpu)');
+  const missing = await webgpuMissing();
+  if (missing !== null) {
+    const gl = webgl2Context(canvas);
+    if (!gl) throw new Error(`this browser has neither WebGPU (${missing}) nor WebGL2`);
+    present = { kind: 'webgl2', gl };
+    status.present = present.kind;
+    setPath(`Drawn with WebGL2, refined on the CPU in WebAssembly: ${missing}.`);
+    return started();
+  }
   status.state = 'compiling';
   setStatus('compiling the kernels (seconds on a software adapter)…');
   const wanted = q.get('present');
@@ -124,7 +155,7 @@ async function start() {
       setStatus(`compiling the kernels: ${done} of ${total} pipelines (${label})`);
     },
   });
-  runtime.device.lost.then((info) => showError(`the GPU device was lost: ${info.message}`));
+  runtime.device.lost.then((info) => showError(`the GPU device was lost: ${info.message}`, 'the GPU device was lost'));
   if (webgpu) {
     const context = /** @type {GPUCanvasContext} */ (canvas.getContext('webgpu'));
     context.configure({ device: runtime.device, format, alphaMode: 'opaque' });
@@ -133,6 +164,12 @@ async function start() {
     present = { kind: '2d', context: /** @type {CanvasRenderingContext2D} */ (canvas.getContext('2d')) };
   }
   status.present = present.kind;
+  setPath(`Drawn with WebGPU, refined on the GPU by the runtime's kernels${present.kind === '2d' ? ' (shown through a read-back: this canvas cannot present WebGPU)' : ''}.`);
+  return started();
+}
+
+/** The page ready for files: ?url= opened, frames drawn from now on. */
+async function started() {
   status.state = 'idle';
   setStatus('open a baked .glb, .gltf or .hce');
   const url = q.get('url');
@@ -177,14 +214,15 @@ async function guarded(f) {
  * @param {((uri: string) => Promise<Uint8Array>) | undefined} resolveUri
  */
 async function open(bytes, name, resolveUri) {
-  if (!runtime) return;
+  if (!runtime && present?.kind !== 'webgl2') return;
   clearError();
   status.state = 'loading';
   setStatus(`reading ${name}…`);
   scene?.destroy();
   scene = null;
   const asset = await loadAsset(bytes, { name, resolveUri });
-  const next = new HceScene(runtime.kernels, asset, { reconstruction: /** @type {any} */ ($('recon')).value });
+  const reconstruction = /** @type {any} */ ($('recon')).value;
+  const next = present?.kind === 'webgl2' ? new GlScene(present.gl, asset, { reconstruction }) : new HceScene(/** @type {NonNullable<typeof runtime>} */ (runtime).kernels, asset, { reconstruction });
   next.upload();
   const forced = q.get('level');
   if (forced !== null) for (const o of next.objects) o.forced = Math.max(0, Math.min(6, Number(forced)));
@@ -265,7 +303,7 @@ function fly() {
 
 function tick() {
   fly();
-  if (!runtime?.renderer || !scene || !view.camera || !bounds || busy) return;
+  if (!(runtime?.renderer || present?.kind === 'webgl2') || !scene || !view.camera || !bounds || busy) return;
   resize();
   if (!dirty) return;
   dirty = false;
@@ -274,8 +312,14 @@ function tick() {
   const camera = { ...view.camera };
   const levels = current.levelsFor(camera, canvas.height);
   current.refineTo(levels).then(() => {
-    if (current !== scene || !runtime?.renderer || !bounds) return;
+    if (current !== scene || !bounds) return;
     const ev = Number(/** @type {HTMLInputElement} */ ($('exposure')).value);
+    if (current instanceof GlScene) {
+      current.render(camera, bounds, ev);
+      finishFrame(current, camera);
+      return;
+    }
+    if (!runtime?.renderer) return;
     if (present?.kind === 'webgpu') {
       runtime.renderer.render(current, camera, bounds, present.context.getCurrentTexture(), ev);
     } else if (present?.kind === '2d') {
@@ -293,10 +337,10 @@ function tick() {
   });
 }
 
-/** @param {HceScene} current @param {Camera} camera */
+/** @param {HceScene | GlScene} current @param {Camera} camera */
 function finishFrame(current, camera) {
   status.levels = current.objects.map((o) => o.level);
-    status.triangles = current.drawnTriangles();
+  status.triangles = current.drawnTriangles();
   status.camera = camera;
   status.frames += 1;
   updateTable();
@@ -410,4 +454,4 @@ window.addEventListener('unhandledrejection', (e) => {
   showError(e.reason);
 });
 
-start().catch(showError);
+start().catch((e) => showError(e, 'could not start the viewer'));

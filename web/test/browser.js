@@ -26,12 +26,14 @@ export function browserRequired() {
 
 /**
  * Starts the static server (web/, runtime/src/gpu/ and `extra` mounts) and a headless
- * Chromium with WebGPU. Returns null, having said why, when there is no browser and none is
- * required; throws when one is required.
+ * Chromium with WebGPU (or, with `webgpu: false`, with WebGPU switched off: navigator.gpu
+ * gives no adapter, as in a browser without WebGPU). Returns null, having said why, when there is no browser and
+ * none is required; throws when one is required.
  * @param {import('node:test').TestContext} t
  * @param {Record<string, string>} [extra]
+ * @param {{ webgpu?: boolean }} [options]
  */
-export async function openBrowser(t, extra = {}) {
+export async function openBrowser(t, extra = {}, options = {}) {
   const exe = chromiumPath();
   if (exe === null) {
     const msg = 'no chromium (install Debian\'s `chromium` or set CHROMIUM)';
@@ -46,7 +48,7 @@ export async function openBrowser(t, extra = {}) {
   });
   const browser = await chromium.launch({
     executablePath: exe,
-    args: ['--headless=new', '--no-sandbox', '--enable-unsafe-webgpu'],
+    args: ['--headless=new', '--no-sandbox', ...(options.webgpu ?? true ? ['--enable-unsafe-webgpu'] : ['--disable-features=WebGPU'])],
   });
   const page = await browser.newPage();
   /** @type {string[]} */

@@ -1,7 +1,10 @@
 // A three.js GLTFLoader plugin for EXT_hce_baked_lighting (SPEC.md section 3): every
-// primitive linked to a container object gets that object refined by the hce runtime's
-// kernels (Loop for multiresolution objects, linear for flat ones) on the device of three.js's
-// WebGPURenderer, with the baked lighting as vertex colours. Registered the usual way:
+// primitive linked to a container object gets that object refined (Loop for multiresolution
+// objects, linear for flat ones), with the baked lighting as vertex colours. On a
+// WebGPURenderer with a WebGPU backend the hce runtime's kernels run on three.js's own device;
+// on a WebGL2 backend (`forceWebGL: true`, or a browser without WebGPU) or a WebGLRenderer, the
+// same Rust as `hce subdivide` refines on the CPU in hce.wasm (cpu_refine.js). Registered the
+// usual way:
 //
 //   const runtime = await HceGLTFPlugin.runtime(renderer, { wgslBase });
 //   loader.register((parser) => new HceGLTFPlugin(parser, runtime, { level: 3 }));
@@ -12,6 +15,7 @@ import { loadAsset } from '../native.js';
 import { fetchWgsl, KernelSources } from '../wgsl.js';
 import { Kernels, destroyRefined, destroyUploaded } from '../kernels.js';
 import { flatLevel } from '../scene.js';
+import { CpuRefiner } from '../cpu_refine.js';
 
 const EXT = 'EXT_hce_baked_lighting';
 
@@ -26,20 +30,26 @@ const EXT = 'EXT_hce_baked_lighting';
 
 export class HceGLTFPlugin {
   /**
-   * The kernels on three.js's device: call once per renderer, after `await renderer.init()`.
-   * @param {{ backend: any }} renderer a three.js WebGPURenderer
-   * @param {{ wgslBase: string | URL, progress?: (done: number, total: number, label: string) => void }} options
+   * What refines for `renderer`, once per renderer: the kernels on three.js's device for a
+   * WebGPURenderer on its WebGPU backend (after `await renderer.init()`), else the CPU.
+   * @param {any} renderer a three.js WebGPURenderer (either backend) or WebGLRenderer
+   * @param {{ wgslBase?: string | URL, progress?: (done: number, total: number, label: string) => void }} options
+   *   `wgslBase`: the URL of the runtime's WGSL (runtime/src/gpu/), needed on WebGPU only
+   * @returns {Promise<Kernels | CpuRefiner>}
    */
-  static async runtime(renderer, options) {
+  static async runtime(renderer, options = {}) {
+    if (renderer?.isWebGLRenderer || renderer?.backend?.isWebGLBackend) return new CpuRefiner();
+    if (!renderer?.isWebGPURenderer) throw new Error('HceGLTFPlugin.runtime needs a three.js WebGPURenderer or WebGLRenderer');
     const device = /** @type {GPUDevice | undefined} */ (renderer.backend?.device);
-    if (!device) throw new Error('HceGLTFPlugin needs a WebGPURenderer on a WebGPU backend (await renderer.init() first)');
+    if (!device) throw new Error('HceGLTFPlugin.runtime: the WebGPURenderer has no device yet; call it after `await renderer.init()`');
+    if (options.wgslBase === undefined) throw new Error('HceGLTFPlugin.runtime: on WebGPU it needs `wgslBase`, the URL of the runtime\'s WGSL (runtime/src/gpu/)');
     const sources = new KernelSources(await fetchWgsl(options.wgslBase));
     return Kernels.create(device, sources, options.progress);
   }
 
   /**
    * @param {any} parser the GLTFLoader's parser
-   * @param {Kernels} kernels from {@link HceGLTFPlugin.runtime}
+   * @param {Kernels | CpuRefiner} kernels from {@link HceGLTFPlugin.runtime}
    * @param {PluginOptions} [options]
    */
   constructor(parser, kernels, options = {}) {
@@ -47,7 +57,7 @@ export class HceGLTFPlugin {
     this.parser = parser;
     this.kernels = kernels;
     this.options = options;
-    /** What the last load did, per object: level, vertices, triangles. @type {{ name: string, level: number, vertices: number, triangles: number }[]} */
+    /** What the last load did, per object: level, vertices, triangles, and where it refined. @type {{ name: string, level: number, vertices: number, triangles: number, path: 'gpu' | 'cpu' }[]} */
     this.report = [];
   }
 
@@ -78,16 +88,22 @@ export class HceGLTFPlugin {
       let p = refined.get(object.index);
       if (!p) {
         p = (async () => {
-          const level = object.kind === 'flat'
-            ? flatLevel(object.treeDepth, object.records.length / 4)
-            : typeof this.options.level === 'function' ? this.options.level(object) : this.options.level ?? 3;
-          const uploaded = this.kernels.upload(object, this.options.reconstruction ?? 'smooth');
-          const buffers = this.kernels.refine(uploaded, level);
-          const mesh = await this.kernels.readBack(buffers);
-          destroyRefined(buffers);
-          destroyUploaded(uploaded);
-          this.report.push({ name: object.name, level, vertices: mesh.positions.length / 3, triangles: mesh.indices.length / 3 });
-          return { ...mesh, level };
+          const kernels = this.kernels;
+          const reconstruction = this.options.reconstruction ?? 'smooth';
+          const asked = typeof this.options.level === 'function' ? this.options.level(object) : this.options.level ?? 3;
+          let mesh;
+          if (kernels instanceof CpuRefiner) {
+            mesh = kernels.refine(object, asked, reconstruction);
+          } else {
+            const level = object.kind === 'flat' ? flatLevel(object.treeDepth, object.records.length / 4) : asked;
+            const uploaded = kernels.upload(object, reconstruction);
+            const buffers = kernels.refine(uploaded, level);
+            mesh = await kernels.readBack(buffers);
+            destroyRefined(buffers);
+            destroyUploaded(uploaded);
+          }
+          this.report.push({ name: object.name, level: mesh.level, vertices: mesh.positions.length / 3, triangles: mesh.indices.length / 3, path: kernels instanceof CpuRefiner ? 'cpu' : 'gpu' });
+          return mesh;
         })();
         refined.set(object.index, p);
       }
