@@ -17,6 +17,8 @@ pub enum ExportError {
     NotFinite { path: PathBuf, index: usize },
     #[error("{path}: the mesh is too large for a single glTF buffer")]
     TooLarge { path: PathBuf },
+    #[error("{path}: unclamped colours need an .obj output (glTF holds COLOR_0 in [0, 1] only)")]
+    UnclampedNeedsObj { path: PathBuf },
     #[error("{path}: {colours} vertex colours for {vertices} vertices; give one per vertex")]
     ColourCount {
         path: PathBuf,
@@ -58,6 +60,38 @@ pub fn write_mesh_with_colours(
         .map(|c| c.map(|x| if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) }))
         .collect();
     write_any(path, positions, normals, Some(&clamped), indices)
+}
+
+/// [`write_mesh_with_colours`] for OBJ without the clamp: the colours as they are (NaN becomes
+/// 0), so that radiosity above 1 can be measured. glTF cannot hold them, so any other extension
+/// is an error.
+pub fn write_obj_with_unclamped_colours(
+    path: &Path,
+    positions: &[[f32; 3]],
+    normals: &[[f32; 3]],
+    colours: &[[f32; 3]],
+    indices: &[[u32; 3]],
+) -> Result<(), ExportError> {
+    let is_obj = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    if !is_obj {
+        return Err(ExportError::UnclampedNeedsObj {
+            path: path.to_owned(),
+        });
+    }
+    if colours.len() != positions.len() {
+        return Err(ExportError::ColourCount {
+            path: path.to_owned(),
+            colours: colours.len(),
+            vertices: positions.len(),
+        });
+    }
+    let finite: Vec<[f32; 3]> = colours
+        .iter()
+        .map(|c| c.map(|x| if x.is_nan() { 0.0 } else { x }))
+        .collect();
+    write_any(path, positions, normals, Some(&finite), indices)
 }
 
 fn write_any(
@@ -455,6 +489,30 @@ mod tests {
         let text = std::fs::read_to_string(&path).unwrap();
         assert!(text.contains("v 1 0 0 1 0 0\n"), "{text}");
         let short = write_mesh_with_colours(&path, &p, &n, &c[..2], &[[0, 1, 2]]);
+        assert!(matches!(
+            short,
+            Err(ExportError::ColourCount { colours: 2, .. })
+        ));
+    }
+
+    #[test]
+    fn unclamped_obj_colours_keep_values_above_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let n = [[0.0, 0.0, 1.0]; 3];
+        let c = [[0.25, 0.5, 0.75], [2.5, -1.0, f32::NAN], [1.0, 0.0, 0.125]];
+        let path = dir.path().join("m.obj");
+        write_obj_with_unclamped_colours(&path, &p, &n, &c, &[[0, 1, 2]]).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.contains("v 1 0 0 2.5 -1 0\n"), "{text}");
+        let glb = dir.path().join("m.glb");
+        let refused = write_obj_with_unclamped_colours(&glb, &p, &n, &c, &[[0, 1, 2]]);
+        assert!(matches!(
+            refused,
+            Err(ExportError::UnclampedNeedsObj { .. })
+        ));
+        assert!(!glb.exists());
+        let short = write_obj_with_unclamped_colours(&path, &p, &n, &c[..2], &[[0, 1, 2]]);
         assert!(matches!(
             short,
             Err(ExportError::ColourCount { colours: 2, .. })

@@ -25,7 +25,7 @@ test('without WebGPU, the CPU refinement is hce subdivide\'s bit for bit', { tim
       fs.copyFileSync(baked, path.join(dir, `${name}.glb`));
       for (const level of [1, 2]) {
         const ref = `${name}-${level}.glb`;
-        runHce(hce, ['subdivide', baked, '--level', String(level), '--merge', '-o', path.join(dir, ref)]);
+        runHce(hce, ['subdivide', baked, '--level', String(level), '--flat', 'uniform', '--merge', '-o', path.join(dir, ref)]);
         /** @type {any} */
         const r = await b.page.evaluate(([u, l, rf]) => /** @type {any} */ (window).hceCpuCompare(u, l, rf), [`/files/${name}.glb`, level, `/files/${ref}`]);
         const at = `${name} level ${level}`;

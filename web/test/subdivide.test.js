@@ -26,7 +26,7 @@ test('the baked samples refine in Chromium as hce subdivide refines them', { tim
       fs.copyFileSync(baked, path.join(dir, `${name}.glb`));
       for (const level of [0, 1, 2, 3]) {
         const ref = `${name}-${level}.glb`;
-        runHce(hce, ['subdivide', baked, '--level', String(level), '--merge', '-o', path.join(dir, ref)]);
+        runHce(hce, ['subdivide', baked, '--level', String(level), '--flat', 'uniform', '--merge', '-o', path.join(dir, ref)]);
         /** @type {any} */
         const r = await b.page.evaluate(([u, l, rf]) => /** @type {any} */ (window).hceCompare(u, l, rf), [`/files/${name}.glb`, level, `/files/${ref}`]);
         assert.ok(r.ok, `${name} level ${level}: ${r.error}`);
@@ -48,7 +48,7 @@ test('the baked samples refine in Chromium as hce subdivide refines them', { tim
     const gltf = path.join(dir, 'cornell.gltf');
     runHce(hce, ['bake', path.join(REPO, 'samples/cornell-box.glb'), '-o', gltf, '--multires', 'short_block', '--creases', 'auto', '-q']);
     assert.ok(fs.existsSync(path.join(dir, 'cornell.bin')), 'the .gltf has an external buffer');
-    runHce(hce, ['subdivide', gltf, '--level', '2', '--merge', '-o', path.join(dir, 'cornell-gltf-2.glb')]);
+    runHce(hce, ['subdivide', gltf, '--level', '2', '--flat', 'uniform', '--merge', '-o', path.join(dir, 'cornell-gltf-2.glb')]);
     /** @type {any} */
     const g = await b.page.evaluate(() => /** @type {any} */ (window).hceCompare('/files/cornell.gltf', 2, '/files/cornell-gltf-2.glb'));
     assert.ok(g.ok, `cornell.gltf: ${g.error}`);

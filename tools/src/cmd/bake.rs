@@ -14,11 +14,14 @@ use anyhow::{Context, Result};
 use clap::Args;
 use hce_bake::NormalSetParams;
 use hce_bake::{bake_file, BakeOutcome, PipelineOptions};
-use hce_bake::{cache_key, BakeParams, CacheKey, KEY_FORMAT};
+use hce_bake::{cache_key, CacheKey, KEY_FORMAT};
 use hce_format::ObjectKind;
 use hce_geometry::Creases;
 use hce_meshio::scene::ImportOptions;
 use indicatif::{ProgressBar, ProgressStyle};
+
+mod quality;
+pub use quality::Quality;
 
 #[derive(Args)]
 pub struct BakeArgs {
@@ -48,18 +51,25 @@ pub struct BakeArgs {
     /// Sharp creases of multiresolution objects: none, auto (split input normals) or angle=DEG.
     #[arg(long, default_value = "none")]
     pub creases: Creases,
-    /// Link refinement threshold (fraction of the scene's reference power).
-    #[arg(long, default_value_t = 1e-4)]
-    pub bf_epsilon: f32,
+    /// Named solver settings, each a point measured on the error/time curve of the Cornell
+    /// box against Blender Cycles (tools/scripts/cycles-curve.sh, BENCHMARKS.md). Any of
+    /// --bf-epsilon, --detail-level and --visibility-rays given explicitly overrides the
+    /// preset's value.
+    #[arg(long, value_enum, default_value = "default")]
+    pub quality: Quality,
+    /// Link refinement threshold (fraction of the scene's reference power) [default: from
+    /// --quality; 1e-4 at default].
+    #[arg(long)]
+    pub bf_epsilon: Option<f32>,
     /// Jittered visibility rays per link (0 disables occlusion); links that bring much of
-    /// their receiver's light take up to 4x as many.
-    #[arg(long, default_value_t = 8)]
-    pub visibility_rays: u32,
+    /// their receiver's light take up to 4x as many [default: from --quality; 8 at default].
+    #[arg(long)]
+    pub visibility_rays: Option<u32>,
     /// Deepest element level below a coarse triangle that shadow edges and contacts are
     /// refined to (the power rule stops at level 4); each level halves the finest shadow
-    /// detail, for more elements where shadows fall.
-    #[arg(long, default_value_t = BakeParams::default().detail_level)]
-    pub detail_level: u32,
+    /// detail, for more elements where shadows fall [default: from --quality; 7 at default].
+    #[arg(long)]
+    pub detail_level: Option<u32>,
     /// Worker threads (default: all cores). The output is the same whatever the count.
     #[arg(long, value_parser = thread_count_parser())]
     pub threads: Option<usize>,
@@ -164,12 +174,9 @@ fn pipeline_options(args: &BakeArgs) -> PipelineOptions {
             normal_tolerance_deg: args.normal_tolerance,
         },
         creases: args.creases,
-        bake: BakeParams {
-            bf_epsilon: args.bf_epsilon,
-            visibility_rays: args.visibility_rays,
-            detail_level: args.detail_level,
-            ..BakeParams::default()
-        },
+        bake: args
+            .quality
+            .params(args.bf_epsilon, args.detail_level, args.visibility_rays),
         output: args.output.clone(),
     }
 }

@@ -35,7 +35,8 @@ linearly to --level as the GPU runtime draws them; --creases, --weld-tolerance a
 transform, shared mesh, material, camera and light kept, each baked primitive refined with \
 NORMAL and COLOR_0 (the baked light over the base colour, one exposure per scene, as hce bake \
 writes it). --merge writes instead all objects into one mesh in object space (no node \
-transforms) with COLOR_0 the drawn radiosity clamped to [0, 1]; an .obj output implies it."
+transforms) with COLOR_0 the drawn radiosity clamped to [0, 1] (with --unclamped as it is, \
+.obj only); an .obj output implies it."
 )]
 pub struct SubdivideArgs {
     /// Input mesh (.obj, .gltf or .glb; glTF mesh instances are placed by their node
@@ -77,6 +78,10 @@ pub struct SubdivideArgs {
     /// apply) or `uniform` (every coarse triangle split 1-to-4 to `--level`, F.7.2).
     #[arg(long, default_value = "adaptive", value_parser = parse_flat)]
     pub flat: FlatRefinement,
+    /// Baked input, .obj output: write the vertex colours unclamped (the drawn radiosity as it
+    /// is, above 1 too), to measure the light rather than to view it.
+    #[arg(long)]
+    pub unclamped: bool,
 }
 
 fn parse_flat(s: &str) -> Result<FlatRefinement, String> {
@@ -93,6 +98,12 @@ pub fn run(mut args: SubdivideArgs) -> Result<()> {
     }
     if let Some(baked) = baked_input(&args.input)? {
         return run_baked(&args, baked);
+    }
+    if args.unclamped {
+        return Err(anyhow!(
+            "--unclamped needs a baked input: {} has no baked light",
+            args.input.display()
+        ));
     }
     let t0 = Instant::now();
     let input = hce_meshio::load_mesh(&args.input)?;
@@ -228,6 +239,11 @@ fn run_baked(args: &SubdivideArgs, input: Baked) -> Result<()> {
         .output
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    if args.unclamped && !obj_output {
+        return Err(anyhow!(
+            "--unclamped needs an .obj output: glTF holds COLOR_0 in [0, 1] only"
+        ));
+    }
     if args.merge || obj_output {
         if obj_output && !args.merge {
             eprintln!("note: OBJ cannot hold the scene; writing all objects merged (--merge)");
@@ -276,12 +292,11 @@ fn write_merged(args: &SubdivideArgs, refined: &[RefinedObject]) -> Result<()> {
         normals.extend_from_slice(&r.mesh.normals);
         colours.extend_from_slice(&r.colours);
     }
-    hce_meshio::export::write_mesh_with_colours(
-        &args.output,
-        &positions,
-        &normals,
-        &colours,
-        &indices,
-    )?;
+    let write = if args.unclamped {
+        hce_meshio::export::write_obj_with_unclamped_colours
+    } else {
+        hce_meshio::export::write_mesh_with_colours
+    };
+    write(&args.output, &positions, &normals, &colours, &indices)?;
     Ok(())
 }
