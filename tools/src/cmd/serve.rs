@@ -44,6 +44,7 @@ macro_rules! embed {
 /// `web/src/` and every `.wgsl` of `runtime/src/gpu/` is here.
 const EMBEDDED: &[Embedded] = embed! {
     "/web/viewer.html" => "web/viewer.html",
+    "/web/src/cpu_refine.js" => "web/src/cpu_refine.js",
     "/web/src/device.js" => "web/src/device.js",
     "/web/src/errors.js" => "web/src/errors.js",
     "/web/src/index.js" => "web/src/index.js",
@@ -55,6 +56,7 @@ const EMBEDDED: &[Embedded] = embed! {
     "/web/src/scene.js" => "web/src/scene.js",
     "/web/src/view.js" => "web/src/view.js",
     "/web/src/viewer.js" => "web/src/viewer.js",
+    "/web/src/webgl_scene.js" => "web/src/webgl_scene.js",
     "/web/src/wgsl.js" => "web/src/wgsl.js",
     "/web/src/three/HceGLTFPlugin.js" => "web/src/three/HceGLTFPlugin.js",
     "/runtime/src/gpu/decode.wgsl" => "runtime/src/gpu/decode.wgsl",
