@@ -305,6 +305,21 @@ impl SplitTables {
         self.copies == 0 && self.split_edges == 0
     }
 
+    /// The seven tables the kernels upload, in the order their uploads and the browser's frames
+    /// lay them out: edge slots (offsets, sides), corner slots (offsets, corners), the corner and
+    /// edge copies, and `slot_split`. The flat kernel takes the first six.
+    pub fn tables(&self) -> [&[u32]; 7] {
+        [
+            &self.edge_slot_offsets,
+            &self.edge_slot_sides,
+            &self.corner_slot_offsets,
+            &self.corner_slot_corners,
+            &self.corner_copy,
+            &self.edge_copy,
+            &self.slot_split,
+        ]
+    }
+
     /// Vertices appended at `level`: `X + S (2^level − 1)`.
     pub fn appended(&self, level: u32) -> u64 {
         u64::from(self.copies) + u64::from(self.split_edges) * ((1u64 << level) - 1)

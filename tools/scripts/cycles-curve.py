@@ -65,7 +65,9 @@ def read_points(obj_path):
 
 def read_stats(stats_path):
     """(name, vertices, triangles) per object, in order, from `hce subdivide --stats`."""
-    pat = re.compile(r"^object '(.*)' \([^)]*\): level \d+: (\d+) vertices, (\d+) triangles")
+    # "object 'floor' (flat, uniform: level 2): 25 vertices, 32 triangles", or with the level
+    # after the parenthesis.
+    pat = re.compile(r"^object '(.*)' \(.*?\)(?:: level \d+)?: (\d+) vertices, (\d+) triangles")
     out = []
     with open(stats_path) as f:
         for line in f:
@@ -134,6 +136,23 @@ class Points:
             if max(o["emission"]) <= 0:
                 keep[o["first"] : o["first"] + o["count"]] = True
         self.keep = keep
+        # Points on the border of their face (an edge used by one triangle of the face), where
+        # the field is read at an edge or corner and the nudge moves the Cycles point.
+        border = np.zeros(len(self.pos), dtype=bool)
+        for o in self.objects:
+            first = o["first"]
+            face = [tuple(np.round(x, 3)) for x in self.nrm[first : first + o["count"]]]
+            uses = {}
+            for tri in o["triangles"]:
+                if len({face[i] for i in tri}) != 1:
+                    continue
+                for a, b in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])):
+                    key = (min(a, b), max(a, b))
+                    uses[key] = uses.get(key, 0) + 1
+            for (a, b), count in uses.items():
+                if count == 1:
+                    border[first + a] = border[first + b] = True
+        self.border = border
 
     def nudged(self, o, nudge):
         """Object `o`'s positions, each moved `nudge` towards the middle of its face."""
@@ -293,14 +312,25 @@ def main():
 
     rows = []
 
+    # Where a bias lies: per object, and on the faces' borders against their interiors.
+    border = points.border[keep]
+    groups = [("face borders", border), ("face interiors", ~border)]
+    for o in points.objects:
+        if max(o["emission"]) <= 0:
+            mask = np.zeros(len(points.pos), dtype=bool)
+            mask[o["first"] : o["first"] + o["count"]] = True
+            groups.append((o["name"], mask[keep]))
+
     def add(peer, setting, a, seconds):
         e = rel_rms(a, ref)
         rows.append({
             "peer": peer, "setting": setting, "seconds": seconds,
             "error": e, "error_noise_removed": math.sqrt(max(e * e - noise * noise, 0.0)),
             "bias": rel_bias(a, ref),
+            "biases": [rel_bias(a[m], ref[m]) for _, m in groups],
         })
-        print(f"{peer} {setting}: {e * 100:.2f}% in {seconds:.1f} s", file=sys.stderr)
+        print(f"{peer} {setting}: {e * 100:.2f}% in {seconds:.1f} s, bias "
+              f"{rel_bias(a, ref) * 100:+.2f}%", file=sys.stderr)
 
     for spec in args.hce:
         name, seconds, path = spec.split("=", 2)
@@ -330,6 +360,13 @@ def main():
             f.write(f"| {r['peer']}, {r['setting']} | {r['error'] * 100:.2f}% | "
                     f"{r['error_noise_removed'] * 100:.2f}% | {r['bias'] * 100:+.2f}% | "
                     f"{r['seconds']:.1f} |\n")
+        f.write("\nBias by where the points lie (points: "
+                + ", ".join(f"{name} {int(m.sum())}" for name, m in groups) + "):\n\n")
+        f.write("| bake | " + " | ".join(name for name, _ in groups) + " |\n")
+        f.write("|---|" + "---|" * len(groups) + "\n")
+        for r in rows:
+            f.write(f"| {r['peer']}, {r['setting']} | "
+                    + " | ".join(f"{b * 100:+.2f}%" for b in r["biases"]) + " |\n")
 
 
 if __name__ == "__main__":

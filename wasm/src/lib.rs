@@ -312,15 +312,7 @@ pub fn tables(request: &[u32]) -> Result<Vec<u32>, String> {
     w.words(&topology.edge_verts);
     w.u32(split.copies);
     w.u32(split.split_edges);
-    for table in [
-        &split.edge_slot_offsets,
-        &split.edge_slot_sides,
-        &split.corner_slot_offsets,
-        &split.corner_slot_corners,
-        &split.corner_copy,
-        &split.edge_copy,
-        &split.slot_split,
-    ] {
+    for table in split.tables() {
         w.words(table);
     }
     match &loop_tables {

@@ -385,6 +385,8 @@ impl LoopKernel {
         // The split at sharp edges (SPEC.md F.5): its slot lists replace the topology's vertex
         // and edge incidence, so that each region of a split vertex gathers its own side only.
         let split = SplitTables::from_topology(mesh, &topology, ObjectKind::Multiresolution);
+        let [edge_slots, edge_sides, corner_slots, corner_corners, corner_copy, edge_copy, slot_split] =
+            split.tables();
         let (packed, offsets) = pack_sections(
             ctx,
             [
@@ -398,13 +400,13 @@ impl LoopKernel {
                 &tri_flags,
                 &crease,
                 &weights,
-                &split.edge_slot_offsets,
-                &split.edge_slot_sides,
-                &split.corner_slot_offsets,
-                &split.corner_slot_corners,
-                &split.corner_copy,
-                &split.edge_copy,
-                &split.slot_split,
+                edge_slots,
+                edge_sides,
+                corner_slots,
+                corner_corners,
+                corner_copy,
+                edge_copy,
+                slot_split,
             ],
         )?;
         check_size(ctx, "coarse positions", mesh.positions.len() as u64 * 4)?;
