@@ -28,7 +28,11 @@ measured error is its own and the reference's noise added in quadrature.
 A vertex on the edge where two walls meet lies on both; a ray Cycles starts there towards the
 other wall would leave the box through the edge. Every point is therefore baked NUDGE metres
 (default 0.5 mm) inside its own face, towards the middle of the face it belongs to (the points
-of one object with one normal): the limit the reconstructed field takes at the edge.
+of one object with one normal), and LIFT (10 µm) off it along its normal: the limit the
+reconstructed field takes at the edge. The points are baked on a probe copy of each object that
+no ray sees; the scene the rays meet keeps the exact geometry. (Moving the scene's own vertices
+instead opens a crack along every edge and shrinks the light, which darkens every point, those
+beside the cracks most: +3.6% bias against hce, +5% on the faces' borders, at 0.5 mm.)
 """
 
 import argparse
@@ -154,8 +158,9 @@ class Points:
                     border[first + a] = border[first + b] = True
         self.border = border
 
-    def nudged(self, o, nudge):
-        """Object `o`'s positions, each moved `nudge` towards the middle of its face."""
+    def nudged(self, o, nudge, lift):
+        """Object `o`'s positions, each moved `nudge` towards the middle of its face and `lift`
+        along its normal."""
         p = self.pos[o["first"] : o["first"] + o["count"]].copy()
         n = self.nrm[o["first"] : o["first"] + o["count"]]
         key = [tuple(np.round(x, 3)) for x in n]
@@ -168,7 +173,10 @@ class Points:
             length = np.linalg.norm(d, axis=1, keepdims=True)
             step = np.where(length > nudge, nudge / np.maximum(length, 1e-30), 0.0)
             p[idx] = p[idx] + d * step
-        return p
+        return p + lift * n
+
+
+LIFT = 1e-5
 
 
 def build_scene(points, nudge, threads):
@@ -204,8 +212,10 @@ def build_scene(points, nudge, threads):
 
     baked = []
     for o in points.objects:
+        first = o["first"]
         mesh = bpy.data.meshes.new(o["name"])
-        mesh.from_pydata(points.nudged(o, nudge).tolist(), [], o["triangles"].tolist())
+        exact = points.pos[first : first + o["count"]]
+        mesh.from_pydata(exact.tolist(), [], o["triangles"].tolist())
         mesh.update()
         obj = bpy.data.objects.new(o["name"], mesh)
         scene.collection.objects.link(obj)
@@ -237,9 +247,20 @@ def build_scene(points, nudge, threads):
             mat.cycles.emission_sampling = "FRONT"
         else:
             links.new(diffuse.outputs[0], out.inputs["Surface"])
-            attr = mesh.color_attributes.new("cycles", "FLOAT_COLOR", "POINT")
-            mesh.color_attributes.active_color = attr
-            baked.append((o, obj))
+            # The probe: the points, moved off the edges, on a copy no ray meets.
+            probe_mesh = bpy.data.meshes.new(o["name"] + " probe")
+            probe_mesh.from_pydata(points.nudged(o, nudge, LIFT).tolist(), [],
+                                   o["triangles"].tolist())
+            probe_mesh.update()
+            probe_mesh.materials.append(mat)
+            attr = probe_mesh.color_attributes.new("cycles", "FLOAT_COLOR", "POINT")
+            probe_mesh.color_attributes.active_color = attr
+            probe = bpy.data.objects.new(o["name"] + " probe", probe_mesh)
+            for flag in ("visible_diffuse", "visible_glossy",
+                         "visible_transmission", "visible_volume_scatter", "visible_shadow"):
+                setattr(probe, flag, False)
+            scene.collection.objects.link(probe)
+            baked.append((o, probe))
         mesh.materials.append(mat)
     return scene, baked
 
