@@ -48,17 +48,7 @@ pub fn write_mesh_with_colours(
     colours: &[[f32; 3]],
     indices: &[[u32; 3]],
 ) -> Result<(), ExportError> {
-    if colours.len() != positions.len() {
-        return Err(ExportError::ColourCount {
-            path: path.to_owned(),
-            colours: colours.len(),
-            vertices: positions.len(),
-        });
-    }
-    let clamped: Vec<[f32; 3]> = colours
-        .iter()
-        .map(|c| c.map(|x| if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) }))
-        .collect();
+    let clamped = finite_colours(path, positions, colours, |x| x.clamp(0.0, 1.0))?;
     write_any(path, positions, normals, Some(&clamped), indices)
 }
 
@@ -80,6 +70,17 @@ pub fn write_obj_with_unclamped_colours(
             path: path.to_owned(),
         });
     }
+    let finite = finite_colours(path, positions, colours, |x| x)?;
+    write_any(path, positions, normals, Some(&finite), indices)
+}
+
+/// One colour per vertex checked, NaN made 0 and every other value passed through `limit`.
+fn finite_colours(
+    path: &Path,
+    positions: &[[f32; 3]],
+    colours: &[[f32; 3]],
+    limit: impl Fn(f32) -> f32,
+) -> Result<Vec<[f32; 3]>, ExportError> {
     if colours.len() != positions.len() {
         return Err(ExportError::ColourCount {
             path: path.to_owned(),
@@ -87,11 +88,10 @@ pub fn write_obj_with_unclamped_colours(
             vertices: positions.len(),
         });
     }
-    let finite: Vec<[f32; 3]> = colours
+    Ok(colours
         .iter()
-        .map(|c| c.map(|x| if x.is_nan() { 0.0 } else { x }))
-        .collect();
-    write_any(path, positions, normals, Some(&finite), indices)
+        .map(|c| c.map(|x| if x.is_nan() { 0.0 } else { limit(x) }))
+        .collect())
 }
 
 fn write_any(

@@ -34,17 +34,10 @@ bakes="${BAKES:-default --bf-epsilon,3e-5 --bf-epsilon,1e-5}"
 exclude="${EXCLUDE:-light}"
 out="${OUT:-$root/target/against-path-tracer}"
 hce="${HCE:-$root/target/release/hce}"
-if [[ ! -x "$hce" ]]; then
-    echo "error: $hce is missing; run: cargo build --release -p hce-tools" >&2
-    exit 2
-fi
-if [[ ! -f "$scene" ]]; then
-    echo "error: no scene at $scene" >&2
-    exit 2
-fi
+# shellcheck source=tools/scripts/timing.sh
+source "$root/tools/scripts/timing.sh"
+require_inputs "$hce" "$scene"
 mkdir -p "$out"
-now() { date +%s.%N; }
-elapsed() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", b - a }'; }
 
 # The reference path tracer reads a baked file (materials, lights, camera): bake once.
 "$hce" bake "$scene" -o "$out/baked-default.glb" -q

@@ -41,22 +41,15 @@ nudge="${NUDGE:-0.0005}"
 hce="${HCE:-$root/target/release/hce}"
 venv="${VENV:-$root/target/bpy-venv}"
 python="${PYTHON:-python3.11}"
-if [[ ! -x "$hce" ]]; then
-    echo "error: $hce is missing; run: cargo build --release -p hce-tools" >&2
-    exit 2
-fi
-if [[ ! -f "$scene" ]]; then
-    echo "error: no scene at $scene" >&2
-    exit 2
-fi
+# shellcheck source=tools/scripts/timing.sh
+source "$root/tools/scripts/timing.sh"
+require_inputs "$hce" "$scene"
 if [[ ! -x "$venv/bin/python" ]]; then
     echo "making $venv (bpy from PyPI)" >&2
     "$python" -m venv "$venv"
     "$venv/bin/pip" install -q -r "$root/tools/scripts/cycles-curve-requirements.txt"
 fi
 mkdir -p "$out"
-now() { date +%s.%N; }
-elapsed() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", b - a }'; }
 
 hce_args=()
 for setting in $bakes; do
