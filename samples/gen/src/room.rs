@@ -147,11 +147,13 @@ pub fn room_with_mesh(name: &str, mesh: &Mesh, turn_degrees: f64) -> Scene {
 
 /// Distance between the centres of neighbouring meshes in [`room_with_meshes`], in metres.
 pub const MESH_SPACING: f64 = 1.5;
+/// How far inside the walls and the ceiling the camera of [`room_with_meshes`] stays, in metres.
+const CAMERA_MARGIN: f64 = 0.25;
 
 /// The room around several meshes (`(name, mesh)`, each names its object): each is turned by
 /// `turn_degrees` and scaled as in [`room_with_mesh`], and they stand on the floor in a row
 /// along X, [`MESH_SPACING`] apart and centred on the room, each multiresolution with its own
-/// material; the camera looks at the middle of the row from the front. A scene of several
+/// material; the camera looks at the middle of the row from the front, from inside the room. A scene of several
 /// objects that see and shade each other, as real assets are baked.
 pub fn room_with_meshes(meshes: &[(&str, &Mesh)], turn_degrees: f64) -> Scene {
     let turn = glam::DQuat::from_rotation_y(turn_degrees.to_radians());
@@ -190,9 +192,22 @@ pub fn room_with_meshes(meshes: &[(&str, &Mesh)], turn_degrees: f64) -> Scene {
         let centre = (lo_all + hi_all) / 2.0;
         let radius = (hi_all - lo_all).length() / 2.0;
         let distance = 1.15 * radius / (FOV_DEGREES / 2.0).to_radians().sin();
+        let dir = DVec3::new(0.35, 0.3, 1.0).normalize();
+        // A row wider than the room's depth would put the fitted eye behind the front wall,
+        // where it sees only the wall: it stops [`CAMERA_MARGIN`] inside the room instead, and
+        // the row's ends may leave the view.
+        let half = DVec3::from_array(ROOM_SIZE) / 2.0 - DVec3::splat(CAMERA_MARGIN);
+        let room_limit = [
+            (half.x - centre.x) / dir.x,
+            (half.z - centre.z) / dir.z,
+            (ROOM_SIZE[1] - CAMERA_MARGIN - centre.y) / dir.y,
+        ]
+        .into_iter()
+        .fold(f64::MAX, f64::min)
+        .max(0.0);
         s.camera = Some(Camera {
             name: "view".to_string(),
-            eye: centre + DVec3::new(0.35, 0.3, 1.0).normalize() * distance,
+            eye: centre + dir * distance.min(room_limit),
             target: centre,
             yfov_degrees: FOV_DEGREES,
         });
