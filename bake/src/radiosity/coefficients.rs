@@ -7,7 +7,7 @@ use glam::Vec3;
 use super::cluster::ClusterChild;
 use super::context::Ctx;
 use super::element::{jittered_point, split, ElemKey};
-use super::formfactor::{point_to_polygon, stratified_points};
+use super::formfactor::{point_to_polygon, point_to_polygon_each, stratified_points};
 use super::links::{Source, CORNERS};
 
 /// A cluster is one disc in a link's coefficient while its radius is below this fraction of
@@ -116,19 +116,23 @@ impl Ctx<'_> {
                 // Points and source on the refined surfaces where the objects have them.
                 let mut buf = [st; 4];
                 let polys = self.source_shape(sk, st, pts.len() > 1, &mut buf);
+                // The receiver's normals, and the refined surface's own after them.
+                let mut normals = root.normals.clone();
+                normals.push(Vec3::ZERO);
+                let m = nn + usize::from(lifted);
+                // Per polygon and normal (`[t * m + j]`), summed over the polygons in order.
+                let mut f = vec![0.0f32; polys.len() * m];
                 for p in &pts {
                     let (p, pn) = self.on_surface(recv.root, *p);
-                    for (kj, n) in k.iter_mut().zip(&root.normals) {
-                        *kj += polys
-                            .iter()
-                            .map(|t| point_to_polygon(p, *n, t))
-                            .sum::<f32>();
+                    normals[nn] = pn;
+                    for (t, poly) in polys.iter().enumerate() {
+                        point_to_polygon_each(p, &normals[..m], poly, |j, v| f[t * m + j] = v);
+                    }
+                    for (j, kj) in k.iter_mut().enumerate() {
+                        *kj += (0..polys.len()).map(|t| f[t * m + j]).sum::<f32>();
                     }
                     if lifted {
-                        closure += polys
-                            .iter()
-                            .map(|t| point_to_polygon(p, pn, t))
-                            .sum::<f32>();
+                        closure += (0..polys.len()).map(|t| f[t * m + nn]).sum::<f32>();
                     }
                 }
                 let inv = 1.0 / pts.len() as f32;
@@ -243,10 +247,11 @@ impl Ctx<'_> {
             match ch {
                 ClusterChild::Cluster(x) => self.cluster_form_factors(x, p, normals, out),
                 ClusterChild::Root(x) => {
-                    let tri = &self.shape[x as usize];
-                    for (o, n) in out.iter_mut().zip(normals) {
-                        *o += point_to_polygon(p, *n, tri);
-                    }
+                    point_to_polygon_each(p, normals, &self.shape[x as usize], |j, v| {
+                        if let Some(o) = out.get_mut(j) {
+                            *o += v;
+                        }
+                    });
                 }
             }
         }

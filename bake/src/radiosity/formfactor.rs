@@ -62,6 +62,67 @@ pub fn point_to_polygon(p: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
     ((-sum / (2.0 * std::f64::consts::PI)).max(0.0)) as f32
 }
 
+/// [`point_to_polygon`] from one point `p` to `poly` for each of `normals`, handed to
+/// `out(j, value)` in order, each value bit for bit the one [`point_to_polygon`] gives. A
+/// normal whose tangent plane clips nothing sees the whole polygon, so its contour's edges
+/// (their cross products and angles, most of the cost) are the same for every such normal:
+/// they are found once, and only their dot products with each normal differ. A multiresolution
+/// receiver evaluates every source for up to eight normals at once, and each took the whole
+/// contour again.
+pub fn point_to_polygon_each(
+    p: Vec3,
+    normals: &[Vec3],
+    poly: &[Vec3],
+    mut out: impl FnMut(usize, f32),
+) {
+    if poly.len() < 3 || normals.len() < 2 {
+        for (j, n) in normals.iter().enumerate() {
+            out(j, point_to_polygon(p, *n, poly));
+        }
+        return;
+    }
+    let pd = p.as_dvec3();
+    let src_n = (poly[1] - poly[0]).cross(poly[2] - poly[0]).as_dvec3();
+    if src_n.dot(pd - poly[0].as_dvec3()) <= 0.0 {
+        for j in 0..normals.len() {
+            out(j, 0.0);
+        }
+        return;
+    }
+    let k = poly.len().min(7);
+    let mut rel = [DVec3::ZERO; 7];
+    for (r, v) in rel.iter_mut().zip(poly) {
+        *r = v.as_dvec3() - pd;
+    }
+    // Per edge of the whole polygon: its angle and cross product, and that product's length.
+    let mut edges: Option<[(f64, DVec3, f64); 7]> = None;
+    for (j, n) in normals.iter().enumerate() {
+        let nd = n.as_dvec3();
+        if !rel[..k].iter().all(|a| nd.dot(*a) >= 0.0) {
+            out(j, point_to_polygon(p, *n, poly));
+            continue;
+        }
+        let e = edges.get_or_insert_with(|| {
+            let mut e = [(0.0, DVec3::ZERO, 0.0); 7];
+            for i in 0..k {
+                let (a, b) = (rel[i], rel[(i + 1) % k]);
+                let c = a.cross(b);
+                let lc = c.length();
+                e[i] = (angle(lc, a.dot(b)), c, lc);
+            }
+            e
+        });
+        let mut sum = 0.0f64;
+        for &(gamma, c, lc) in &e[..k] {
+            if lc < 1e-300 {
+                continue;
+            }
+            sum += gamma * nd.dot(c) / lc;
+        }
+        out(j, ((-sum / (2.0 * std::f64::consts::PI)).max(0.0)) as f32);
+    }
+}
+
 /// `atan2(y, x)` for `y ≥ 0` (an angle in `0..=π`), to within 1e-9 rad: the library's `atan2`
 /// took a twelfth of a bake's time in [`point_to_polygon`]. Reduced to `|t| ≤ tan(π/8)` by
 /// `atan t = π/2 − atan(1/t)` and `atan t = π/4 + atan((t − 1)/(t + 1))`, then the Taylor
@@ -173,6 +234,33 @@ mod tests {
         assert_eq!(angle(0.0, 0.0), 0.0);
         assert_eq!(angle(0.0, 2.0), 0.0);
         assert!((angle(0.0, -2.0) - std::f64::consts::PI).abs() < 1e-15);
+    }
+
+    #[test]
+    fn each_normal_gets_the_single_normals_value_bit_for_bit() {
+        let mut rng = crate::radiosity::element::Rng::new(4, 5, 6);
+        let mut v = || {
+            Vec3::new(
+                rng.next_f32() * 2.0 - 1.0,
+                rng.next_f32() * 2.0 - 1.0,
+                rng.next_f32() * 2.0 - 1.0,
+            )
+        };
+        let mut clipped = 0;
+        for _ in 0..2000 {
+            let poly = [v() + Vec3::Z, v() + Vec3::Z, v() + Vec3::Z];
+            let p = v() * 0.5;
+            let normals: Vec<Vec3> = (0..5).map(|_| v().normalize_or(Vec3::Z)).collect();
+            let mut got = vec![f32::NAN; normals.len()];
+            point_to_polygon_each(p, &normals, &poly, |j, f| got[j] = f);
+            for (j, n) in normals.iter().enumerate() {
+                let want = point_to_polygon(p, *n, &poly);
+                assert_eq!(got[j].to_bits(), want.to_bits(), "{p} {n} {poly:?}");
+                clipped += usize::from(poly.iter().any(|q| n.dot(*q - p) < 0.0));
+            }
+        }
+        // Both paths were taken: normals that clip the polygon and normals that do not.
+        assert!(clipped > 1000 && clipped < 9000, "{clipped}");
     }
 
     fn square(o: Vec3, u: Vec3, v: Vec3) -> Vec<[Vec3; 3]> {

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 
 use super::cluster_reading::ClusterLight;
 use super::context::Ctx;
-use super::formfactor::point_to_polygon;
+use super::formfactor::point_to_polygon_each;
 use super::links::{Link, SrcIdx, CORNERS};
 use super::tree::{corner_mean, push_linear, Tree};
 
@@ -37,18 +37,27 @@ impl Ctx<'_> {
         let surf = &self.surface[r as usize];
         let root = &self.roots[r as usize];
         let mut view = vec![0.0f32; n * nn];
+        // The root's normals and the refined surface's own after them; per refined triangle
+        // and normal, their form factors from one leaf's centre.
+        let mut normals = root.normals.clone();
+        normals.push(Vec3::ZERO);
+        let mut per_tri = vec![0.0f32; surf.len() * (nn + 1)];
         for i in (0..n).filter(|&i| t.child[i] == u32::MAX) {
             let c = self.elem_corners(t.keys[i]);
             let (p, pn) = self.on_surface(r, (c[0] + c[1] + c[2]) / 3.0);
-            let f = |n: Vec3| {
-                surf.iter()
-                    .map(|tri| point_to_polygon(p, n, tri))
+            normals[nn] = pn;
+            for (t, tri) in surf.iter().enumerate() {
+                point_to_polygon_each(p, &normals, tri, |j, v| per_tri[t * (nn + 1) + j] = v);
+            }
+            let f = |j: usize| {
+                (0..surf.len())
+                    .map(|t| per_tri[t * (nn + 1) + j])
                     .sum::<f32>()
             };
-            for (j, n) in root.normals.iter().enumerate() {
-                view[i * nn + j] = f(*n);
+            for j in 0..nn {
+                view[i * nn + j] = f(j);
             }
-            closure[i] += f(pn);
+            closure[i] += f(nn);
         }
         (closure, view)
     }

@@ -18,7 +18,7 @@ use super::coefficients::{inset_corners, KnownFactors};
 use super::context::{lum, Ctx, Root};
 use super::element::{split, ElemKey};
 use super::factor_variation::factor_variation_splits;
-use super::formfactor::{disc_estimate, point_to_polygon};
+use super::formfactor::{disc_estimate, point_to_polygon, point_to_polygon_each};
 use super::link_visibility::{rays_for, LIGHT_RAY_FACTOR, MAX_RAY_FACTOR};
 use super::links::{RawLink, Source, SrcIdx, CORNERS};
 use super::narrow_shadow::taken_down_with;
@@ -515,15 +515,29 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
             }
         };
         let (lc, li) = (lift(rc), inset.map(lift));
-        for (j, n) in self.root.normals.iter().enumerate() {
+        let normals = &self.root.normals;
+        let nn = normals.len();
+        // Per point (the inset corners, then the centre) and normal, summed over the polygons
+        // in order.
+        let mut per_poly = vec![0.0f32; polys.len() * nn];
+        let mut values = vec![0.0f32; (CORNERS + 1) * nn];
+        for (i, p) in li.iter().chain([&lc]).enumerate() {
+            for (t, poly) in polys.iter().enumerate() {
+                point_to_polygon_each(*p, normals, poly, |j, v| per_poly[t * nn + j] = v);
+            }
+            for j in 0..nn {
+                values[i * nn + j] = (0..polys.len()).map(|t| per_poly[t * nn + j]).sum::<f32>();
+            }
+        }
+        for (j, n) in normals.iter().enumerate() {
             let f = |p: Vec3| {
                 polys
                     .iter()
                     .map(|t| point_to_polygon(p, *n, t))
                     .sum::<f32>()
             };
-            let centre = f(lc);
-            let at = li.map(f);
+            let centre = values[CORNERS * nn + j];
+            let at: [f32; CORNERS] = std::array::from_fn(|c| values[c * nn + j]);
             for v in at.into_iter().chain([centre]) {
                 fmax = fmax.max(v);
                 fmin = fmin.min(v);

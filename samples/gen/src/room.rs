@@ -145,6 +145,76 @@ pub fn room_with_mesh(name: &str, mesh: &Mesh, turn_degrees: f64) -> Scene {
     s
 }
 
+/// Distance between the centres of neighbouring meshes in [`room_with_meshes`], in metres.
+pub const MESH_SPACING: f64 = 1.5;
+/// How far inside the walls and the ceiling the camera of [`room_with_meshes`] stays, in metres.
+const CAMERA_MARGIN: f64 = 0.25;
+
+/// The room around several meshes (`(name, mesh)`, each names its object): each is turned by
+/// `turn_degrees` and scaled as in [`room_with_mesh`], and they stand on the floor in a row
+/// along X, [`MESH_SPACING`] apart and centred on the room, each multiresolution with its own
+/// material; the camera looks at the middle of the row from the front, from inside the room. A scene of several
+/// objects that see and shade each other, as real assets are baked.
+pub fn room_with_meshes(meshes: &[(&str, &Mesh)], turn_degrees: f64) -> Scene {
+    let turn = glam::DQuat::from_rotation_y(turn_degrees.to_radians());
+    let mut s = Scene {
+        name: format!(
+            "Room with {}",
+            meshes.iter().map(|m| m.0).collect::<Vec<_>>().join(", ")
+        ),
+        ..Default::default()
+    };
+    room_with_light(
+        &mut s,
+        DVec3::from_array(ROOM_SIZE),
+        LIGHT_SIDE,
+        LIGHT_EMISSION,
+    );
+    let first_x = -MESH_SPACING * (meshes.len().max(1) - 1) as f64 / 2.0;
+    let (mut lo_all, mut hi_all) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+    for (i, (name, mesh)) in meshes.iter().enumerate() {
+        let mut mesh = (*mesh).clone();
+        mesh.map_positions(|p| turn * p);
+        let (lo, hi) = mesh.bounds().unwrap_or((DVec3::ZERO, DVec3::ONE));
+        let scale = MESH_SIZE / (hi - lo).max_element().max(1e-12);
+        let base = DVec3::new((lo.x + hi.x) / 2.0, lo.y, (lo.z + hi.z) / 2.0);
+        mesh.map_positions(|p| (p - base) * scale);
+        let at = DVec3::new(first_x + MESH_SPACING * i as f64, REST_GAP, 0.0);
+        if let Some((lo, hi)) = mesh.bounds() {
+            lo_all = lo_all.min(lo + at);
+            hi_all = hi_all.max(hi + at);
+        }
+        let material = s.material(Material::diffuse(name, [0.75, 0.72, 0.68]));
+        s.objects
+            .push(Object::new(name, mesh, material).at(at).multires());
+    }
+    if lo_all.x <= hi_all.x {
+        let centre = (lo_all + hi_all) / 2.0;
+        let radius = (hi_all - lo_all).length() / 2.0;
+        let distance = 1.15 * radius / (FOV_DEGREES / 2.0).to_radians().sin();
+        let dir = DVec3::new(0.35, 0.3, 1.0).normalize();
+        // A row wider than the room's depth would put the fitted eye behind the front wall,
+        // where it sees only the wall: it stops [`CAMERA_MARGIN`] inside the room instead, and
+        // the row's ends may leave the view.
+        let half = DVec3::from_array(ROOM_SIZE) / 2.0 - DVec3::splat(CAMERA_MARGIN);
+        let room_limit = [
+            (half.x - centre.x) / dir.x,
+            (half.z - centre.z) / dir.z,
+            (ROOM_SIZE[1] - CAMERA_MARGIN - centre.y) / dir.y,
+        ]
+        .into_iter()
+        .fold(f64::MAX, f64::min)
+        .max(0.0);
+        s.camera = Some(Camera {
+            name: "view".to_string(),
+            eye: centre + dir * distance.min(room_limit),
+            target: centre,
+            yfov_degrees: FOV_DEGREES,
+        });
+    }
+    s
+}
+
 /// Radiance every surface of [`furnace`] emits, and its reflectance.
 pub const FURNACE_EMISSION: f64 = 0.4;
 pub const FURNACE_REFLECTANCE: f64 = 0.5;
@@ -201,6 +271,29 @@ mod tests {
             Err(ObjError::Syntax { line: 1, .. })
         ));
         assert!(matches!(parse_obj("# nothing\n"), Err(ObjError::Empty)));
+    }
+
+    #[test]
+    fn several_meshes_stand_apart_on_the_floor() {
+        let mesh = parse_obj(TETRA).unwrap();
+        let s = room_with_meshes(&[("a", &mesh), ("b", &mesh), ("c", &mesh)], 0.0);
+        let xs: Vec<f64> = ["a", "b", "c"]
+            .iter()
+            .map(|n| {
+                let o = s.object(n).unwrap();
+                assert!(o.multires);
+                let (lo, hi) = o.primitives[0].mesh.bounds().unwrap();
+                assert!(((hi - lo).max_element() - MESH_SIZE).abs() < 1e-12);
+                assert!((lo.y + o.translation.y - REST_GAP).abs() < 1e-12);
+                o.translation.x
+            })
+            .collect();
+        assert_eq!(xs, [-MESH_SPACING, 0.0, MESH_SPACING]);
+        // Floor, walls, ceiling, light and three meshes; the camera inside the room.
+        assert_eq!(s.objects.len(), 7);
+        let eye = s.camera.as_ref().unwrap().eye;
+        let half = DVec3::from_array(ROOM_SIZE) / 2.0;
+        assert!(eye.x.abs() < half.x && eye.z.abs() < half.z && eye.y < ROOM_SIZE[1]);
     }
 
     #[test]

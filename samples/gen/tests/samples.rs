@@ -355,6 +355,32 @@ fn usage_errors_exit_2_with_the_usage_and_no_backtrace() {
         &["room", "--turn"],
         &["room", "--mesh", "x.obj", "--triangles", "2", "-o", "x.glb"],
         &["room", "--mesh", "x.obj"],
+        // Several meshes: each --triangles follows its --mesh, once, and --name is for one.
+        &[
+            "room",
+            "--triangles",
+            "9",
+            "--mesh",
+            "a.obj",
+            "--mesh",
+            "b.obj",
+            "-o",
+            "x.glb",
+        ],
+        &[
+            "room",
+            "--mesh",
+            "a.obj",
+            "--triangles",
+            "9",
+            "--triangles",
+            "9",
+            "-o",
+            "x.glb",
+        ],
+        &[
+            "room", "--mesh", "a.obj", "--mesh", "b.obj", "--name", "n", "-o", "x.glb",
+        ],
     ] {
         let out = run(args);
         let err = String::from_utf8_lossy(&out.stderr);

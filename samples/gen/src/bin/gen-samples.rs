@@ -12,6 +12,8 @@
 //! the coarse control mesh a multiresolution object is meant to be. With `--furnace` every
 //! surface, the light included, emits 0.4 and reflects 0.5 ([`hce_samples::room::furnace`]):
 //! a closed furnace whose exact radiance is 0.8 everywhere (`hce compare --constant 0.8`).
+//! `--mesh` may be given several times, each followed by its own `--triangles`: the meshes
+//! then stand in a row ([`hce_samples::room::room_with_meshes`]), each named by its file.
 #![forbid(unsafe_code)]
 
 use std::io::Write;
@@ -66,12 +68,17 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     result
 }
 
-/// `room --mesh PATH -o OUT.glb [--name NAME] [--turn DEG] [--triangles N] [--furnace]`.
+/// `room --mesh PATH [--triangles N] [--mesh PATH [--triangles N] ...] -o OUT.glb [--name NAME]
+/// [--turn DEG] [--furnace]`.
 fn room(args: &[String]) -> Result<()> {
-    let usage = "usage: gen-samples room --mesh MESH.obj -o ROOM.glb [--name NAME] [--turn DEG] \
-                 [--triangles N] [--furnace]";
-    let (mut mesh, mut out, mut name, mut turn) = (None, None, None, 0.0);
-    let mut triangles: Option<usize> = None;
+    let usage = "usage: gen-samples room --mesh MESH.obj [--triangles N] [--mesh MESH.obj \
+                 [--triangles N] ...] -o ROOM.glb [--name NAME] [--turn DEG] [--furnace]";
+    // Each mesh with the triangle count it is simplified to, if one.
+    let mut meshes: Vec<(PathBuf, Option<usize>)> = Vec::new();
+    let (mut out, mut name, mut turn) = (None, None, 0.0);
+    // A `--triangles` given before any `--mesh` (one mesh only, as the single-mesh room always
+    // took it in any order).
+    let mut early_triangles: Option<usize> = None;
     let mut furnace = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -83,7 +90,7 @@ fn room(args: &[String]) -> Result<()> {
             .next()
             .ok_or_else(|| usage_error(format!("{a} needs a value; {usage}")));
         match a.as_str() {
-            "--mesh" => mesh = Some(PathBuf::from(value?)),
+            "--mesh" => meshes.push((PathBuf::from(value?), None)),
             "-o" | "--output" => out = Some(PathBuf::from(value?)),
             "--name" => name = Some(value?.clone()),
             "--turn" => {
@@ -94,52 +101,98 @@ fn room(args: &[String]) -> Result<()> {
                     .ok_or_else(|| usage_error(format!("--turn takes degrees; {usage}")))?
             }
             "--triangles" => {
-                triangles = Some(
-                    value?
-                        .parse::<usize>()
-                        .ok()
-                        .filter(|&n| n >= 4)
-                        .ok_or_else(|| {
-                            usage_error(format!("--triangles takes a count of 4 or more; {usage}"))
-                        })?,
-                )
+                let n = value?
+                    .parse::<usize>()
+                    .ok()
+                    .filter(|&n| n >= 4)
+                    .ok_or_else(|| {
+                        usage_error(format!("--triangles takes a count of 4 or more; {usage}"))
+                    })?;
+                match meshes.last_mut() {
+                    Some(m) if m.1.is_none() => m.1 = Some(n),
+                    Some(_) => {
+                        return Err(usage_error(format!(
+                            "--triangles given twice for one --mesh; {usage}"
+                        )))
+                    }
+                    None => early_triangles = Some(n),
+                }
             }
             _ => return Err(usage_error(format!("unknown argument {a:?}; {usage}"))),
         }
     }
-    let (mesh_path, out) = match (mesh, out) {
-        (Some(m), Some(o)) => (m, o),
-        _ => return Err(usage_error(usage.to_string())),
+    let Some(out) = out else {
+        return Err(usage_error(usage.to_string()));
     };
-    let name = name.unwrap_or_else(|| {
-        mesh_path
-            .file_stem()
-            .map_or("mesh".into(), |s| s.to_string_lossy().into_owned())
-    });
-    let text = std::fs::read_to_string(&mesh_path)
-        .with_context(|| format!("{}: cannot read", mesh_path.display()))?;
-    let mut mesh = hce_samples::room::parse_obj(&text)
-        .with_context(|| format!("{}: not a usable OBJ", mesh_path.display()))?;
-    let input_triangles = mesh.triangles.len();
-    if let Some(n) = triangles {
-        mesh = hce_samples::simplify::simplify(&mesh, n);
+    if meshes.is_empty() {
+        return Err(usage_error(usage.to_string()));
     }
-    let mut scene = hce_samples::room::room_with_mesh(&name, &mesh, turn);
+    if let Some(n) = early_triangles {
+        match meshes.as_mut_slice() {
+            [(_, t @ None)] => *t = Some(n),
+            _ => {
+                return Err(usage_error(format!(
+                    "with several meshes, --triangles follows the --mesh it is for; {usage}"
+                )))
+            }
+        }
+    }
+    if name.is_some() && meshes.len() > 1 {
+        return Err(usage_error(format!(
+            "--name names the one mesh; with several, each is named by its file; {usage}"
+        )));
+    }
+    let mut loaded = Vec::new();
+    let mut described = Vec::new();
+    for (i, (path, triangles)) in meshes.iter().enumerate() {
+        let stem = path
+            .file_stem()
+            .map_or("mesh".into(), |s| s.to_string_lossy().into_owned());
+        // Two copies of one file are two objects, named apart.
+        let mut object = name.clone().unwrap_or(stem);
+        if meshes[..i]
+            .iter()
+            .any(|(p, _)| p.file_stem() == path.file_stem())
+        {
+            object = format!("{object}-{i}");
+        }
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("{}: cannot read", path.display()))?;
+        let mut mesh = hce_samples::room::parse_obj(&text)
+            .with_context(|| format!("{}: not a usable OBJ", path.display()))?;
+        let input_triangles = mesh.triangles.len();
+        if let Some(n) = *triangles {
+            mesh = hce_samples::simplify::simplify(&mesh, n);
+        }
+        let simplified = match triangles {
+            Some(_) => format!(", simplified from {input_triangles}"),
+            None => String::new(),
+        };
+        described.push(format!(
+            "'{object}' {} triangles (multires{simplified})",
+            mesh.triangles.len()
+        ));
+        loaded.push((object, mesh));
+    }
+    let mut scene = match loaded.as_slice() {
+        [(object, mesh)] => hce_samples::room::room_with_mesh(object, mesh, turn),
+        _ => {
+            let refs: Vec<(&str, &hce_samples::mesh::Mesh)> =
+                loaded.iter().map(|(n, m)| (n.as_str(), m)).collect();
+            hce_samples::room::room_with_meshes(&refs, turn)
+        }
+    };
     if furnace {
         hce_samples::room::furnace(&mut scene);
     }
     let bytes = hce_samples::glb::write_glb(&scene).context("cannot build the GLB")?;
     write_atomically(&out, &bytes)?;
-    let simplified = match triangles {
-        Some(_) => format!(", simplified from {input_triangles}"),
-        None => String::new(),
-    };
     println!(
-        "{}: {} bytes, {} triangles, '{name}' {} triangles (multires{simplified}){}",
+        "{}: {} bytes, {} triangles, {}{}",
         out.display(),
         bytes.len(),
         scene.triangle_count(),
-        mesh.triangles.len(),
+        described.join(", "),
         if furnace {
             ", a closed furnace (E 0.4, reflectance 0.5: 0.8 everywhere)"
         } else {
