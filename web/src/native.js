@@ -33,6 +33,9 @@ async function compile() {
 // would hold back every page script that imports the runtime. `loadAsset` waits for it, and
 // every object the synchronous calls take comes from `loadAsset`.
 const compiled = compile();
+// Marked handled here: a missing hce.wasm is reported by the first load that needs it (as a
+// rejected load), not as an unhandled rejection at import.
+compiled.catch(() => {});
 const instantiate = async () => /** @type {Exports} */ (/** @type {unknown} */ ((await WebAssembly.instantiate(await compiled)).exports));
 /** @type {Exports | null} null until instantiated, and after a trap until a fresh instance replaces it */
 let wasm = null;

@@ -6,14 +6,7 @@
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { HceGLTFPlugin } from '../../src/three/HceGLTFPlugin.js';
-
-/** present.wgsl's curve on one linear channel, to 8 bits. @param {number} c */
-function toneMap(c) {
-  const x = Math.max(c, 0);
-  const y = Math.min(Math.max((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0), 1);
-  const s = y <= 0.0031308 ? 12.92 * y : 1.055 * y ** (1 / 2.4) - 0.055;
-  return Math.round(255 * s);
-}
+import { toneMap } from './tone_map.js';
 
 /**
  * @param {string} url
