@@ -992,14 +992,16 @@ mod tests {
         assert!(t.abs_diff_eq(Mat4::IDENTITY, 1e-6), "{t}");
         let b = asset.bounds().unwrap();
         assert_eq!((b.min, b.max), ([0.0; 3], [1.0, 1.0, 0.0]));
-        // Moved to twice the size by the node, the object follows.
+        // With the node's scale 1 instead of 0.5 the primitive is drawn twice the size, at
+        // (-0.5, -0.5, 0), (1.5, -0.5, 0), (-0.5, 1.5, 0): the node times M⁻¹ (x ↦ 2x - (1, 1, 0))
+        // puts the object's corners there too.
         json["nodes"][0]["scale"] = serde_json::json!([1.0, 1.0, 1.0]);
         let glb = hce_format::write_glb(&json, &bin).unwrap();
         let b = open_glb(&glb, &OpenOptions::default())
             .unwrap()
             .bounds()
             .unwrap();
-        assert_eq!((b.min, b.max), ([0.5, 0.5, 0.0], [2.5, 2.5, 0.0]));
+        assert_eq!((b.min, b.max), ([-0.5, -0.5, 0.0], [1.5, 1.5, 0.0]));
     }
 
     #[test]
