@@ -6,8 +6,11 @@
 //! free of geometry dependencies. Every size and index read from the asset is checked; nothing
 //! panics on any input.
 
+use crate::accessor::{read_primitive, PrimitiveMesh, DRACO};
 use crate::model::geometry_hash;
+use crate::same_geometry::{primitive_box, same_surface, Mismatch, Placement};
 use serde_json::{json, Map, Value};
+use std::rc::Rc;
 
 pub const EXTENSION_NAME: &str = "EXT_hce_baked_lighting";
 const GLB_MAGIC: &[u8; 4] = b"glTF";
@@ -25,6 +28,11 @@ pub enum GltfError {
     Extension { location: String, message: String },
     #[error("buffers[{index}]: {message}")]
     Buffer { index: usize, message: String },
+    /// Data compressed with an extension hce's readers do not decode (SPEC.md 2.6).
+    #[error(
+        "{location}: cannot check: {extension}-compressed data is not decoded by hce (SPEC.md 2.6)"
+    )]
+    Compressed { location: String, extension: String },
 }
 
 fn u32_le(b: &[u8], at: usize) -> Option<u32> {
@@ -137,9 +145,15 @@ impl Asset {
                     .bin
                     .clone()
                     .ok_or_else(|| bad("has no uri and the asset has no BIN chunk".into()))?,
+                // EXT_meshopt_compression's fallback buffer: no data, never read (its views
+                // are read decoded from the compressed buffer they name).
+                None if is_meshopt_fallback(b) => {
+                    out.push(Vec::new());
+                    continue;
+                }
                 None => {
                     return Err(bad(
-                        "has no uri; only buffer 0 may use the GLB BIN chunk".into()
+                        "has no uri; only buffer 0 may use the GLB BIN chunk (or an EXT_meshopt_compression fallback buffer)".into()
                     ))
                 }
                 Some(uri) if uri.starts_with("data:") => {
@@ -162,6 +176,16 @@ impl Asset {
         }
         Ok(out)
     }
+}
+
+/// A buffer marked as `EXT_meshopt_compression`'s fallback (`"fallback": true`).
+fn is_meshopt_fallback(buffer: &Value) -> bool {
+    buffer
+        .get("extensions")
+        .and_then(|e| e.get(crate::accessor::MESHOPT))
+        .and_then(|m| m.get("fallback"))
+        .and_then(Value::as_bool)
+        == Some(true)
 }
 
 fn parse_json(bytes: &[u8]) -> Result<Value, GltfError> {
@@ -384,145 +408,16 @@ pub fn container_bytes<'a>(
     }
 }
 
-/// Reads an accessor as `count` elements of `components` values each, converted to `f64`.
-/// Only what triangle positions and indices need: no sparse accessors, no normalisation.
-fn accessor_values(
-    json: &Value,
-    buffers: &[Vec<u8>],
-    accessor: usize,
-) -> Result<(Vec<f64>, usize), GltfError> {
-    let loc = format!("accessors[{accessor}]");
-    let a = item(json, "accessors", accessor)?;
-    if a.get("sparse").is_some() {
-        return Err(GltfError::Json(format!(
-            "{loc}: sparse accessors are not supported for baked primitives"
-        )));
-    }
-    let count = a
-        .get("count")
-        .and_then(Value::as_u64)
-        .ok_or_else(|| GltfError::Json(format!("{loc}.count is missing")))?;
-    let components = match a.get("type").and_then(Value::as_str) {
-        Some("SCALAR") => 1usize,
-        Some("VEC3") => 3,
-        t => {
-            return Err(GltfError::Json(format!(
-                "{loc}.type {t:?} is not SCALAR or VEC3"
-            )))
-        }
-    };
-    let (size, kind) = match a.get("componentType").and_then(Value::as_u64) {
-        Some(5121) => (1usize, 0),
-        Some(5123) => (2, 1),
-        Some(5125) => (4, 2),
-        Some(5126) => (4, 3),
-        t => {
-            return Err(GltfError::Json(format!(
-                "{loc}.componentType {t:?} is not supported"
-            )))
-        }
-    };
-    let view = index_of(a, "bufferView", &loc)?;
-    let data = buffer_view_bytes(json, buffers, view)?;
-    let stride = item(json, "bufferViews", view)?
-        .get("byteStride")
-        .and_then(Value::as_u64)
-        .unwrap_or((size * components) as u64);
-    let offset = a.get("byteOffset").and_then(Value::as_u64).unwrap_or(0);
-    let element = (size * components) as u64;
-    // The last element must end inside the view; checked before allocating `count` values.
-    let needed = if count == 0 {
-        0
-    } else {
-        (count - 1)
-            .checked_mul(stride)
-            .and_then(|x| x.checked_add(offset))
-            .and_then(|x| x.checked_add(element))
-            .unwrap_or(u64::MAX)
-    };
-    if needed > data.len() as u64 || stride < element {
-        return Err(GltfError::Json(format!(
-            "{loc}: {count} elements of stride {stride} do not fit in bufferViews[{view}]"
-        )));
-    }
-    let mut out = Vec::with_capacity(count as usize * components);
-    for i in 0..count {
-        let base = (offset + i * stride) as usize;
-        for c in 0..components {
-            let at = base + c * size;
-            let b = &data[at..at + size];
-            out.push(match kind {
-                0 => f64::from(b[0]),
-                1 => f64::from(u16::from_le_bytes([b[0], b[1]])),
-                2 => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-                _ => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-            });
-        }
-    }
-    Ok((out, count as usize))
-}
-
 /// The geometry hash (SPEC.md 2.5) and triangle count of a triangle primitive, recomputed from
-/// its POSITION accessor and indices.
+/// its POSITION accessor (decoded and dequantized, [`read_primitive`]) and indices.
 pub fn primitive_geometry(
     json: &Value,
     buffers: &[Vec<u8>],
     mesh: usize,
     primitive: usize,
 ) -> Result<(u64, usize), GltfError> {
-    let loc = format!("meshes[{mesh}].primitives[{primitive}]");
-    let prim = item(json, "meshes", mesh)?
-        .get("primitives")
-        .and_then(Value::as_array)
-        .and_then(|p| p.get(primitive))
-        .ok_or_else(|| GltfError::Json(format!("{loc} does not exist")))?;
-    if prim.get("mode").and_then(Value::as_u64).unwrap_or(4) != 4 {
-        return Err(GltfError::Json(format!("{loc}: mode is not 4 (triangles)")));
-    }
-    let position = prim
-        .get("attributes")
-        .and_then(|a| a.get("POSITION"))
-        .and_then(Value::as_u64)
-        .ok_or_else(|| GltfError::Json(format!("{loc} has no POSITION attribute")))?
-        as usize;
-    let (positions, vertex_count) = accessor_values(json, buffers, position)?;
-    // accessor_values returns count * components values: VEC3 has three per vertex.
-    if positions.len() != 3 * vertex_count {
-        return Err(GltfError::Json(format!(
-            "{loc}: the POSITION accessor is not VEC3"
-        )));
-    }
-    let indices: Vec<usize> = match prim.get("indices").and_then(Value::as_u64) {
-        Some(i) => {
-            let (values, count) = accessor_values(json, buffers, i as usize)?;
-            if values.len() != count {
-                return Err(GltfError::Json(format!(
-                    "{loc}: the indices accessor is not SCALAR"
-                )));
-            }
-            values.iter().map(|&x| x as usize).collect()
-        }
-        None => (0..vertex_count).collect(),
-    };
-    if indices.len() % 3 != 0 {
-        return Err(GltfError::Json(format!(
-            "{loc}: {} indices are not whole triangles",
-            indices.len()
-        )));
-    }
-    if let Some(&bad) = indices.iter().find(|&&i| i >= vertex_count) {
-        return Err(GltfError::Json(format!(
-            "{loc}: index {bad} is out of range ({vertex_count} vertices)"
-        )));
-    }
-    let hash = geometry_hash(indices.iter().map(|&i| {
-        [
-            positions[3 * i] as f32,
-            positions[3 * i + 1] as f32,
-            positions[3 * i + 2] as f32,
-        ]
-    }));
-    Ok((hash, indices.len() / 3))
+    let m = read_primitive(json, buffers, mesh, primitive)?;
+    Ok((geometry_hash(m.corners_f32()), m.triangles.len()))
 }
 
 /// Formats a geometry hash as in the extension JSON.
@@ -631,15 +526,21 @@ pub fn write_glb(json: &Value, bin: &[u8]) -> Result<Vec<u8>, GltfError> {
     Ok(out)
 }
 
-/// [`primitive_geometry`] for every link, reading each distinct (POSITION, indices, mode)
-/// combination once: the work stays linear in the buffers even when thousands of primitives
-/// share one accessor.
-pub fn linked_geometries(
+/// A linked primitive as read once: its triangles and their geometry hash (SPEC.md 2.5).
+struct LinkedMesh {
+    hash: u64,
+    mesh: PrimitiveMesh,
+}
+
+/// [`read_primitive`] for every link, reading each distinct (POSITION, indices, mode,
+/// compression) combination once: the work stays linear in the buffers even when thousands of
+/// primitives share one accessor.
+fn linked_meshes(
     json: &Value,
     buffers: &[Vec<u8>],
     links: &[PrimitiveLink],
-) -> Vec<Result<(u64, usize), GltfError>> {
-    let mut cache: std::collections::HashMap<String, Result<(u64, usize), GltfError>> =
+) -> Vec<Result<Rc<LinkedMesh>, GltfError>> {
+    let mut cache: std::collections::HashMap<String, Result<Rc<LinkedMesh>, GltfError>> =
         std::collections::HashMap::new();
     links
         .iter()
@@ -651,38 +552,73 @@ pub fn linked_geometries(
                 .and_then(|p| p.get(l.primitive));
             let key = match prim {
                 Some(p) => format!(
-                    "{}/{}/{}",
+                    "{}/{}/{}/{}",
                     p.get("attributes")
                         .and_then(|a| a.get("POSITION"))
                         .unwrap_or(&Value::Null),
                     p.get("indices").unwrap_or(&Value::Null),
-                    p.get("mode").unwrap_or(&Value::Null)
+                    p.get("mode").unwrap_or(&Value::Null),
+                    p.get("extensions").and_then(|e| e.get(DRACO)).is_some()
                 ),
                 None => format!("missing {}/{}", l.mesh, l.primitive),
             };
             cache
                 .entry(key)
-                .or_insert_with(|| primitive_geometry(json, buffers, l.mesh, l.primitive))
+                .or_insert_with(|| {
+                    read_primitive(json, buffers, l.mesh, l.primitive).map(|mesh| {
+                        Rc::new(LinkedMesh {
+                            hash: geometry_hash(mesh.corners_f32()),
+                            mesh,
+                        })
+                    })
+                })
                 .clone()
         })
+        .collect()
+}
+
+/// [`primitive_geometry`] for every link (each distinct primitive read once): hash and
+/// triangle count.
+pub fn linked_geometries(
+    json: &Value,
+    buffers: &[Vec<u8>],
+    links: &[PrimitiveLink],
+) -> Vec<Result<(u64, usize), GltfError>> {
+    linked_meshes(json, buffers, links)
+        .into_iter()
+        .map(|m| m.map(|m| (m.hash, m.mesh.triangles.len())))
         .collect()
 }
 
 /// Validates a glTF asset that uses the extension (SPEC.md 3.3, 3.5, Appendix C and E.2):
 /// the root object and its buffer view, the embedded container (every rule of
 /// [`crate::validate_bytes`]), and every primitive link: well-formed, object in range, one mesh
-/// per object, triangle range inside the object and not overlapping another primitive's,
-/// triangles still hashing to `geometryHash` (and to the object's hash when the primitive is the
-/// whole object). When the container cannot be read, the link checks that need no object are
-/// still made. `buffers` are the asset's loaded buffers ([`Asset::buffers`]). An empty result
-/// means the asset is valid; an asset that does not use the extension is one problem.
+/// per object, triangle range inside the object and not overlapping another primitive's, the
+/// same geometry as its range (SPEC.md 2.6). When the container cannot be read, the link checks
+/// that need no object are still made. `buffers` are the asset's loaded buffers
+/// ([`Asset::buffers`]). An empty result means the asset is valid; an asset that does not use
+/// the extension is one problem. The warnings of [`validate_asset_report`] are left out.
 pub fn validate_asset(json: &Value, buffers: &[Vec<u8>]) -> Vec<crate::Problem> {
+    validate_asset_report(json, buffers).problems
+}
+
+/// What [`validate_asset_report`] finds: problems make the asset invalid; warnings do not
+/// (a primitive that cannot be checked, SPEC.md 2.6, is drawn without its lighting).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct AssetReport {
+    pub problems: Vec<crate::Problem>,
+    pub warnings: Vec<crate::Problem>,
+}
+
+/// [`validate_asset`] with its warnings.
+pub fn validate_asset_report(json: &Value, buffers: &[Vec<u8>]) -> AssetReport {
     let mut p = crate::validate::Problems::default();
     let container = validate_root(json, buffers, &mut p);
     let (links, errors) = scan_primitive_links(json);
     for e in errors {
         push_error(&mut p, e);
     }
+    let mut warnings = crate::validate::Problems::default();
     // Without a readable container the checks of rule 15 that read only the asset still run
     // (SPEC.md Appendix C, stages 1 and 2): an edited mesh is worth reporting either way.
     let _ = check_links_against(
@@ -690,18 +626,97 @@ pub fn validate_asset(json: &Value, buffers: &[Vec<u8>]) -> Vec<crate::Problem> 
         json,
         buffers,
         &links,
-        &mut LinkProblems(&mut p),
+        &mut LinkProblems {
+            problems: &mut p,
+            warnings: &mut warnings,
+        },
     );
-    p.finish()
+    AssetReport {
+        problems: p.finish(),
+        warnings: warnings.finish(),
+    }
 }
 
-/// The validator's sink for link faults: every one, located, and on to the next check.
-struct LinkProblems<'a>(&'a mut crate::validate::Problems);
+/// The validator's sink for link faults: every one, located, and on to the next check; a
+/// primitive that cannot be checked is a warning.
+struct LinkProblems<'a> {
+    problems: &'a mut crate::validate::Problems,
+    warnings: &'a mut crate::validate::Problems,
+}
 
 impl LinkSink for LinkProblems<'_> {
     fn fault(&mut self, link: &PrimitiveLink, at: &str, fault: LinkFault) -> LinkNext {
+        if let LinkFault::Unchecked(e) = &fault {
+            self.warnings.push(
+                at,
+                format!("{e}; loaders draw its plain primitive without the baked lighting"),
+            );
+            return LinkNext::Continue;
+        }
+        let (location, message) = fault.describe(link, at);
+        self.problems.push(location, message);
+        LinkNext::Continue
+    }
+}
+
+/// What is wrong with one primitive link (SPEC.md 3.3, 3.5), as [`check_links`] finds it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LinkFault {
+    /// The link names no object of the container, which has `objects`.
+    ObjectOutOfRange { objects: usize },
+    /// The object is linked from primitives of another mesh, `mesh`, too.
+    OtherMesh { mesh: usize },
+    /// The primitive's triangles cannot be read.
+    Geometry(GltfError),
+    /// The primitive's triangles are compressed in a way hce does not decode
+    /// ([`GltfError::Compressed`]): it cannot be checked (SPEC.md 2.6).
+    Unchecked(GltfError),
+    /// The primitive's triangles hash to `computed`, not to the link's `geometryHash`, and
+    /// there is no container (or no range inside it) to compare them with (SPEC.md 2.6).
+    Stale { computed: u64, stored: u64 },
+    /// The primitive's triangles hash to `computed`, not to `stored`, and the surface match of
+    /// SPEC.md 2.6 fails against the object's range: the mesh was edited after baking.
+    Edited {
+        mismatch: Mismatch,
+        computed: u64,
+        stored: u64,
+        name: String,
+        end: u64,
+    },
+    /// The primitive is the whole object and hashes to its `geometryHash`, but not to the
+    /// object's `geometry_hash`.
+    WholeObject { computed: u64, stored: u64 },
+    /// The primitive's triangles end at `end`, past the object's `triangles`.
+    Range {
+        end: u64,
+        triangles: usize,
+        name: String,
+    },
+    /// The primitive's triangle range overlaps that of the primitive at `other` (a location
+    /// such as `meshes[0].primitives[1]`), an earlier range of the same object.
+    Overlap { other: String },
+    /// The primitive's placement (SPEC.md 2.6) differs from that of `other`, an earlier
+    /// primitive of the same mesh and object.
+    Placement { other: String },
+}
+
+impl LinkFault {
+    /// The hashes of a stale primitive: computed and stored.
+    pub fn stale_hashes(&self) -> Option<(u64, u64)> {
+        match *self {
+            LinkFault::Stale { computed, stored }
+            | LinkFault::WholeObject { computed, stored }
+            | LinkFault::Edited {
+                computed, stored, ..
+            } => Some((computed, stored)),
+            _ => None,
+        }
+    }
+
+    /// The fault as `hce validate` prints it (SPEC.md E.2): a location and a message.
+    pub fn describe(&self, link: &PrimitiveLink, at: &str) -> (String, String) {
         let object_at = || format!("{at}.extensions.{EXTENSION_NAME}.object");
-        let (location, message) = match fault {
+        match self {
             LinkFault::ObjectOutOfRange { objects } => (
                 object_at(),
                 format!(
@@ -716,11 +731,23 @@ impl LinkSink for LinkProblems<'_> {
                     link.object
                 ),
             ),
-            LinkFault::Geometry(e) => (at.to_owned(), e.to_string()),
+            LinkFault::Geometry(e) | LinkFault::Unchecked(e) => (at.to_owned(), e.to_string()),
             LinkFault::Stale { computed, stored } => (
                 at.to_owned(),
                 format!(
                     "geometry hash {computed:016x} differs from the baked {stored:016x}: the mesh was edited after baking; bake it again"
+                ),
+            ),
+            LinkFault::Edited {
+                mismatch,
+                name,
+                end,
+                ..
+            } => (
+                at.to_owned(),
+                format!(
+                    "not the same geometry as object {} '{name}' triangles {}..{end} (SPEC.md 2.6): {mismatch}; the mesh was edited after baking; bake it again",
+                    link.object, link.first_triangle
                 ),
             ),
             LinkFault::WholeObject { computed, stored } => (
@@ -744,45 +771,13 @@ impl LinkSink for LinkProblems<'_> {
                     link.object
                 ),
             ),
-        };
-        self.0.push(location, message);
-        LinkNext::Continue
-    }
-}
-
-/// What is wrong with one primitive link (SPEC.md 3.3, 3.5), as [`check_links`] finds it.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum LinkFault {
-    /// The link names no object of the container, which has `objects`.
-    ObjectOutOfRange { objects: usize },
-    /// The object is linked from primitives of another mesh, `mesh`, too.
-    OtherMesh { mesh: usize },
-    /// The primitive's triangles cannot be read.
-    Geometry(GltfError),
-    /// The primitive's triangles hash to `computed`, not to the link's `geometryHash`.
-    Stale { computed: u64, stored: u64 },
-    /// The primitive is the whole object and hashes to its `geometryHash`, but not to the
-    /// object's `geometry_hash`.
-    WholeObject { computed: u64, stored: u64 },
-    /// The primitive's triangles end at `end`, past the object's `triangles`.
-    Range {
-        end: u64,
-        triangles: usize,
-        name: String,
-    },
-    /// The primitive's triangle range overlaps that of the primitive at `other` (a location
-    /// such as `meshes[0].primitives[1]`), an earlier range of the same object.
-    Overlap { other: String },
-}
-
-impl LinkFault {
-    /// The hashes of a stale primitive: computed and stored.
-    pub fn stale_hashes(&self) -> Option<(u64, u64)> {
-        match *self {
-            LinkFault::Stale { computed, stored } | LinkFault::WholeObject { computed, stored } => {
-                Some((computed, stored))
-            }
-            _ => None,
+            LinkFault::Placement { other } => (
+                at.to_owned(),
+                format!(
+                    "its placement onto object {} (SPEC.md 2.6) differs from that of {other}, a primitive of the same mesh and object; the object cannot be drawn in both places (SPEC.md 3.3)",
+                    link.object
+                ),
+            ),
         }
     }
 }
@@ -805,38 +800,59 @@ pub trait LinkSink {
     fn fault(&mut self, link: &PrimitiveLink, at: &str, fault: LinkFault) -> LinkNext;
 }
 
+/// A link that passed [`check_links`], with where its object goes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CheckedLink {
+    /// The index into the `links` given to [`check_links`].
+    pub index: usize,
+    /// The primitive's placement onto its object (SPEC.md 2.6): a loader that draws the object
+    /// in this primitive's node draws it with the node's transform times
+    /// [`Placement::inverse_columns`].
+    pub placement: Placement,
+}
+
+/// The links that passed [`check_links`], in the order given.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CheckedLinks {
+    pub links: Vec<CheckedLink>,
+}
+
 /// The check of every primitive link against the container's `objects`, written once (SPEC.md
 /// 3.3, 3.5): the object in range and linked from one mesh only, the primitive's triangles
-/// readable, hashing to its `geometryHash` (and to the object's hash when the primitive is the
-/// whole object), inside the object and not overlapping another primitive's range. Returns the
-/// indices into `links` of those the sink did not skip, or `Err(Stop)` when it stopped.
+/// readable and the same geometry as its range (SPEC.md 2.6: the hash fast path, else the
+/// surface match), inside the object and not overlapping another primitive's range, one
+/// placement per mesh and object. Returns the links the sink did not skip, each with its
+/// placement, or `Err(Stop)` when it stopped.
 pub fn check_links(
     objects: &[crate::Object],
     json: &Value,
     buffers: &[Vec<u8>],
     links: &[PrimitiveLink],
     sink: &mut impl LinkSink,
-) -> Result<Vec<usize>, crate::rules::Stop> {
+) -> Result<CheckedLinks, crate::rules::Stop> {
     check_links_against(Some(objects), json, buffers, links, sink)
 }
 
 /// [`check_links`] with the container's objects, or `None` when the container cannot be read:
 /// then only the checks that read the asset alone are made (one mesh per object, readable
 /// triangles, `geometryHash`, no overlap), and those that need an object (in range, the range
-/// inside it, its `geometry_hash`) are skipped (SPEC.md Appendix C).
+/// inside it, its `geometry_hash`, the surface match) are skipped (SPEC.md Appendix C).
 fn check_links_against(
     objects: Option<&[crate::Object]>,
     json: &Value,
     buffers: &[Vec<u8>],
     links: &[PrimitiveLink],
     sink: &mut impl LinkSink,
-) -> Result<Vec<usize>, crate::rules::Stop> {
-    let geometries = linked_geometries(json, buffers, links);
-    let mut good = Vec::with_capacity(links.len());
+) -> Result<CheckedLinks, crate::rules::Stop> {
+    let meshes = linked_meshes(json, buffers, links);
+    let mut good: Vec<CheckedLink> = Vec::with_capacity(links.len());
     // (object, first triangle, end, location, link index) of each range that was read.
     let mut ranges: Vec<(u32, u64, u64, String, usize)> = Vec::new();
     let mut mesh_of: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
-    'links: for (i, (l, g)) in links.iter().zip(geometries).enumerate() {
+    // The first placement of each (object, mesh), and where it came from.
+    let mut placed: std::collections::HashMap<(u32, usize), (Placement, String)> =
+        std::collections::HashMap::new();
+    'links: for (i, (l, g)) in links.iter().zip(meshes).enumerate() {
         let at = format!("meshes[{}].primitives[{}]", l.mesh, l.primitive);
         // Each fault: on, leave this link out, or stop.
         macro_rules! fault {
@@ -869,27 +885,53 @@ fn check_links_against(
             }
             std::collections::hash_map::Entry::Occupied(_) => {}
         }
-        let (hash, triangles) = match g {
+        let linked = match g {
             Ok(g) => g,
+            Err(e @ GltfError::Compressed { .. }) => {
+                fault!(LinkFault::Unchecked(e));
+                continue;
+            }
             Err(e) => {
                 fault!(LinkFault::Geometry(e));
                 continue;
             }
         };
-        if hash != l.geometry_hash {
+        let (hash, triangles) = (linked.hash, linked.mesh.triangles.len());
+        let end = u64::from(l.first_triangle) + triangles as u64;
+        let inside = object.filter(|o| end <= o.triangles.len() as u64);
+        let mut placement = Placement::identity(primitive_box(&linked.mesh));
+        if hash == l.geometry_hash {
+            if let Some(object) = object.filter(|o| {
+                l.first_triangle == 0 && triangles == o.triangles.len() && hash != o.geometry_hash
+            }) {
+                fault!(LinkFault::WholeObject {
+                    computed: hash,
+                    stored: object.geometry_hash
+                });
+            }
+        } else if let Some(object) = inside {
+            let first = l.first_triangle as usize;
+            let range = object
+                .mesh
+                .triangles
+                .get(3 * first..3 * (first + triangles))
+                .unwrap_or(&[]);
+            match same_surface(&object.mesh.positions, range, &linked.mesh, first) {
+                Ok(p) => placement = p,
+                Err(mismatch) => fault!(LinkFault::Edited {
+                    mismatch,
+                    computed: hash,
+                    stored: l.geometry_hash,
+                    name: object.name.clone(),
+                    end,
+                }),
+            }
+        } else {
             fault!(LinkFault::Stale {
                 computed: hash,
                 stored: l.geometry_hash
             });
-        } else if let Some(object) = object.filter(|o| {
-            l.first_triangle == 0 && triangles == o.triangles.len() && hash != o.geometry_hash
-        }) {
-            fault!(LinkFault::WholeObject {
-                computed: hash,
-                stored: object.geometry_hash
-            });
         }
-        let end = u64::from(l.first_triangle) + triangles as u64;
         if let Some(object) = object.filter(|o| end > o.triangles.len() as u64) {
             fault!(LinkFault::Range {
                 end,
@@ -897,8 +939,23 @@ fn check_links_against(
                 name: object.name.clone(),
             });
         }
+        match placed.entry((l.object, l.mesh)) {
+            std::collections::hash_map::Entry::Vacant(v) => {
+                v.insert((placement, at.clone()));
+            }
+            std::collections::hash_map::Entry::Occupied(o)
+                if !o.get().0.agrees_with(&placement) =>
+            {
+                let other = o.get().1.clone();
+                fault!(LinkFault::Placement { other })
+            }
+            std::collections::hash_map::Entry::Occupied(_) => {}
+        }
         ranges.push((l.object, u64::from(l.first_triangle), end, at, i));
-        good.push(i);
+        good.push(CheckedLink {
+            index: i,
+            placement,
+        });
     }
     ranges.sort();
     let mut skipped = vec![false; links.len()];
@@ -914,8 +971,8 @@ fn check_links_against(
             }
         }
     }
-    good.retain(|&i| !skipped[i]);
-    Ok(good)
+    good.retain(|c| !skipped[c.index]);
+    Ok(CheckedLinks { links: good })
 }
 
 fn push_error(p: &mut crate::validate::Problems, e: GltfError) {

@@ -14,28 +14,33 @@
 // The modules are private: what the crate offers is the flat list below. Two namespaces stay
 // public: `rules` (each Appendix C rule once, named after the rule, for the validator and the
 // refinement guard) and, behind feature `testing`, `example` (small valid files for tests).
+mod accessor;
 mod colour0;
 mod error;
 #[cfg(any(test, feature = "testing"))]
 pub mod example;
 mod gltf;
 mod layout;
+mod meshopt;
 mod model;
 mod problem;
 mod read;
 pub mod rules;
+mod same_geometry;
 mod section;
 mod tree;
 mod validate;
 mod write;
 
+pub use accessor::{read_accessor, read_primitive, AccessorValues, PrimitiveMesh, DRACO, MESHOPT};
 pub use colour0::{colour_exposure, ALBEDO_FLOOR};
 pub use error::{ReadError, WriteError};
 pub use gltf::{
     buffer_view_bytes, check_links, container_bytes, decode_base64, embed_container, hash_hex,
     link_primitive, linked_geometries, primitive_geometry, primitive_links, root_link,
-    root_problems, scan_primitive_links, validate_asset, write_glb, Asset as GltfAsset, GltfError,
-    LinkFault, LinkNext, LinkSink, PrimitiveLink, RootLink, EXTENSION_NAME,
+    root_problems, scan_primitive_links, validate_asset, validate_asset_report, write_glb,
+    Asset as GltfAsset, AssetReport, CheckedLink, CheckedLinks, GltfError, LinkFault, LinkNext,
+    LinkSink, PrimitiveLink, RootLink, EXTENSION_NAME,
 };
 pub use layout::{
     read_layout, Header, Layout, SectionEntry, DIRECTORY_ENTRY_LEN, FILE_LEVEL, HEADER_LEN,
@@ -50,6 +55,7 @@ pub use problem::Problem;
 pub use read::{
     expected_length, read, read_metadata, read_object_table, read_with, ObjectRecord, ReadOptions,
 };
+pub use same_geometry::{primitive_box, same_surface, Mismatch, Placement};
 pub use section::SectionType;
 pub use tree::{
     check_flags, decode_shape, encode_tree, triangle_trees, BitWriter, NodeInfo, Tree, TreeError,

@@ -167,14 +167,22 @@ fn malformed_geometry_hash_is_one_located_problem() {
 
 #[test]
 fn primitive_hash_object_range_and_mesh_rules() {
-    let p = glb_problems(|j| {
+    // A stale hash alone is no edit: the triangles are the object's (SPEC.md 2.6).
+    let stale = |j: &mut Value| {
         j["meshes"][0]["primitives"][0]["extensions"][EXTENSION_NAME]["geometryHash"] =
             json!("0123456789abcdef")
-    });
+    };
+    assert_eq!(glb_problems(stale), vec![]);
+    // A vertex moved off the plane by half the triangle's size is.
+    let a = Asset::from_glb(&example::triangle_glb()).unwrap();
+    let mut json = a.json.clone();
+    stale(&mut json);
+    let mut buffers = a.buffers(|_| Err("none".into())).unwrap();
+    buffers[0][32..36].copy_from_slice(&0.5f32.to_le_bytes());
     assert_problem(
-        &p,
+        &validate_asset(&json, &buffers),
         "meshes[0].primitives[0]",
-        "the mesh was edited after baking",
+        "not the same geometry as object 0 'tri' triangles 0..1 (SPEC.md 2.6): container triangle 0 has no primitive triangle within",
     );
     let p = glb_problems(|j| {
         j["meshes"][0]["primitives"][0]["extensions"][EXTENSION_NAME]["object"] = json!(4)

@@ -26,7 +26,10 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use hce_format::{colour_exposure, hash_hex, write_glb, PrimitiveLink, ALBEDO_FLOOR};
+use hce_format::{
+    check_links, colour_exposure, hash_hex, write_glb, LinkFault, LinkNext, LinkSink, Placement,
+    PrimitiveLink, ALBEDO_FLOOR,
+};
 use hce_format::{Object, ObjectKind};
 use serde_json::{json, Map, Value};
 
@@ -258,10 +261,33 @@ fn material_response(input: &Value, material: Option<u64>) -> ([f32; 3], bool) {
     (base, emissive)
 }
 
+/// The link check's sink here: a faulted link keeps the identity placement (the loader that
+/// read the asset has already applied its policy to it).
+struct SkipFaulted;
+
+impl LinkSink for SkipFaulted {
+    fn fault(&mut self, _: &PrimitiveLink, _: &str, _: LinkFault) -> LinkNext {
+        LinkNext::SkipLink
+    }
+}
+
+/// Object-space points in the primitive's space: `M⁻¹ x = (x - t) / s` (SPEC.md 2.6).
+fn placed(points: &[[f32; 3]], place: &Placement) -> Vec<[f32; 3]> {
+    points
+        .iter()
+        .map(|p| {
+            std::array::from_fn(|a| ((f64::from(p[a]) - place.offset[a]) / place.scale) as f32)
+        })
+        .collect()
+}
+
 /// Writes a baked asset's `objects` (its container's, in order) with every object refined
 /// (`refined[k]` for object `k`) as a `.glb` or `.gltf` (buffer embedded as a data URI). `input`
 /// is the glTF JSON and `buffers` its loaded buffers, `None` for a `.hce` file (then each object
 /// becomes one node and mesh of its name).
+///
+/// A primitive placed by an optimiser (SPEC.md 2.6) gets the refined object through `M⁻¹`, so
+/// it is drawn where the primitive was, in the primitive's node.
 pub fn write_refined_scene(
     path: &Path,
     objects: &[&Object],
@@ -296,6 +322,23 @@ pub fn write_refined_scene(
     };
     let link_of: HashMap<(usize, usize), &PrimitiveLink> =
         links.iter().map(|l| ((l.mesh, l.primitive), l)).collect();
+    // Each linked primitive's placement onto its object (SPEC.md 2.6): an optimiser that
+    // quantized the primitive moved the dequantization into the node, so the refined object,
+    // in object space, is written through M⁻¹ into the primitive's space. The loader has
+    // already accepted or reported each link; one that fails here keeps the identity.
+    let placements: HashMap<(usize, usize), Placement> = if bare {
+        HashMap::new()
+    } else {
+        let owned: Vec<Object> = objects.iter().map(|&o| o.clone()).collect();
+        check_links(&owned, input, buffers, &links, &mut SkipFaulted)
+            .map(|c| {
+                c.links
+                    .into_iter()
+                    .map(|c| ((links[c.index].mesh, links[c.index].primitive), c.placement))
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
     let geometry: Vec<ObjectGeometry> = objects
         .iter()
         .zip(refined)
@@ -305,6 +348,7 @@ pub fn write_refined_scene(
     // COLOR_0 per linked primitive, before the exposure: radiosity over base colour.
     struct Part {
         object: usize,
+        placement: Option<Placement>,
         triangles: std::ops::Range<usize>,
         light: Vec<[f32; 3]>,
         emissive: bool,
@@ -359,6 +403,10 @@ pub fn write_refined_scene(
                 (m, p),
                 Part {
                     object: k,
+                    placement: placements
+                        .get(&(m, p))
+                        .copied()
+                        .filter(|p| !p.is_identity()),
                     triangles,
                     light,
                     emissive,
@@ -379,6 +427,8 @@ pub fn write_refined_scene(
     // Positions and normals once per object, shared by its primitives and instances.
     let mut object_accessors: HashMap<usize, (usize, usize)> = HashMap::new();
     let mut out_meshes = Vec::new();
+    // Whether a primitive was copied as it is (its accessors may be quantized).
+    let mut copied_primitive = false;
     let mut mesh_map: Vec<Option<usize>> = vec![None; meshes.len()];
     for (m, mesh) in meshes.iter().enumerate() {
         let prims = mesh
@@ -389,6 +439,7 @@ pub fn write_refined_scene(
         let mut out_prims = Vec::new();
         for (p, prim) in prims.iter().enumerate() {
             let Some(part) = parts.get(&(m, p)) else {
+                copied_primitive = true;
                 out_prims.push(w.copy_primitive(prim)?);
                 continue;
             };
@@ -396,7 +447,12 @@ pub fn write_refined_scene(
             let (pos, nrm) = match object_accessors.get(&part.object) {
                 Some(&a) => a,
                 None => {
-                    let a = (w.vec3(&g.positions, true), w.vec3(&g.normals, false));
+                    // The placement has one positive scale, so the normals stay as they are.
+                    let pos = match &part.placement {
+                        None => w.vec3(&g.positions, true),
+                        Some(place) => w.vec3(&placed(&g.positions, place), true),
+                    };
+                    let a = (pos, w.vec3(&g.normals, false));
                     object_accessors.insert(part.object, a);
                     a
                 }
@@ -528,9 +584,12 @@ pub fn write_refined_scene(
             root.insert("extensions".into(), Value::Object(ext));
         }
     }
+    // The refined primitives are written in FLOAT: KHR_mesh_quantization stays only for
+    // primitives copied as they are.
+    let dropped = |e: &Value| *e == ours || (!copied_primitive && *e == "KHR_mesh_quantization");
     for key in ["extensionsUsed", "extensionsRequired"] {
         if let Some(list) = input.get(key).and_then(Value::as_array) {
-            let list: Vec<Value> = list.iter().filter(|e| *e != ours).cloned().collect();
+            let list: Vec<Value> = list.iter().filter(|e| !dropped(e)).cloned().collect();
             if !list.is_empty() {
                 root.insert(key.into(), json!(list));
             }
@@ -591,4 +650,76 @@ fn hce_scene_json(objects: &[&Object]) -> Value {
         "nodes": nodes,
         "meshes": meshes,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use hce_format::{example, read_accessor, GltfAsset};
+
+    /// The example GLB as gltf-transform's `quantize` leaves it: positions as normalized SHORTs
+    /// over the box (corners (-1, -1, 0), (1, -1, 0), (-1, 1, 0)), the dequantization (scale
+    /// 0.5, translation (0.5, 0.5, 0)) in the node, `KHR_mesh_quantization` required.
+    fn quantized_triangle() -> (Value, Vec<u8>) {
+        let a = GltfAsset::from_glb(&example::triangle_glb()).expect("the example parses");
+        let mut bin = a.bin.expect("a BIN chunk");
+        let mut json = a.json;
+        let at = bin.len();
+        for q in [[-1i16, -1, 0, 0], [1, -1, 0, 0], [-1, 1, 0, 0]] {
+            for c in q {
+                bin.extend_from_slice(&(c * 32767).to_le_bytes());
+            }
+        }
+        json["buffers"][0]["byteLength"] = json!(bin.len());
+        json["bufferViews"]
+            .as_array_mut()
+            .expect("views")
+            .push(json!({ "buffer": 0, "byteOffset": at, "byteLength": 24, "byteStride": 8 }));
+        let view = json["bufferViews"].as_array().expect("views").len() - 1;
+        json["accessors"][0] = json!({
+            "bufferView": view, "componentType": 5122, "normalized": true, "count": 3,
+            "type": "VEC3", "min": [-1.0, -1.0, 0.0], "max": [1.0, 1.0, 0.0]
+        });
+        json["nodes"][0]["scale"] = json!([0.5, 0.5, 0.5]);
+        json["nodes"][0]["translation"] = json!([0.5, 0.5, 0.0]);
+        json["extensionsUsed"] = json!(["EXT_hce_baked_lighting", "KHR_mesh_quantization"]);
+        json["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+        (json, bin)
+    }
+
+    #[test]
+    fn a_quantized_primitive_gets_its_refined_object_through_the_inverse_placement() {
+        let (json, bin) = quantized_triangle();
+        let c = example::single_triangle();
+        let objects: Vec<&Object> = c.objects.iter().collect();
+        let refined =
+            vec![hce_geometry::refine::refine_object(&c.objects[0], 1).expect("it refines")];
+        let path = std::env::temp_dir().join(format!("hce-refined-{}.glb", std::process::id()));
+        write_refined_scene(&path, &objects, Some((&json, &[bin])), &refined).expect("it writes");
+        let bytes = std::fs::read(&path).expect("the output");
+        std::fs::remove_file(&path).ok();
+        let out = GltfAsset::from_glb(&bytes).expect("the output parses");
+        let buffers = [out.bin.clone().expect("a BIN chunk")];
+        let position = out.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"]
+            .as_u64()
+            .expect("POSITION") as usize;
+        let written = read_accessor(&out.json, &buffers, position).expect("FLOAT positions");
+        // The node (kept as it was) times the written positions is where the refined object
+        // is: the dequantization the node holds is undone by M⁻¹.
+        let expected = &refined[0].mesh.positions;
+        assert_eq!(written.count(), expected.len());
+        for (w, e) in written.values.chunks_exact(3).zip(expected) {
+            let drawn = [0.5 * w[0] + 0.5, 0.5 * w[1] + 0.5, 0.5 * w[2]];
+            for a in 0..3 {
+                assert!(
+                    (drawn[a] - f64::from(e[a])).abs() < 1e-6,
+                    "{drawn:?} vs {e:?}"
+                );
+            }
+        }
+        assert_eq!(out.json["nodes"][0]["scale"], json!([0.5, 0.5, 0.5]));
+        // Every refined primitive is FLOAT: the output needs no KHR_mesh_quantization.
+        assert!(out.json.get("extensionsRequired").is_none(), "{}", out.json);
+        assert!(out.json.get("extensionsUsed").is_none(), "{}", out.json);
+    }
 }

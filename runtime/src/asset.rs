@@ -12,8 +12,11 @@
 //!   into `NRML`/`COLR`, trees inside the bitstream and at most 12 deep. A kernel that reads a
 //!   validated object cannot index out of bounds.
 //! * Each object's geometry hash (SPEC.md 2.5) against its control mesh (`POSN` through `TRIS`),
-//!   and, for glTF, each linked primitive's recomputed hash against its `geometryHash` and the
-//!   object's; each primitive's triangle range inside its object, ranges not overlapping.
+//!   and, for glTF, that each linked primitive has the same geometry as its object's triangle
+//!   range (SPEC.md 2.6: its hash, or else its triangles paired with the range's, so optimised
+//!   files still load); each primitive's triangle range inside its object, ranges not
+//!   overlapping. An object is drawn where its primitive is: the node's transform times the
+//!   inverse of the primitive's placement (the dequantization a quantizer moved into the node).
 //! * The glTF scene graph: node and mesh indices in range, finite transforms, camera
 //!   parameters.
 //!
@@ -650,12 +653,17 @@ impl Loader {
         let links = hce_format::primitive_links(json).map_err(|e| self.gltf_err(e))?;
         let good = self.check_links(&container, source, &links)?;
 
-        // Objects of each mesh, in first-primitive order, from the links that passed.
-        let mut mesh_objects: HashMap<usize, Vec<u32>> = HashMap::new();
-        for l in &good {
+        // Objects of each mesh, in first-primitive order, from the links that passed, each with
+        // its placement (SPEC.md 2.6): the object drawn in the primitive's node goes where the
+        // primitive is, through `M⁻¹` (the dequantization an optimiser moved into the node).
+        let mut mesh_objects: HashMap<usize, Vec<(u32, Mat4)>> = HashMap::new();
+        for (l, placement) in &good {
             let list = mesh_objects.entry(l.mesh).or_default();
-            if !list.contains(&l.object) {
-                list.push(l.object);
+            if !list.iter().any(|(o, _)| *o == l.object) {
+                list.push((
+                    l.object,
+                    Mat4::from_cols_array(&placement.inverse_columns()),
+                ));
             }
         }
         let walk = scene_graph::walk(json).map_err(|e| AssetError::Scene {
@@ -675,11 +683,11 @@ impl Loader {
                 .map(str::to_owned)
                 .unwrap_or_else(|| format!("nodes[{node}]"));
             if let Some(m) = visit.mesh {
-                for &o in mesh_objects.get(&m).map(Vec::as_slice).unwrap_or(&[]) {
+                for &(o, placement) in mesh_objects.get(&m).map(Vec::as_slice).unwrap_or(&[]) {
                     instances[o as usize].push(Instance {
                         node: Some(node),
                         name: name.clone(),
-                        transform: *world,
+                        transform: *world * placement,
                     });
                 }
             }
@@ -703,14 +711,15 @@ impl Loader {
     }
 
     /// SPEC.md 3.3 and 3.5 for every primitive link ([`hce_format::check_links`], the validator's
-    /// rules), strict or lenient; returns the links that passed. An object linked from two
-    /// meshes is drawn as both link it (the validator reports it).
+    /// rules, the same-geometry rule of 2.6 among them), strict or lenient; returns the links
+    /// that passed with their placements. An object linked from two meshes is drawn as both
+    /// link it (the validator reports it).
     fn check_links(
         &mut self,
         container: &hce_format::Container,
         source: &GltfSource,
         links: &[PrimitiveLink],
-    ) -> Result<Vec<PrimitiveLink>, AssetError> {
+    ) -> Result<Vec<(PrimitiveLink, hce_format::Placement)>, AssetError> {
         let mut sink = LinkPolicy {
             loader: self,
             container,
@@ -724,7 +733,11 @@ impl Loader {
             &mut sink,
         );
         match (good, sink.error) {
-            (Ok(good), _) => Ok(good.into_iter().map(|i| links[i].clone()).collect()),
+            (Ok(good), _) => Ok(good
+                .links
+                .into_iter()
+                .map(|c| (links[c.index].clone(), c.placement))
+                .collect()),
             (Err(_), Some(e)) => Err(e),
             // The policy stops only with an error; should that change, still no panic.
             (Err(_), None) => Err(self.scene_err("meshes", "the link check stopped")),
@@ -808,14 +821,30 @@ impl hce_format::LinkSink for LinkPolicy<'_> {
                 link.object
             )),
             LinkFault::Geometry(e) => link_err(format!("cannot read its geometry: {e}")),
+            LinkFault::Unchecked(e) => link_err(format!(
+                "{e}; its baked lighting is not applied (SPEC.md 3.5)"
+            )),
             LinkFault::Stale { computed, stored } | LinkFault::WholeObject { computed, stored } => {
                 AssetError::StaleGeometry {
                     path,
                     location: at.to_owned(),
                     object: link.object,
-                    name: self.container.objects[link.object as usize].name.clone(),
+                    name: self
+                        .container
+                        .objects
+                        .get(link.object as usize)
+                        .map(|o| o.name.clone())
+                        .unwrap_or_default(),
                     stored,
                     computed,
+                }
+            }
+            edited @ (LinkFault::Edited { .. } | LinkFault::Placement { .. }) => {
+                let (location, message) = edited.describe(link, at);
+                AssetError::Link {
+                    path,
+                    location,
+                    message,
                 }
             }
             LinkFault::Range {
@@ -924,13 +953,55 @@ mod tests {
         let glb = hce_format::write_glb(&a.json, &bin).unwrap();
         let e = open_glb(&glb, &OpenOptions::default()).unwrap_err();
         assert!(
-            matches!(e, AssetError::StaleGeometry { object: 0, .. }),
+            e.to_string()
+                .contains("not the same geometry as object 0 'tri' triangles 0..1 (SPEC.md 2.6)"),
             "{e}"
         );
         assert!(e.to_string().contains("bake it again"), "{e}");
         let lenient = open_glb(&glb, &OpenOptions { strict: false }).unwrap();
         assert!(lenient.objects[0].instances.is_empty());
         assert_eq!(lenient.warnings.len(), 2, "{:?}", lenient.warnings);
+    }
+
+    #[test]
+    fn a_quantized_primitive_places_its_object_where_the_primitive_is() {
+        // What gltf-transform's `quantize` does to the example: positions as normalized SHORTs
+        // over the box, the dequantization (scale 0.5, offset (0.5, 0.5, 0)) in the node.
+        let a = hce_format::GltfAsset::from_glb(&example::triangle_glb()).unwrap();
+        let mut bin = a.bin.unwrap();
+        let mut json = a.json;
+        let at = bin.len();
+        for q in [[-1i16, -1, 0, 0], [1, -1, 0, 0], [-1, 1, 0, 0]] {
+            for c in q {
+                bin.extend_from_slice(&(c * 32767).to_le_bytes());
+            }
+        }
+        json["buffers"][0]["byteLength"] = serde_json::json!(bin.len());
+        json["bufferViews"].as_array_mut().unwrap().push(
+            serde_json::json!({ "buffer": 0, "byteOffset": at, "byteLength": 24, "byteStride": 8 }),
+        );
+        let view = json["bufferViews"].as_array().unwrap().len() - 1;
+        json["accessors"][0] = serde_json::json!({
+            "bufferView": view, "componentType": 5122, "normalized": true, "count": 3, "type": "VEC3"
+        });
+        json["nodes"][0]["scale"] = serde_json::json!([0.5, 0.5, 0.5]);
+        json["nodes"][0]["translation"] = serde_json::json!([0.5, 0.5, 0.0]);
+        let glb = hce_format::write_glb(&json, &bin).unwrap();
+        let asset = open_glb(&glb, &OpenOptions::default()).unwrap();
+        let t = asset.objects[0].instances[0].transform;
+        assert!(t.abs_diff_eq(Mat4::IDENTITY, 1e-6), "{t}");
+        let b = asset.bounds().unwrap();
+        assert_eq!((b.min, b.max), ([0.0; 3], [1.0, 1.0, 0.0]));
+        // With the node's scale 1 instead of 0.5 the primitive is drawn twice the size, at
+        // (-0.5, -0.5, 0), (1.5, -0.5, 0), (-0.5, 1.5, 0): the node times M⁻¹ (x ↦ 2x - (1, 1, 0))
+        // puts the object's corners there too.
+        json["nodes"][0]["scale"] = serde_json::json!([1.0, 1.0, 1.0]);
+        let glb = hce_format::write_glb(&json, &bin).unwrap();
+        let b = open_glb(&glb, &OpenOptions::default())
+            .unwrap()
+            .bounds()
+            .unwrap();
+        assert_eq!((b.min, b.max), ([-0.5, -0.5, 0.0], [1.5, 1.5, 0.0]));
     }
 
     #[test]

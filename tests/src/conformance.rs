@@ -456,14 +456,11 @@ pub fn cases(cornell_baked: Vec<u8>) -> Vec<Case> {
                 }
             },
         ),
-        glb(
+        moved_vertex_glb(
             "invalid/stale-primitive-hash.glb",
-            "3.5: geometryHash differs from the primitive's triangles (edited after baking)",
-            &|j| {
-                if let Some(x) = j.pointer_mut(&format!("{link}/geometryHash")) {
-                    *x = json!("0123456789abcdef");
-                }
-            },
+            "2.6, 3.5: geometryHash differs from the primitive's triangles and vertex 2 moved \
+             off the plane by half the triangle's size, far beyond the tolerance (edited after \
+             baking; a differing hash alone is no edit)",
         ),
         glb(
             "invalid/object-out-of-range.glb",
@@ -507,7 +504,259 @@ pub fn cases(cornell_baked: Vec<u8>) -> Vec<Case> {
             },
         ),
     ]);
+    out.extend(optimised_cases());
     out
+}
+
+/// The example GLB (one triangle) with vertex 2 moved to z = 0.5 and its geometryHash stale.
+fn moved_vertex_glb(file: &str, description: &str) -> Case {
+    let a = Asset::from_glb(&example::triangle_glb()).expect("the example GLB parses");
+    let mut j = a.json;
+    let mut bin = a.bin.unwrap_or_default();
+    // POSITION is the first buffer view: vertex 2's z is bytes 32..36.
+    bin[32..36].copy_from_slice(&0.5f32.to_le_bytes());
+    j["meshes"][0]["primitives"][0]["extensions"][EXTENSION_NAME]["geometryHash"] =
+        json!("0123456789abcdef");
+    j["accessors"][0]["max"] = json!([1.0, 1.0, 0.5]);
+    Case {
+        file: file.into(),
+        bytes: hce_format::write_glb(&j, &bin).expect("a small GLB"),
+        description: description.into(),
+        baked: false,
+    }
+}
+
+/// A primitive as an optimiser may leave it: positions, triangles, and how positions are stored.
+struct Rewritten {
+    positions: Vec<[f32; 3]>,
+    triangles: Vec<[u32; 3]>,
+    /// Normalized SHORTs of `bits` bits over the box, the dequantization in the node (what
+    /// gltf-transform's `quantize` writes), instead of `FLOAT`.
+    quantized_bits: Option<u32>,
+}
+
+impl Rewritten {
+    /// The grid as `hce bake` writes a primitive: three vertices per triangle, in the object's
+    /// triangle and corner order.
+    fn unwelded(c: &Container) -> Self {
+        let m = &c.objects[0].mesh;
+        let p = |v: u32| {
+            let i = 3 * v as usize;
+            [m.positions[i], m.positions[i + 1], m.positions[i + 2]]
+        };
+        Rewritten {
+            positions: m.triangles.iter().map(|&v| p(v)).collect(),
+            triangles: (0..m.triangle_count() as u32)
+                .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+                .collect(),
+            quantized_bits: None,
+        }
+    }
+
+    /// The grid welded: the object's own vertices and triangles.
+    fn welded(c: &Container) -> Self {
+        let m = &c.objects[0].mesh;
+        Rewritten {
+            positions: m
+                .positions
+                .chunks_exact(3)
+                .map(|p| [p[0], p[1], p[2]])
+                .collect(),
+            triangles: m
+                .triangles
+                .chunks_exact(3)
+                .map(|t| [t[0], t[1], t[2]])
+                .collect(),
+            quantized_bits: None,
+        }
+    }
+}
+
+/// `example::grid(3, 2)` in a GLB whose one primitive is `prim`, linked to object 0 with the
+/// object's (baked) geometry hash: what an optimiser leaves of a baked GLB that it kept the
+/// extension of.
+fn grid_glb(c: &Container, prim: &Rewritten) -> Vec<u8> {
+    let mut bin = Vec::new();
+    let lo = (0..3).map(|a| prim.positions.iter().map(|p| p[a]).fold(f32::MAX, f32::min));
+    let hi = (0..3).map(|a| prim.positions.iter().map(|p| p[a]).fold(f32::MIN, f32::max));
+    let (lo, hi): (Vec<f32>, Vec<f32>) = (lo.collect(), hi.collect());
+    let mut node = json!({ "mesh": 0 });
+    let position = match prim.quantized_bits {
+        None => {
+            for p in &prim.positions {
+                for x in p {
+                    bin.extend_from_slice(&x.to_le_bytes());
+                }
+            }
+            json!({ "bufferView": 0, "componentType": 5126, "count": prim.positions.len(),
+                    "type": "VEC3", "min": lo, "max": hi })
+        }
+        Some(bits) => {
+            // One scale for every axis, the box's centre as offset; `bits` levels stored in the
+            // top bits of a SHORT, as gltf-transform does for fewer than 16 bits.
+            let centre: Vec<f32> = (0..3).map(|a| (lo[a] + hi[a]) / 2.0).collect();
+            let half = (0..3).map(|a| (hi[a] - lo[a]) / 2.0).fold(0.0, f32::max);
+            let levels = ((1u32 << (bits - 1)) - 1) as f32;
+            let step = 1 << (16 - bits);
+            let (mut qlo, mut qhi) = ([i16::MAX; 3], [i16::MIN; 3]);
+            for p in &prim.positions {
+                for a in 0..3 {
+                    let q = (((p[a] - centre[a]) / half * levels).round() as i32 * step) as i16;
+                    (qlo[a], qhi[a]) = (qlo[a].min(q), qhi[a].max(q));
+                    bin.extend_from_slice(&q.to_le_bytes());
+                }
+                bin.extend_from_slice(&0i16.to_le_bytes());
+            }
+            let scale = half * 32767.0 / (levels * step as f32);
+            node["translation"] = json!(centre);
+            node["scale"] = json!([scale, scale, scale]);
+            json!({ "bufferView": 0, "componentType": 5122, "normalized": true,
+                    "count": prim.positions.len(), "type": "VEC3",
+                    "min": qlo.map(|q| f32::from(q) / 32767.0), "max": qhi.map(|q| f32::from(q) / 32767.0) })
+        }
+    };
+    let positions_len = bin.len();
+    for t in &prim.triangles {
+        for v in t {
+            bin.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    let stride = if prim.quantized_bits.is_some() {
+        json!(8)
+    } else {
+        Value::Null
+    };
+    let mut view0 =
+        json!({ "buffer": 0, "byteOffset": 0, "byteLength": positions_len, "target": 34962 });
+    if !stride.is_null() {
+        view0["byteStride"] = stride;
+    }
+    let mut j = json!({
+        "asset": { "version": "2.0", "generator": "hce conformance" },
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [node],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 1 }] }],
+        "accessors": [
+            position,
+            { "bufferView": 1, "componentType": 5125, "count": 3 * prim.triangles.len(), "type": "SCALAR" }
+        ],
+        "bufferViews": [
+            view0,
+            { "buffer": 0, "byteOffset": positions_len, "byteLength": bin.len() - positions_len, "target": 34963 }
+        ],
+        "buffers": [{ "byteLength": bin.len() }],
+    });
+    if prim.quantized_bits.is_some() {
+        j["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+        j["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+    }
+    let container = write(c).expect("example containers are consistent");
+    hce_format::embed_container(&mut j, &mut bin, &container).expect("a fresh asset");
+    hce_format::link_primitive(
+        &mut j,
+        &hce_format::PrimitiveLink {
+            mesh: 0,
+            primitive: 0,
+            object: 0,
+            geometry_hash: c.objects[0].geometry_hash,
+            first_triangle: 0,
+        },
+    )
+    .expect("the primitive exists");
+    hce_format::write_glb(&j, &bin).expect("a small GLB")
+}
+
+/// The same-geometry rule (SPEC.md 2.6) on the grid in a GLB: what optimisers do without
+/// changing the surface (valid, the geometryHash left stale as they leave it), and edits.
+fn optimised_cases() -> Vec<Case> {
+    let c = example::grid(3, 2);
+    let case = |file: &str, prim: &Rewritten, description: &str| Case {
+        file: file.into(),
+        bytes: grid_glb(&c, prim),
+        description: description.into(),
+        baked: false,
+    };
+    let base = Rewritten::unwelded(&c);
+    // Triangles in reverse order, each one's corners rotated by its index, vertices renumbered
+    // from the end (gltf-transform `reorder`).
+    let mut reordered = Rewritten::unwelded(&c);
+    let n = reordered.positions.len() as u32;
+    reordered.triangles = base
+        .triangles
+        .iter()
+        .enumerate()
+        .rev()
+        .map(|(t, tri)| {
+            let mut r = tri.map(|v| n - 1 - v);
+            r.rotate_left(t % 3);
+            r
+        })
+        .collect();
+    reordered.positions.reverse();
+    let welded = Rewritten::welded(&c);
+    let quantized = Rewritten {
+        quantized_bits: Some(14),
+        ..Rewritten::welded(&c)
+    };
+    // Vertex (1, 1) raised by 0.25, 30 times the tolerance D/512.
+    let mut moved = Rewritten::welded(&c);
+    moved.positions[5][2] += 0.25;
+    // Vertex (1, 1) collapsed into (2, 1), its two degenerate triangles removed.
+    let mut simplified = Rewritten::welded(&c);
+    simplified.triangles = simplified
+        .triangles
+        .iter()
+        .map(|t| t.map(|v| if v == 5 { 6 } else { v }))
+        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])
+        .collect();
+    let mut flipped = Rewritten::welded(&c);
+    flipped.triangles[4].swap(1, 2);
+    vec![
+        case(
+            "valid/grid.glb",
+            &base,
+            "example::grid(3, 2) in a GLB, its primitive as hce bake writes one (three \
+             vertices per triangle, the object's order): the hash fast path of 2.6",
+        ),
+        case(
+            "valid/optimised-reordered.glb",
+            &reordered,
+            "2.6: the grid's triangles reversed, their corners rotated, vertices renumbered \
+             (gltf-transform reorder); geometryHash stale, the surface the same",
+        ),
+        case(
+            "valid/optimised-welded.glb",
+            &welded,
+            "2.6: the grid welded (gltf-transform weld: 16 vertices for 54 corners); \
+             geometryHash stale, the surface the same",
+        ),
+        case(
+            "valid/optimised-quantized.glb",
+            &quantized,
+            "2.6: the welded grid quantized to 14 bits in normalized SHORTs, the \
+             dequantization in the node's scale and translation (gltf-transform quantize); \
+             the placement M undoes it",
+        ),
+        case(
+            "invalid/edited-moved-vertex.glb",
+            &moved,
+            "2.6: the welded grid with vertex (1, 1) raised by 0.25, beyond the tolerance \
+             D / 512 = 0.0083",
+        ),
+        case(
+            "invalid/edited-simplified.glb",
+            &simplified,
+            "2.6: the welded grid with vertex (1, 1) collapsed into (2, 1): 16 triangles for \
+             the object's 18 (gltf-transform simplify)",
+        ),
+        case(
+            "invalid/edited-flipped.glb",
+            &flipped,
+            "2.6: the welded grid with triangle 4's winding reversed: its corners match under \
+             a reflection, not a rotation",
+        ),
+    ]
 }
 
 /// Gives the primitive extension object at JSON pointer `link` a geometryHash that matches

@@ -230,6 +230,20 @@ fn probe_colours_match_both_reconstructions() {
 /// the output vertex order: each output vertex at the position of the refined vertex that
 /// `refined_vertices` names, and the primitive's indices, read through that list, the refined
 /// mesh's fine triangles of the primitive's coarse triangles.
+/// The suite's valid files have no link faults.
+struct NoFault;
+
+impl hce_format::LinkSink for NoFault {
+    fn fault(
+        &mut self,
+        _: &hce_format::PrimitiveLink,
+        at: &str,
+        fault: hce_format::LinkFault,
+    ) -> hce_format::LinkNext {
+        panic!("{at}: {fault:?}")
+    }
+}
+
 #[test]
 fn scene_entries_match_hce_subdivide() {
     let m = manifest();
@@ -246,6 +260,10 @@ fn scene_entries_match_hce_subdivide() {
         let input = hce_format::GltfAsset::parse(&bytes).unwrap();
         let input_buffers = input.buffers(|_| Err("none".into())).unwrap();
         let links = hce_format::primitive_links(&input.json).unwrap();
+        // Each link's placement (SPEC.md 2.6): hce subdivide writes the object through M⁻¹.
+        let placements =
+            hce_format::check_links(&objects, &input.json, &input_buffers, &links, &mut NoFault)
+                .unwrap();
         let out = dir.path().join(format!("scene{checked}.glb"));
         let level = scene["level"].to_string();
         common::hce_ok(&[
@@ -289,12 +307,30 @@ fn scene_entries_match_hce_subdivide() {
                 hce_geometry::refine::refine_object(&objects[link.object as usize], level).unwrap();
             let positions: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
             assert_eq!(positions.len(), order.len(), "{name} mesh {m}");
+            let placement = placements
+                .links
+                .iter()
+                .find(|c| std::ptr::eq(&links[c.index], link))
+                .unwrap()
+                .placement;
             for (v, &r) in order.iter().enumerate() {
-                assert_eq!(
-                    positions[v].map(f32::to_bits),
-                    refined.mesh.positions[r as usize].map(f32::to_bits),
-                    "{name} mesh {m} output vertex {v}"
-                );
+                let expected = refined.mesh.positions[r as usize];
+                if placement.is_identity() {
+                    assert_eq!(
+                        positions[v].map(f32::to_bits),
+                        expected.map(f32::to_bits),
+                        "{name} mesh {m} output vertex {v}"
+                    );
+                } else {
+                    // Placed back by M: the f32 rounding of M⁻¹, a thousandth of τ at most.
+                    let back = placement.apply(positions[v].map(f64::from));
+                    for a in 0..3 {
+                        assert!(
+                            (back[a] - f64::from(expected[a])).abs() <= 1e-3 * placement.tolerance,
+                            "{name} mesh {m} output vertex {v}: {back:?} vs {expected:?}"
+                        );
+                    }
+                }
             }
             let (_, coarse) =
                 hce_format::primitive_geometry(&input.json, &input_buffers, m, q).unwrap();

@@ -95,7 +95,7 @@ fn glb_links_are_checked_against_the_mesh() {
     std::fs::write(&ok, &glb).unwrap();
     let (code, out, _) = common::hce(&["validate", ok.to_str().unwrap()]);
     assert_eq!(code, 0, "{out}");
-    // Move the second vertex: the mesh no longer matches what was baked.
+    // Move the second vertex: the hash differs and no placement pairs the triangle (SPEC.md 2.6).
     let asset = Asset::from_glb(&glb).unwrap();
     let mut bin = asset.bin.clone().unwrap();
     bin[12..16].copy_from_slice(&2f32.to_le_bytes());
@@ -104,8 +104,9 @@ fn glb_links_are_checked_against_the_mesh() {
     let (code, out, _) = common::hce(&["validate", edited.to_str().unwrap()]);
     assert_eq!(code, 3);
     assert!(
-        out.starts_with("meshes[0].primitives[0]: geometry hash ")
-            && out.contains("the mesh was edited after baking"),
+        out.starts_with(
+            "meshes[0].primitives[0]: not the same geometry as object 0 'tri' triangles 0..1 (SPEC.md 2.6)"
+        ) && out.contains("the mesh was edited after baking"),
         "{out}"
     );
     let (code, out, _) = common::hce(&["inspect", "--json", edited.to_str().unwrap()]);
