@@ -47,6 +47,10 @@ pub enum AdaptiveFlatError {
 pub struct AdaptiveFlat {
     /// Per vertex, numbered in order of first use.
     pub positions: Vec<[f32; 3]>,
+    /// Per vertex, the coarse triangle and the point `(x, y)` on its lattice of denominator
+    /// 4096 of its first use, from which its position is computed: what a GPU kernel needs to
+    /// compute the same bits (`runtime/src/gpu/flat.wgsl`).
+    pub sources: Vec<(u32, [u32; 2])>,
     /// Unit per-vertex normals: the normalised sum of the triangles' `(q − p) × (r − p)` in
     /// triangle order, `(0, 1, 0)` where it has no direction (F.7.2's rule).
     pub normals: Vec<[f32; 3]>,
@@ -222,6 +226,7 @@ pub fn refine_adaptive_flat(object: &Object) -> Result<AdaptiveFlat, AdaptiveFla
                     let key = surface.key(t, x, y);
                     let next = out.positions.len() as u32;
                     *vertex_of.entry(key).or_insert_with(|| {
+                        out.sources.push((t as u32, [x as u32, y as u32]));
                         out.positions.push(match site(n, x, y) {
                             Site::Corner(c) => corners[c],
                             Site::Edge { edge, k } => {

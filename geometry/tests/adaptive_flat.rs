@@ -257,6 +257,36 @@ fn vertices_are_the_uniform_refinements_at_the_same_points() {
     }
 }
 
+/// Each vertex's source is the coarse triangle and point of its first use, and its position is
+/// computed there: the lists a GPU kernel evaluates (SPEC.md F.7.1, `sources`).
+#[test]
+fn each_vertex_comes_from_its_first_use() {
+    for object in objects() {
+        let r = refine_adaptive_flat(&object).unwrap();
+        assert_eq!(r.sources.len(), r.vertex_count(), "{}", object.name);
+        let mut seen = vec![false; r.vertex_count()];
+        let mut shared = 0;
+        for (f, tri) in r.indices.iter().enumerate() {
+            let t = r.coarse_triangle(f) as u32;
+            for (&i, p) in tri.iter().zip(r.points[f]) {
+                let i = i as usize;
+                if !seen[i] {
+                    seen[i] = true;
+                    assert_eq!(r.sources[i], (t, p), "{} vertex {i}", object.name);
+                } else if r.sources[i].0 != t {
+                    shared += 1;
+                }
+            }
+        }
+        assert!(seen.iter().all(|&s| s), "{}: an unused vertex", object.name);
+        assert!(
+            shared > 0,
+            "{}: no vertex shared across a coarse edge",
+            object.name
+        );
+    }
+}
+
 #[test]
 fn the_refinement_is_deterministic_and_rejects_bad_trees() {
     for object in objects() {
