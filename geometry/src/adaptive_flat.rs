@@ -76,6 +76,27 @@ impl AdaptiveFlat {
     pub fn coarse_triangle(&self, f: usize) -> usize {
         self.triangle_start.partition_point(|&s| s as usize <= f) - 1
     }
+
+    /// The triangle corners that use each vertex, as a list per vertex: the uses of vertex `v`
+    /// are `uses[offsets[v]..offsets[v + 1]]`, each `3 f + c` (corner `c` of triangle `f`), in
+    /// increasing `3 f + c`, the order in which [`crate::colour::adaptive_flat_colours`] adds
+    /// them. A kernel gathers a vertex's colour over them with one writer per vertex.
+    pub fn incidence(&self) -> (Vec<u32>, Vec<u32>) {
+        let mut offsets = vec![0u32; self.positions.len() + 1];
+        for &i in self.indices.iter().flatten() {
+            offsets[i as usize + 1] += 1;
+        }
+        for v in 0..self.positions.len() {
+            offsets[v + 1] += offsets[v];
+        }
+        let mut next = offsets.clone();
+        let mut uses = vec![0u32; 3 * self.indices.len()];
+        for (g, &i) in self.indices.iter().flatten().enumerate() {
+            uses[next[i as usize] as usize] = g as u32;
+            next[i as usize] += 1;
+        }
+        (offsets, uses)
+    }
 }
 
 /// The leaves of coarse triangle `t`: breadth-first node number and lattice triangle (G.2).

@@ -279,6 +279,16 @@ fn each_vertex_comes_from_its_first_use() {
             }
         }
         assert!(seen.iter().all(|&s| s), "{}: an unused vertex", object.name);
+        let (offsets, uses) = r.incidence();
+        assert_eq!(offsets.len(), r.vertex_count() + 1);
+        assert_eq!(uses.len(), 3 * r.triangle_count());
+        for v in 0..r.vertex_count() {
+            let list = &uses[offsets[v] as usize..offsets[v + 1] as usize];
+            assert!(list.windows(2).all(|w| w[0] < w[1]), "{}", object.name);
+            for &u in list {
+                assert_eq!(r.indices[u as usize / 3][u as usize % 3], v as u32);
+            }
+        }
         assert!(
             shared > 0,
             "{}: no vertex shared across a coarse edge",
