@@ -47,6 +47,10 @@ pub enum AdaptiveFlatError {
 pub struct AdaptiveFlat {
     /// Per vertex, numbered in order of first use.
     pub positions: Vec<[f32; 3]>,
+    /// Per vertex, the coarse triangle and the point `(x, y)` on its lattice of denominator
+    /// 4096 of its first use, from which its position is computed: what a GPU kernel needs to
+    /// compute the same bits (`runtime/src/gpu/flat.wgsl`).
+    pub sources: Vec<(u32, [u32; 2])>,
     /// Unit per-vertex normals: the normalised sum of the triangles' `(q − p) × (r − p)` in
     /// triangle order, `(0, 1, 0)` where it has no direction (F.7.2's rule).
     pub normals: Vec<[f32; 3]>,
@@ -71,6 +75,27 @@ impl AdaptiveFlat {
     /// The coarse triangle triangle `f` lies in.
     pub fn coarse_triangle(&self, f: usize) -> usize {
         self.triangle_start.partition_point(|&s| s as usize <= f) - 1
+    }
+
+    /// The triangle corners that use each vertex, as a list per vertex: the uses of vertex `v`
+    /// are `uses[offsets[v]..offsets[v + 1]]`, each `3 f + c` (corner `c` of triangle `f`), in
+    /// increasing `3 f + c`, the order in which [`crate::colour::adaptive_flat_colours`] adds
+    /// them. A kernel gathers a vertex's colour over them with one writer per vertex.
+    pub fn incidence(&self) -> (Vec<u32>, Vec<u32>) {
+        let mut offsets = vec![0u32; self.positions.len() + 1];
+        for &i in self.indices.iter().flatten() {
+            offsets[i as usize + 1] += 1;
+        }
+        for v in 0..self.positions.len() {
+            offsets[v + 1] += offsets[v];
+        }
+        let mut next = offsets.clone();
+        let mut uses = vec![0u32; 3 * self.indices.len()];
+        for (g, &i) in self.indices.iter().flatten().enumerate() {
+            uses[next[i as usize] as usize] = g as u32;
+            next[i as usize] += 1;
+        }
+        (offsets, uses)
     }
 }
 
@@ -222,6 +247,7 @@ pub fn refine_adaptive_flat(object: &Object) -> Result<AdaptiveFlat, AdaptiveFla
                     let key = surface.key(t, x, y);
                     let next = out.positions.len() as u32;
                     *vertex_of.entry(key).or_insert_with(|| {
+                        out.sources.push((t as u32, [x as u32, y as u32]));
                         out.positions.push(match site(n, x, y) {
                             Site::Corner(c) => corners[c],
                             Site::Edge { edge, k } => {

@@ -57,7 +57,7 @@ use crate::split::{corner_groups, joined_sides};
 
 /// Denominator of the lattice in which leaf corners are identified: the finest split a tree can
 /// have (`hce_format::MAX_TREE_DEPTH` = 12).
-pub(crate) const TREE_LATTICE_BITS: u32 = 12;
+pub const TREE_LATTICE_BITS: u32 = 12;
 pub(crate) const TREE_LATTICE: i32 = 1 << TREE_LATTICE_BITS;
 
 /// Denominator of the lattice in which points are evaluated: deep enough for every render level

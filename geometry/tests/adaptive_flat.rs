@@ -257,6 +257,46 @@ fn vertices_are_the_uniform_refinements_at_the_same_points() {
     }
 }
 
+/// Each vertex's source is the coarse triangle and point of its first use, and its position is
+/// computed there: the lists a GPU kernel evaluates (SPEC.md F.7.1, `sources`).
+#[test]
+fn each_vertex_comes_from_its_first_use() {
+    for object in objects() {
+        let r = refine_adaptive_flat(&object).unwrap();
+        assert_eq!(r.sources.len(), r.vertex_count(), "{}", object.name);
+        let mut seen = vec![false; r.vertex_count()];
+        let mut shared = 0;
+        for (f, tri) in r.indices.iter().enumerate() {
+            let t = r.coarse_triangle(f) as u32;
+            for (&i, p) in tri.iter().zip(r.points[f]) {
+                let i = i as usize;
+                if !seen[i] {
+                    seen[i] = true;
+                    assert_eq!(r.sources[i], (t, p), "{} vertex {i}", object.name);
+                } else if r.sources[i].0 != t {
+                    shared += 1;
+                }
+            }
+        }
+        assert!(seen.iter().all(|&s| s), "{}: an unused vertex", object.name);
+        let (offsets, uses) = r.incidence();
+        assert_eq!(offsets.len(), r.vertex_count() + 1);
+        assert_eq!(uses.len(), 3 * r.triangle_count());
+        for v in 0..r.vertex_count() {
+            let list = &uses[offsets[v] as usize..offsets[v + 1] as usize];
+            assert!(list.windows(2).all(|w| w[0] < w[1]), "{}", object.name);
+            for &u in list {
+                assert_eq!(r.indices[u as usize / 3][u as usize % 3], v as u32);
+            }
+        }
+        assert!(
+            shared > 0,
+            "{}: no vertex shared across a coarse edge",
+            object.name
+        );
+    }
+}
+
 #[test]
 fn the_refinement_is_deterministic_and_rejects_bad_trees() {
     for object in objects() {

@@ -5,7 +5,8 @@
 //! unless `HCE_REQUIRE_GPU=1`, which makes them fail.
 #![cfg(feature = "gpu")]
 
-use hce_geometry::colour::apply_baked_colours;
+use hce_geometry::adaptive_flat::refine_adaptive_flat;
+use hce_geometry::colour::{adaptive_flat_colours, apply_baked_colours};
 use hce_geometry::flat::{self, FlatTopology};
 use hce_geometry::lighting::Reconstruction;
 use hce_geometry::split::SplitTables;
@@ -15,7 +16,7 @@ use hce_runtime::gpu::testing::{
     context_or_skip, decode_colours, grid, octahedron, random_object, ColourQuery, RandomTrees,
     SplitMix,
 };
-use hce_runtime::gpu::{refine_flat, refine_flat_with};
+use hce_runtime::gpu::{refine_flat, refine_flat_adaptive, refine_flat_with};
 
 /// `object` with the full adjacency tables of a container's object (neighbours, rings,
 /// spokes), so that its refinement splits where the surface folds (SPEC.md F.5, G.2).
@@ -239,6 +240,55 @@ fn gpu_flat_refinement_matches_cpu() {
         }
     }
     assert_eq!(split_objects, 2, "both objects with folds split");
+}
+
+/// The adaptive refinement (SPEC.md F.7.1) on the GPU against `hce_geometry::adaptive_flat`
+/// and `adaptive_flat_colours`: the same indices and position bits, and the same vertex colours
+/// up to the f32 rounding of the area-weighted means (the CPU sums in f64), for both
+/// reconstructions.
+#[test]
+fn gpu_adaptive_flat_refinement_matches_cpu() {
+    let Some(ctx) = context_or_skip("gpu_adaptive_flat_refinement_matches_cpu") else {
+        return;
+    };
+    for object in test_objects() {
+        let cpu = refine_adaptive_flat(&object).unwrap();
+        for reconstruction in [Reconstruction::Smooth, Reconstruction::NearestNormal] {
+            let what = format!("{} {reconstruction:?}", object.name);
+            let gpu = refine_flat_adaptive(&ctx, &object, reconstruction).unwrap();
+            assert_eq!(gpu.vertex_count(), cpu.vertex_count(), "{what}");
+            assert_eq!(
+                gpu.indices,
+                cpu.indices.iter().flatten().copied().collect::<Vec<_>>(),
+                "{what}: indices"
+            );
+            for (v, p) in cpu.positions.iter().enumerate() {
+                assert_eq!(
+                    gpu.positions[3 * v..3 * v + 3]
+                        .iter()
+                        .map(|x| x.to_bits())
+                        .collect::<Vec<_>>(),
+                    p.map(f32::to_bits),
+                    "{what}: position {v}"
+                );
+            }
+            let want = adaptive_flat_colours(&object, &cpu, reconstruction).unwrap();
+            // The nearest-normal rule may pick another normal on a near tie (the GPU may fuse
+            // multiply-adds); a vertex of such a triangle then differs.
+            let mut differing = 0;
+            for (v, c) in want.iter().enumerate() {
+                let g = &gpu.colours[4 * v..4 * v + 3];
+                let scale = c.iter().fold(1e-3f32, |a, &b| a.max(b));
+                if !(0..3).all(|k| (g[k] - c[k]).abs() <= 1e-5 * scale) {
+                    differing += 1;
+                    assert!(
+                        reconstruction == Reconstruction::NearestNormal && differing <= 6,
+                        "{what}: vertex colour {v}: {g:?} vs {c:?}"
+                    );
+                }
+            }
+        }
+    }
 }
 
 #[test]

@@ -2,7 +2,8 @@
 //! small flat objects that `GpuScene::refine_batch` refines whole are refined together, one
 //! dispatch per step for all of them, and must write exactly the bytes of each object refined
 //! alone with its own dispatches, at any mix of levels, with either colour reconstruction, as
-//! the levels change (the pooled outputs reused and grown) and beside objects refined in pieces.
+//! the levels change (the pooled outputs reused and grown) and beside objects refined in pieces,
+//! for both refinements (SPEC.md F.7.1, whose triangles do not depend on the level, and F.7.2).
 //!
 //! Runs on any adapter, Mesa lavapipe included. Without one the tests skip with a message,
 //! unless `HCE_REQUIRE_GPU=1`, which makes them fail.
@@ -11,7 +12,7 @@
 use hce_geometry::lighting::Reconstruction;
 use hce_runtime::asset::Asset;
 use hce_runtime::gpu::testing::{context_or_skip, small_flat_scene};
-use hce_runtime::gpu::{GpuContext, GpuScene, ObjectMesh, SceneOptions};
+use hce_runtime::gpu::{FlatRefinement, GpuContext, GpuScene, ObjectMesh, SceneOptions};
 
 /// A mesh's bytes, so that equal means bit-identical (and a NaN equals itself).
 fn bytes(m: &ObjectMesh) -> Vec<u8> {
@@ -24,18 +25,27 @@ fn bytes(m: &ObjectMesh) -> Vec<u8> {
     out
 }
 
-fn scene(ctx: &GpuContext, asset: &Asset, reconstruction: Reconstruction, batch: bool) -> GpuScene {
+fn scene(
+    ctx: &GpuContext,
+    asset: &Asset,
+    reconstruction: Reconstruction,
+    batch: bool,
+    flat: FlatRefinement,
+) -> GpuScene {
     GpuScene::new(
         ctx,
         asset,
         &SceneOptions {
             reconstruction,
             flat_batch: batch,
+            flat_refinement: flat,
             ..SceneOptions::default()
         },
     )
     .unwrap()
 }
+
+const BOTH: [FlatRefinement; 2] = [FlatRefinement::Adaptive, FlatRefinement::Uniform];
 
 /// Every object of `reference` refined alone to `levels[i]` (one object per call: its own
 /// dispatches), read back.
@@ -55,9 +65,12 @@ fn a_batch_writes_the_bytes_of_each_object_refined_alone() {
     };
     let asset = small_flat_scene(14, 5).unwrap();
     let n = asset.objects.len();
-    for reconstruction in [Reconstruction::Smooth, Reconstruction::NearestNormal] {
-        let mut batched = scene(&ctx, &asset, reconstruction, true);
-        let mut reference = scene(&ctx, &asset, reconstruction, false);
+    let runs = BOTH.into_iter().flat_map(|flat| {
+        [Reconstruction::Smooth, Reconstruction::NearestNormal].map(|r| (flat, r))
+    });
+    for (flat, reconstruction) in runs {
+        let mut batched = scene(&ctx, &asset, reconstruction, true, flat);
+        let mut reference = scene(&ctx, &asset, reconstruction, false, flat);
         // Levels 0 to 3 mixed, then each object to another (reusing the pooled outputs), then
         // each one level up (growing them), with object 0 refined in pieces beside the batch.
         // Every object changes level in every round.
@@ -85,7 +98,10 @@ fn a_batch_writes_the_bytes_of_each_object_refined_alone() {
                 .collect();
             // Every object given all its work went in the batch.
             let expected: Vec<usize> = (0..n).filter(|&i| !(pieces && i == 0)).collect();
-            assert_eq!(together, expected, "{reconstruction:?}, round {round}");
+            assert_eq!(
+                together, expected,
+                "{flat:?} {reconstruction:?}, round {round}"
+            );
             assert_eq!(reports.len(), n);
             assert!(reports
                 .iter()
@@ -103,7 +119,7 @@ fn a_batch_writes_the_bytes_of_each_object_refined_alone() {
                 assert_eq!(batched.level(i), Some(levels[i]));
                 assert!(
                     got == *want,
-                    "{reconstruction:?}, round {round}: object {i} at level {} differs from its \
+                    "{flat:?} {reconstruction:?}, round {round}: object {i} at level {} differs from its \
                      refinement alone",
                     levels[i]
                 );
@@ -124,28 +140,48 @@ fn several_batches_in_one_call_write_the_bytes_of_each_object_alone() {
     };
     let asset = small_flat_scene(12, 3).unwrap();
     let n = asset.objects.len();
+    let levels: Vec<u32> = (0..n).map(|i| 2 + (i % 2) as u32).collect();
+    for flat in BOTH {
+        let mut reference = scene(&ctx, &asset, Reconstruction::Smooth, false, flat);
+        // A batch of a third of the scene, at least its largest object.
+        let fine: Vec<u64> = (0..n)
+            .map(|i| reference.triangles_at(i, levels[i]))
+            .collect();
+        let batch_fine = (fine.iter().sum::<u64>() / 3).max(*fine.iter().max().unwrap());
+        several_batches(&ctx, &asset, &mut reference, &levels, flat, batch_fine);
+    }
+}
+
+fn several_batches(
+    ctx: &GpuContext,
+    asset: &Asset,
+    reference: &mut GpuScene,
+    levels: &[u32],
+    flat: FlatRefinement,
+    batch_fine: u64,
+) {
+    let n = levels.len();
     let options = SceneOptions {
-        flat_batch_fine: 3000,
+        flat_batch_fine: batch_fine,
+        flat_refinement: flat,
         ..SceneOptions::default()
     };
-    let mut batched = GpuScene::new(&ctx, &asset, &options).unwrap();
-    let mut reference = scene(&ctx, &asset, Reconstruction::Smooth, false);
-    let levels: Vec<u32> = (0..n).map(|i| 2 + (i % 2) as u32).collect();
+    let mut batched = GpuScene::new(ctx, asset, &options).unwrap();
     let work: Vec<(usize, u64)> = levels
         .iter()
         .enumerate()
         .map(|(i, &level)| {
-            assert!(batched.begin_refine(&ctx, i, level).unwrap());
+            assert!(batched.begin_refine(ctx, i, level).unwrap());
             (i, u64::MAX)
         })
         .collect();
     let fine: Vec<u64> = (0..n).map(|i| batched.triangles_at(i, levels[i])).collect();
     let total: u64 = fine.iter().sum();
     assert!(
-        total > 2 * 3000,
-        "the scene ({total} fine triangles) must take three batches or more"
+        total > 2 * batch_fine,
+        "{flat:?}: the scene ({total} fine triangles) must take three batches or more"
     );
-    let reports = batched.refine_batch(&ctx, &work, false).unwrap();
+    let reports = batched.refine_batch(ctx, &work, false).unwrap();
     assert_eq!(reports.len(), n);
     assert!(reports.iter().all(|r| r.finished));
     let together = reports.iter().filter(|r| r.batched).count();
@@ -153,12 +189,12 @@ fn several_batches_in_one_call_write_the_bytes_of_each_object_alone() {
         together >= n - 1,
         "only {together} of {n} objects went in batches"
     );
-    let want = alone(&ctx, &mut reference, &levels);
+    let want = alone(ctx, reference, levels);
     for (i, want) in want.iter().enumerate() {
-        let got = bytes(&batched.read_back(&ctx, i).unwrap());
+        let got = bytes(&batched.read_back(ctx, i).unwrap());
         assert!(
             got == *want,
-            "object {i} at level {} differs from its refinement alone",
+            "{flat:?}: object {i} at level {} differs from its refinement alone",
             levels[i]
         );
     }
@@ -170,7 +206,13 @@ fn a_scene_without_batching_refines_each_object_alone() {
         return;
     };
     let asset = small_flat_scene(4, 9).unwrap();
-    let mut s = scene(&ctx, &asset, Reconstruction::Smooth, false);
+    let mut s = scene(
+        &ctx,
+        &asset,
+        Reconstruction::Smooth,
+        false,
+        FlatRefinement::Adaptive,
+    );
     let work: Vec<(usize, u64)> = (0..4)
         .map(|i| {
             assert!(s.begin_refine(&ctx, i, 2).unwrap());
@@ -188,13 +230,15 @@ fn objects_too_large_for_a_batch_keep_their_own_dispatches() {
     else {
         return;
     };
-    // At level 5 an octahedron is 8,192 fine triangles (batched), a grid of 8 to 50 triangles
-    // 8,192 to 51,200: the larger ones exceed 16,384 and are refined alone.
+    // At level 5 of the uniform refinement an octahedron is 8,192 fine triangles (batched), a
+    // grid of 8 to 50 triangles 8,192 to 51,200: the larger ones exceed 16,384 and are refined
+    // alone.
     let asset = small_flat_scene(9, 3).unwrap();
     let n = asset.objects.len();
     let levels = vec![5; n];
-    let mut batched = scene(&ctx, &asset, Reconstruction::Smooth, true);
-    let mut reference = scene(&ctx, &asset, Reconstruction::Smooth, false);
+    let uniform = FlatRefinement::Uniform;
+    let mut batched = scene(&ctx, &asset, Reconstruction::Smooth, true, uniform);
+    let mut reference = scene(&ctx, &asset, Reconstruction::Smooth, false, uniform);
     let work: Vec<(usize, u64)> = (0..n)
         .map(|i| {
             assert!(batched.begin_refine(&ctx, i, 5).unwrap());

@@ -281,6 +281,9 @@ export class Kernels {
         ...u.offsets.slice(0, 7), smooth, u.offsets[7], u.offsets[8], v - appended, u.split.copies,
         // range_first, range_end: every item of each step in one dispatch.
         0, 0xffffffff,
+        // adaptive and its lists' five sections: the browser draws the uniform refinement
+        // (SPEC.md F.7.2), so 0 and no lists.
+        0, 0, 0, 0, 0, 0,
       ]);
       uniform = d.createBuffer({ label: 'flat params', size: params.byteLength, usage: UNIFORM | COPY_DST });
       d.queue.writeBuffer(uniform, 0, params);

@@ -1,12 +1,22 @@
-//! Flat refinement on the GPU (`flat.wgsl`): the linear 1-to-4 split of every coarse triangle to
-//! a level, the vertices split where the surface folds (SPEC.md F.5, F.7), HCE colours per fine
-//! triangle, and area-weighted vertex colours shared across the coarse edges that join. This is how [`ObjectKind::Flat`](hce_format::ObjectKind::Flat) objects are drawn
-//! (Concheiro et al., GRAPP 2012: "flat" objects keep their element colours, unsmoothed), and how
-//! `hce render` previews a plain mesh.
+//! Flat refinement on the GPU (`flat.wgsl`), one of SPEC.md F.7's two:
 //!
-//! Use: [`FlatKernel::new`] once per device, [`FlatKernel::upload`] once per object, then
-//! [`FlatKernel::refine_into`] whenever the level changes; it reuses the output buffers when they
-//! are large enough, so a viewer can refine every frame without reallocating.
+//! * the **adaptive** refinement (F.7.1, [`FlatKernel::upload_adaptive`]): one triangle per leaf
+//!   of the object's trees plus those its finer neighbours' corners need. Its connectivity
+//!   depends on the trees alone, so the CPU lists it once at upload
+//!   ([`hce_geometry::adaptive_flat`]: per vertex its coarse triangle and point, per triangle
+//!   its leaf, points and indices, per vertex the corners that use it), and the kernel computes
+//!   the positions, areas and colours from those lists with the CPU reference's arithmetic.
+//!   This is how [`ObjectKind::Flat`](hce_format::ObjectKind::Flat) objects are drawn
+//!   (Concheiro et al., GRAPP 2012: "flat" objects keep their element colours, unsmoothed).
+//! * the **uniform** refinement (F.7.2, [`FlatKernel::upload`]): the linear 1-to-4 split of
+//!   every coarse triangle to a level, the vertices split where the surface folds (F.5), HCE
+//!   colours per fine triangle, and area-weighted vertex colours shared across the coarse edges
+//!   that join: what the conformance suite records, and how `hce render` previews a plain mesh.
+//!
+//! Use: [`FlatKernel::new`] once per device, an upload once per object, then
+//! [`FlatKernel::refine_into`] whenever the level changes (an adaptive object ignores the
+//! level); it reuses the output buffers when they are large enough, so a viewer can refine
+//! every frame without reallocating.
 
 use hce_format::Object;
 
@@ -20,6 +30,7 @@ use super::util::{
 };
 use super::wgsl::flat_source;
 use super::{GpuContext, GpuError};
+use hce_geometry::adaptive_flat::{refine_adaptive_flat, AdaptiveFlat};
 use hce_geometry::decode::MAX_PATH_LEVEL;
 use hce_geometry::flat::{FlatTopology, RefinedMesh};
 use hce_geometry::lighting::Reconstruction;
@@ -55,7 +66,18 @@ pub(super) struct Params {
     /// The items of one dispatch (`range_first .. range_end`; see [`RefineJob`]).
     pub(super) range_first: u32,
     pub(super) range_end: u32,
+    /// 1 for the adaptive refinement (SPEC.md F.7.1), and its lists' sections of `topo`
+    /// ([`adaptive_sections`]).
+    pub(super) adaptive: u32,
+    pub(super) sources_off: u32,
+    pub(super) faces_off: u32,
+    pub(super) indices_off: u32,
+    pub(super) use_offsets_off: u32,
+    pub(super) uses_off: u32,
 }
+
+/// The sections of `topo` (the split's incidence first, then the adaptive lists).
+const SECTIONS: usize = 14;
 
 /// The compiled pipelines of the three steps.
 pub struct FlatKernel {
@@ -75,9 +97,20 @@ pub struct FlatObject {
     split: SplitTables,
     pub(super) coarse_positions: wgpu::Buffer,
     pub(super) topo: wgpu::Buffer,
-    section_offsets: [u32; 9],
+    section_offsets: [u32; SECTIONS],
+    /// The adaptive refinement's vertex and triangle counts (SPEC.md F.7.1), whose lists `topo`
+    /// holds; `None` for the uniform refinement.
+    adaptive: Option<(u32, u32)>,
     /// The baked lighting and how vertex colours are reconstructed from it.
     pub(super) lighting: LightingBuffers,
+}
+
+impl FlatObject {
+    /// The adaptive refinement's vertex and triangle counts (SPEC.md F.7.1); `None` for an
+    /// object uploaded for the uniform refinement.
+    pub fn adaptive_counts(&self) -> Option<(u32, u32)> {
+        self.adaptive
+    }
 }
 
 /// Output buffers of a flat refinement: [`RefinedOutput`] without normals.
@@ -110,7 +143,8 @@ impl FlatKernel {
         compute_pipeline(ctx, &self.module, entry)
     }
 
-    /// Validates `object` (tables and topology) and uploads it.
+    /// Validates `object` (tables and topology) and uploads it for the uniform refinement
+    /// (SPEC.md F.7.2).
     pub fn upload(&self, ctx: &GpuContext, object: &Object) -> Result<FlatObject, GpuError> {
         self.upload_with(ctx, object, Reconstruction::default())
     }
@@ -122,11 +156,43 @@ impl FlatKernel {
         object: &Object,
         reconstruction: Reconstruction,
     ) -> Result<FlatObject, GpuError> {
+        self.upload_as(ctx, object, reconstruction, false)
+    }
+
+    /// Validates `object` and uploads it for the adaptive refinement (SPEC.md F.7.1), whose
+    /// lists it builds from the trees on the CPU (once: they depend on nothing else).
+    pub fn upload_adaptive(
+        &self,
+        ctx: &GpuContext,
+        object: &Object,
+        reconstruction: Reconstruction,
+    ) -> Result<FlatObject, GpuError> {
+        self.upload_as(ctx, object, reconstruction, true)
+    }
+
+    fn upload_as(
+        &self,
+        ctx: &GpuContext,
+        object: &Object,
+        reconstruction: Reconstruction,
+        adaptive: bool,
+    ) -> Result<FlatObject, GpuError> {
         validate_tables(object)?;
         let topology = FlatTopology::new(&object.name, &object.mesh)?;
         // The split where the surface folds (SPEC.md F.5): its slot lists replace the
         // topology's vertex and edge incidence, so each region gathers its own side only.
         let split = SplitTables::from_topology(&object.mesh, &topology, object.kind);
+        let lists = if adaptive {
+            let mesh = refine_adaptive_flat(object).map_err(|e| GpuError::InvalidObject {
+                object: object.name.clone(),
+                reason: e.to_string(),
+            })?;
+            Some(adaptive_sections(&mesh))
+        } else {
+            None
+        };
+        let empty = Vec::new();
+        let list = |k: usize| lists.as_ref().map_or(&empty, |(l, _)| &l[k]);
         let (packed, section_offsets) = pack_sections(
             ctx,
             [
@@ -139,6 +205,11 @@ impl FlatKernel {
                 &split.corner_slot_corners,
                 &split.corner_copy,
                 &split.edge_copy,
+                list(0),
+                list(1),
+                list(2),
+                list(3),
+                list(4),
             ],
         )?;
         check_size(
@@ -151,6 +222,7 @@ impl FlatKernel {
             coarse_positions: storage_init(ctx, "coarse positions", &object.mesh.positions),
             topo: storage_init(ctx, "topology", &packed),
             section_offsets,
+            adaptive: lists.map(|(_, counts)| counts),
             topology,
             split,
         })
@@ -191,8 +263,11 @@ impl FlatKernel {
         let (v, f) = (shape.vertices, shape.triangles);
 
         let t = &object.topology;
-        let n = 1u32 << level;
         let s = object.section_offsets;
+        let adaptive = object.adaptive.is_some();
+        // The uniform lattice's level; the adaptive lists have none.
+        let level = if adaptive { 0 } else { level };
+        let n = 1u32 << level;
         let params = Params {
             level,
             n,
@@ -212,10 +287,20 @@ impl FlatKernel {
             smooth_light: object.lighting.smooth_flag(),
             corner_copy_off: s[7],
             edge_copy_off: s[8],
-            split_base: v - object.split.appended(level) as u32,
-            split_copies: object.split.copies,
+            split_base: if adaptive {
+                v
+            } else {
+                v - object.split.appended(level) as u32
+            },
+            split_copies: if adaptive { 0 } else { object.split.copies },
             range_first: 0,
             range_end: u32::MAX,
+            adaptive: u32::from(adaptive),
+            sources_off: s[9],
+            faces_off: s[10],
+            indices_off: s[11],
+            use_offsets_off: s[12],
+            uses_off: s[13],
         };
         // The bindings (hce_bindings.wgsl) each step reads or writes.
         let lit = &object.lighting;
@@ -266,8 +351,12 @@ impl FlatKernel {
     }
 }
 
-/// What a refinement of `object` to `level` writes, checked to fit 32-bit indices.
+/// What a refinement of `object` to `level` writes, checked to fit 32-bit indices (an
+/// adaptive object: its lists' counts, whatever the level).
 fn shape(object: &FlatObject, level: u32) -> Result<OutputShape, GpuError> {
+    if let Some((v, f)) = object.adaptive {
+        return OutputShape::new(v.into(), f.into(), false);
+    }
     if level > MAX_PATH_LEVEL {
         return Err(GpuError::LevelTooHigh {
             level,
@@ -279,6 +368,32 @@ fn shape(object: &FlatObject, level: u32) -> Result<OutputShape, GpuError> {
         object.topology.refined_triangle_count(level),
         false,
     )
+}
+
+/// The lists of `mesh` that `flat.wgsl` reads (the sections after `Params::range_end`): per
+/// vertex its coarse triangle and packed point (`x | y << 16` on the 4096 lattice); per triangle
+/// its coarse triangle, leaf and three packed corner points; per triangle its indices; the
+/// offsets and the uses of [`AdaptiveFlat::incidence`]. With the vertex and triangle counts.
+fn adaptive_sections(mesh: &AdaptiveFlat) -> ([Vec<u32>; 5], (u32, u32)) {
+    let pack = |[x, y]: [u32; 2]| x | y << 16;
+    let sources = mesh
+        .sources
+        .iter()
+        .flat_map(|&(t, p)| [t, pack(p)])
+        .collect();
+    let mut faces = Vec::with_capacity(5 * mesh.triangle_count());
+    for t in 0..mesh.triangle_start.len().saturating_sub(1) {
+        let range = mesh.triangle_start[t] as usize..mesh.triangle_start[t + 1] as usize;
+        for f in range {
+            faces.extend([t as u32, mesh.leaves[f]]);
+            faces.extend(mesh.points[f].map(pack));
+        }
+    }
+    let indices = mesh.indices.iter().flatten().copied().collect();
+    let (offsets, uses) = mesh.incidence();
+    // refine_adaptive_flat keeps both counts within u32.
+    let counts = (mesh.vertex_count() as u32, mesh.triangle_count() as u32);
+    ([sources, faces, indices, offsets, uses], counts)
 }
 
 /// One-shot convenience: upload `object`, refine it to `level` and read the mesh back.
@@ -297,5 +412,19 @@ pub fn refine_flat_with(
     let uploaded = kernel.upload_with(ctx, object, reconstruction)?;
     let mut out = None;
     kernel.refine_into(ctx, &uploaded, level, &mut out, false)?;
+    out.expect("refine_into allocates").read_back(ctx)
+}
+
+/// One-shot convenience: upload `object`, refine it adaptively (SPEC.md F.7.1) and read the
+/// mesh back (its level 0).
+pub fn refine_flat_adaptive(
+    ctx: &GpuContext,
+    object: &Object,
+    reconstruction: Reconstruction,
+) -> Result<RefinedMesh, GpuError> {
+    let kernel = FlatKernel::new(ctx);
+    let uploaded = kernel.upload_adaptive(ctx, object, reconstruction)?;
+    let mut out = None;
+    kernel.refine_into(ctx, &uploaded, 0, &mut out, false)?;
     out.expect("refine_into allocates").read_back(ctx)
 }

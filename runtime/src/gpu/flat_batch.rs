@@ -365,6 +365,11 @@ impl FlatPool {
                 &mut p.vertex_corners_off,
                 &mut p.corner_copy_off,
                 &mut p.edge_copy_off,
+                &mut p.sources_off,
+                &mut p.faces_off,
+                &mut p.indices_off,
+                &mut p.use_offsets_off,
+                &mut p.uses_off,
             ] {
                 *off += bases.topo;
             }

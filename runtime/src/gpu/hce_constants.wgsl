@@ -21,9 +21,11 @@ const SPOKE_SHARP: u32 = 0x1u;
 const VERTEX_BOUNDARY: u32 = 0x1u;
 // bits of the lattice in which points are evaluated; lighting.rs EVAL_LATTICE_BITS
 const HCE_EVAL_BITS: u32 = 0x10u;
+// bits of the lattice of the leaf corners (SPEC.md G.2, F.7.1); lighting.rs TREE_LATTICE_BITS
+const HCE_TREE_BITS: u32 = 0xcu;
 // a leaf's node word; lighting.rs LEAF
 const HCE_LEAF: u32 = 0x80000000u;
 // words of a batch entry before the object's Params; flat_batch.rs ENTRY_BASES
 const FLAT_ENTRY_BASES: u32 = 0x6u;
 // words of a batch entry; flat_batch.rs ENTRY_WORDS
-const FLAT_ENTRY_WORDS: u32 = 0x1cu;
+const FLAT_ENTRY_WORDS: u32 = 0x22u;

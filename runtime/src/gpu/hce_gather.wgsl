@@ -172,6 +172,11 @@ fn slot_colour(s: Slot, normal: vec3<f32>) -> vec3<f32> {
         let p = slot_point(s, q);
         gather(&acc, u32(p.x), p.y, p.z);
     }
+    return acc_mean(acc);
+}
+
+// The area-weighted mean, the plain mean where the areas sum to zero, black for no triangle.
+fn acc_mean(acc: Acc) -> vec3<f32> {
     if (acc.area > 0.0) {
         return acc.weighted / acc.area;
     } else if (acc.count > 0.0) {

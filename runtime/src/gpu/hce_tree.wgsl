@@ -82,11 +82,25 @@ var<private> hce_tree_base: vec4<u32>;
 // `depth` levels) and, of that node's colours, the one of the representative normal closest to
 // `n` (the kernel passes the fine triangle's normal, unit or not: the choice is the same).
 fn hce_nearest_colour(t: u32, depth: u32, path: u32, n: vec3<f32>) -> vec3<f32> {
+    let rec = hce_record(t);
+    return hce_node_colour(rec, hce_tree_node(rec, depth, path), n);
+}
+
+// The same for a triangle that names its node (a leaf of the adaptive flat refinement, SPEC.md
+// F.7.1).
+fn hce_leaf_colour(t: u32, node: u32, n: vec3<f32>) -> vec3<f32> {
+    return hce_node_colour(hce_record(t), node, n);
+}
+
+fn hce_record(t: u32) -> TriRecord {
     var rec = hce_records[hce_tree_base.x + t];
     rec.bits_start += hce_tree_base.y;
     rec.colour_start += hce_tree_base.z;
     rec.normal_start += hce_tree_base.w;
-    let node = hce_tree_node(rec, depth, path);
+    return rec;
+}
+
+fn hce_node_colour(rec: TriRecord, node: u32, n: vec3<f32>) -> vec3<f32> {
     let j = hce_choose_normal(rec, n);
     return hce_rgb9e5(hce_colours[rec.colour_start + node * rec.normal_count + j]);
 }

@@ -53,7 +53,10 @@ pub use draw::{
     colour_pass, float_texture_entry, read_texture, render_pipeline, storage_entry, target_texture,
     uniform_entry, PipelineSpec,
 };
-pub use flat::{refine_flat, refine_flat_with, FlatKernel, FlatObject, FlatOutput, KernelTiming};
+pub use flat::{
+    refine_flat, refine_flat_adaptive, refine_flat_with, FlatKernel, FlatObject, FlatOutput,
+    KernelTiming,
+};
 pub use flat_batch::BATCH_MAX_FINE;
 pub use framing::{auto_scene_camera, Placement};
 pub use hce_geometry::flat::RefinedMesh;
@@ -67,8 +70,8 @@ pub use render::{
 };
 pub use scene::{
     flat_level, render_asset, resolve_camera, AssetRender, AssetRenderOptions, BatchReport,
-    CameraChoice, CameraSource, GpuScene, LevelChoice, MultiresPath, ObjectBuffers, ObjectMesh,
-    SceneDraw, SceneOptions,
+    CameraChoice, CameraSource, FlatRefinement, GpuScene, LevelChoice, MultiresPath, ObjectBuffers,
+    ObjectMesh, SceneDraw, SceneOptions,
 };
 pub use util::PassTimer;
 

@@ -12,11 +12,15 @@
 //!
 //! Each object is refined by one of these paths (one variant of a private enum per object):
 //!
-//! * **Flat** objects ([`ObjectKind::Flat`]) by the [`FlatKernel`]: linear 1-to-4 split, colours
-//!   from their HCE trees, no smoothing. They are refined to their tree depth (the level at
-//!   which every radiosity element has its own triangles), whatever level the view asks for: a
-//!   coarser level would blur the baked lighting and a finer one adds nothing. [`flat_level`]
-//!   bounds it by the object's size. The small ones that
+//! * **Flat** objects ([`ObjectKind::Flat`]) by the [`FlatKernel`], colours from their HCE
+//!   trees, no smoothing, whatever level the view asks for. By default they are drawn from their
+//!   trees (SPEC.md F.7.1, [`SceneOptions::flat_refinement`]): one triangle per radiosity
+//!   element plus those its finer neighbours need, the field the baker found with a fraction
+//!   of the triangles. With [`FlatRefinement::Uniform`] they are split 1-to-4 to their tree
+//!   depth (F.7.2, the level at which every element has its own triangles: a coarser level
+//!   would blur the baked lighting and a finer one adds nothing), bounded by the object's size
+//!   ([`flat_level`]); that level is also the one reported for an adaptive object. The small
+//!   ones that
 //!   [`GpuScene::refine_batch`] refines whole in one call are refined together, one dispatch
 //!   per step of the kernel for all of them ([`SceneOptions::flat_batch`]), into the same bytes.
 //! * **Multiresolution** objects by the [`LoopKernel`] ([`MultiresPath::Gpu`], the default):
@@ -74,6 +78,7 @@ use super::{
 };
 use crate::asset::{Asset, Bounds};
 use hce_geometry::lighting::Reconstruction;
+pub use hce_geometry::refine::FlatRefinement;
 use hce_geometry::subdivide::{subdivide_into, Refined};
 
 /// How multiresolution objects are refined.
@@ -109,6 +114,9 @@ pub struct SceneOptions {
     /// The most fine triangles one batch refines, the size of the pooled outputs: a call that
     /// refines more refines them in several batches. Default [`BATCH_MAX_FINE`] (2^20).
     pub flat_batch_fine: u64,
+    /// How flat objects are refined (SPEC.md F.7): from their trees (the default, F.7.1) or
+    /// uniformly to [`flat_level`] (F.7.2).
+    pub flat_refinement: FlatRefinement,
 }
 
 impl Default for SceneOptions {
@@ -120,6 +128,7 @@ impl Default for SceneOptions {
             reconstruction: Reconstruction::default(),
             flat_batch: true,
             flat_batch_fine: BATCH_MAX_FINE,
+            flat_refinement: FlatRefinement::default(),
         }
     }
 }
@@ -222,6 +231,17 @@ struct GpuObject {
     mean_edge_length: f32,
     instances: Vec<Mat4>,
     refiner: Refiner,
+}
+
+impl GpuObject {
+    /// The triangles of an adaptive flat object (SPEC.md F.7.1), which do not depend on the
+    /// level; `None` for the others.
+    fn adaptive_triangles(&self) -> Option<u64> {
+        match &self.refiner {
+            Refiner::Flat { object, .. } => object.adaptive_counts().map(|(_, f)| u64::from(f)),
+            _ => None,
+        }
+    }
 }
 
 /// The buffers of a refined object, ready to draw.
@@ -337,12 +357,16 @@ impl GpuScene {
             let refiner = match (o.kind(), options.multires) {
                 (ObjectKind::Flat, _) => {
                     let kernel = flat.get_or_insert_with(|| FlatKernel::new(ctx));
+                    let object = match options.flat_refinement {
+                        FlatRefinement::Adaptive => {
+                            kernel.upload_adaptive(ctx, &o.object, options.reconstruction)?
+                        }
+                        FlatRefinement::Uniform => {
+                            kernel.upload_with(ctx, &o.object, options.reconstruction)?
+                        }
+                    };
                     Refiner::Flat {
-                        object: Box::new(kernel.upload_with(
-                            ctx,
-                            &o.object,
-                            options.reconstruction,
-                        )?),
+                        object: Box::new(object),
                         out: None,
                         next: None,
                         spare: None,
@@ -457,11 +481,13 @@ impl GpuScene {
         })
     }
 
-    /// Fine triangles of `object` at `level` (per instance).
+    /// Fine triangles of `object` at `level` (per instance); an adaptive flat object's, whatever
+    /// the level.
     pub fn triangles_at(&self, object: usize, level: u32) -> u64 {
-        self.objects
-            .get(object)
-            .map_or(0, |o| o.coarse_triangles << (2 * level.min(31)))
+        self.objects.get(object).map_or(0, |o| {
+            o.adaptive_triangles()
+                .unwrap_or(o.coarse_triangles << (2 * level.min(31)))
+        })
     }
 
     /// The level `object` is refined to now, if it has been refined.
@@ -503,8 +529,11 @@ impl GpuScene {
                 .iter()
                 .enumerate()
                 .filter(|(i, l)| {
+                    let o = &self.objects[*i];
+                    // An adaptive flat object draws its trees whatever its level.
                     l.is_some_and(|l| l > 0)
-                        && (!forced || self.objects[*i].kind == ObjectKind::Flat)
+                        && (!forced || o.kind == ObjectKind::Flat)
+                        && o.adaptive_triangles().is_none()
                 })
                 .max_by_key(|(i, l)| drawn(*i, l.unwrap_or(0)))
                 .map(|(i, _)| i);

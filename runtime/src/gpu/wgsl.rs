@@ -177,6 +177,11 @@ const CONSTANTS: &[(&str, u32, &str)] = &[
         "bits of the lattice in which points are evaluated; lighting.rs EVAL_LATTICE_BITS",
     ),
     (
+        "HCE_TREE_BITS",
+        hce_geometry::lighting::TREE_LATTICE_BITS,
+        "bits of the lattice of the leaf corners (SPEC.md G.2, F.7.1); lighting.rs TREE_LATTICE_BITS",
+    ),
+    (
         "HCE_LEAF",
         hce_geometry::lighting::LEAF,
         "a leaf's node word; lighting.rs LEAF",

@@ -76,6 +76,11 @@ pub struct RenderArgs {
     /// rays through the same sample positions.
     #[arg(long, default_value_t = 4, value_parser = parse_msaa)]
     pub msaa: u32,
+    /// How flat objects are refined: `adaptive` (the default: from their trees, one triangle per
+    /// leaf plus those finer neighbours need, SPEC.md F.7.1) or `uniform` (every coarse triangle
+    /// split 1-to-4 to the depth of its deepest leaf, bounded by its size, F.7.2).
+    #[arg(long, default_value = "adaptive", value_parser = super::subdivide::parse_flat)]
+    pub flat: hce_geometry::refine::FlatRefinement,
 }
 
 /// Parses a multisample count: 1, 2, 4, 8 or 16 (the counts with standard sample positions).
@@ -341,6 +346,7 @@ fn run_baked(
                     hce_runtime::gpu::MultiresPath::Gpu
                 },
                 reconstruction: args.reconstruction,
+                flat_refinement: args.flat,
                 ..Default::default()
             },
             samples: args.msaa,

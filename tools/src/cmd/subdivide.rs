@@ -84,7 +84,7 @@ pub struct SubdivideArgs {
     pub unclamped: bool,
 }
 
-fn parse_flat(s: &str) -> Result<FlatRefinement, String> {
+pub fn parse_flat(s: &str) -> Result<FlatRefinement, String> {
     match s {
         "adaptive" => Ok(FlatRefinement::Adaptive),
         "uniform" => Ok(FlatRefinement::Uniform),

@@ -45,6 +45,11 @@ pub struct ViewArgs {
     /// `smooth`, `nearest` or `gouraud`, as for `hce render` (N cycles them in the window).
     #[arg(long, default_value = "smooth", value_parser = super::render::parse_reconstruction)]
     pub reconstruction: hce_geometry::lighting::Reconstruction,
+    /// How flat objects are refined: `adaptive` (the default: from their trees, one triangle per
+    /// leaf plus those finer neighbours need, SPEC.md F.7.1) or `uniform` (every coarse triangle
+    /// split 1-to-4 to the depth of its deepest leaf, bounded by its size, F.7.2).
+    #[arg(long, default_value = "adaptive", value_parser = super::subdivide::parse_flat)]
+    pub flat: hce_geometry::refine::FlatRefinement,
     /// Exposure in stops before tone mapping (the tone curve of `hce render`'s PNGs).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub exposure: f32,
@@ -139,6 +144,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
                 refine_budget_ms: args.refine_budget,
             },
             reconstruction: args.reconstruction,
+            flat: args.flat,
             exposure: args.exposure,
         },
     })

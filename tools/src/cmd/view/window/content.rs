@@ -8,6 +8,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use hce_format::ObjectKind;
 use hce_geometry::lighting::Reconstruction;
+use hce_geometry::refine::FlatRefinement;
 use hce_runtime::asset::{Asset, AssetError};
 use hce_runtime::gpu::{
     resolve_camera, Camera, CameraChoice, CameraSource, FlatKernel, FlatObject, FlatOutput,
@@ -131,6 +132,7 @@ pub struct Content {
     pub bounds: ([f32; 3], [f32; 3]),
     pub objects: Vec<ObjectStats>,
     pub reconstruction: Reconstruction,
+    flat: FlatRefinement,
 }
 
 fn kind_name(kind: Option<ObjectKind>) -> &'static str {
@@ -185,10 +187,11 @@ impl Content {
         path: &Path,
         data: FileData,
         reconstruction: Reconstruction,
+        flat: FlatRefinement,
     ) -> Result<Self> {
         match data {
-            FileData::Baked(asset) => Self::baked(ctx, path, *asset, reconstruction),
-            FileData::Plain(object) => Self::plain(ctx, path, *object, reconstruction),
+            FileData::Baked(asset) => Self::baked(ctx, path, *asset, reconstruction, flat),
+            FileData::Plain(object) => Self::plain(ctx, path, *object, reconstruction, flat),
         }
     }
 
@@ -197,6 +200,7 @@ impl Content {
         path: &Path,
         asset: Asset,
         reconstruction: Reconstruction,
+        flat: FlatRefinement,
     ) -> Result<Self> {
         let bounds = asset
             .bounds()
@@ -206,6 +210,7 @@ impl Content {
             &asset,
             &SceneOptions {
                 reconstruction,
+                flat_refinement: flat,
                 ..Default::default()
             },
         )?;
@@ -231,6 +236,7 @@ impl Content {
             bounds: (bounds.min, bounds.max),
             objects,
             reconstruction,
+            flat,
         })
     }
 
@@ -239,7 +245,10 @@ impl Content {
         path: &Path,
         object: hce_format::Object,
         reconstruction: Reconstruction,
+        flat: FlatRefinement,
     ) -> Result<Self> {
+        // A plain mesh has no trees: it is previewed at its level, uniformly (`flat` is kept
+        // for the next file).
         let view = PlainView::new(&object)?;
         let kernel = FlatKernel::new(ctx);
         let uploaded = kernel.upload_with(ctx, &object, reconstruction)?;
@@ -265,6 +274,7 @@ impl Content {
             })),
             objects,
             reconstruction,
+            flat,
         })
     }
 
@@ -275,7 +285,7 @@ impl Content {
             Source::Baked { asset, .. } => FileData::Baked(asset),
             Source::Plain(p) => FileData::Plain(p.object),
         };
-        Self::upload(ctx, &path, data, r)
+        Self::upload(ctx, &path, data, r, self.flat)
     }
 
     /// The camera `choice` gives on a view of aspect `aspect`, and where it came from.

@@ -23,6 +23,7 @@ use std::time::Instant;
 
 use anyhow::{anyhow, bail, Context as _, Result};
 use hce_geometry::lighting::Reconstruction;
+use hce_geometry::refine::FlatRefinement;
 use hce_runtime::gpu::{
     view_projection, AdapterKind, Camera, CameraChoice, ContextOptions, GpuContext,
 };
@@ -59,6 +60,8 @@ pub struct Options {
 pub struct Settings {
     pub levels: Levels,
     pub reconstruction: Reconstruction,
+    /// How flat objects are refined (`--flat`), fixed for the run.
+    pub flat: FlatRefinement,
     pub exposure: f32,
 }
 
@@ -385,7 +388,13 @@ impl App {
     /// Opens `path`, replacing what is shown, and places the camera.
     fn open(&mut self, path: &Path, data: FileData, choice: CameraChoice) -> Result<()> {
         let gpu = self.gpu.as_ref().context("no window yet")?;
-        let content = Content::upload(&gpu.ctx, path, data, self.settings.reconstruction)?;
+        let content = Content::upload(
+            &gpu.ctx,
+            path,
+            data,
+            self.settings.reconstruction,
+            self.settings.flat,
+        )?;
         let (width, height) = gpu.size();
         let aspect = width.max(1) as f32 / height.max(1) as f32;
         let (camera, source) = content.start_camera(choice, aspect)?;
