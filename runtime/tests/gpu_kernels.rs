@@ -9,6 +9,7 @@ use hce_geometry::adaptive_flat::refine_adaptive_flat;
 use hce_geometry::colour::{adaptive_flat_colours, apply_baked_colours};
 use hce_geometry::flat::{self, FlatTopology};
 use hce_geometry::lighting::Reconstruction;
+use hce_geometry::refine::FlatRefinement;
 use hce_geometry::split::SplitTables;
 use hce_geometry::Refined;
 use hce_geometry::{decode, tables};
@@ -437,7 +438,14 @@ fn refining_again_reuses_buffers_and_is_deterministic() {
     use hce_runtime::gpu::FlatKernel;
     let object = test_objects().remove(1);
     let kernel = FlatKernel::new(&ctx);
-    let uploaded = kernel.upload(&ctx, &object).unwrap();
+    let uploaded = kernel
+        .upload(
+            &ctx,
+            &object,
+            Reconstruction::default(),
+            FlatRefinement::Uniform,
+        )
+        .unwrap();
     let mut out = None;
     kernel
         .refine_into(&ctx, &uploaded, 3, &mut out, false)

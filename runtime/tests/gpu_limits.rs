@@ -14,6 +14,7 @@
 
 use hce_format::ObjectKind;
 use hce_geometry::lighting::Reconstruction;
+use hce_geometry::refine::FlatRefinement;
 use hce_geometry::topology::{build_control_mesh, TopologyConfig};
 use hce_runtime::gpu::testing::{
     context_or_skip, decode_colours, random_object, ColourQuery, RandomTrees,
@@ -81,7 +82,9 @@ fn every_kernel_runs_within_webgpu_default_limits() {
     let flat = FlatKernel::new(&ctx);
     let mut triangles = Vec::new();
     for reconstruction in [Reconstruction::default(), Reconstruction::NearestNormal] {
-        let uploaded = flat.upload_with(&ctx, &object, reconstruction).unwrap();
+        let uploaded = flat
+            .upload(&ctx, &object, reconstruction, FlatRefinement::Uniform)
+            .unwrap();
         for level in 0..=3 {
             let mut out = None;
             flat.refine_into(&ctx, &uploaded, level, &mut out, false)
@@ -91,7 +94,7 @@ fn every_kernel_runs_within_webgpu_default_limits() {
         }
         for scheme in [PatchScheme::Scratch, PatchScheme::Workgroup] {
             let kernel = LoopKernel::with_scheme(&ctx, scheme);
-            let uploaded = kernel.upload_with(&ctx, &object, reconstruction).unwrap();
+            let uploaded = kernel.upload(&ctx, &object, reconstruction).unwrap();
             for level in 0..=3 {
                 let mut out = None;
                 kernel

@@ -20,6 +20,7 @@ use hce_format::{ControlMesh, Object, ObjectKind};
 use hce_geometry::colour::apply_baked_colours_with;
 use hce_geometry::lighting::Reconstruction;
 use hce_geometry::refine::subdivide_split;
+use hce_geometry::refine::FlatRefinement;
 use hce_geometry::subdivide::subdivide;
 use hce_geometry::topology::{build_control_mesh, Creases, Topology, TopologyConfig};
 use hce_runtime::gpu::testing::{context_or_skip, random_object, RandomTrees};
@@ -151,7 +152,7 @@ fn compare_with(
 ) -> Vec<Report> {
     let uploaded: Vec<_> = kernels
         .iter()
-        .map(|k| k.upload_with(ctx, object, reconstruction).unwrap())
+        .map(|k| k.upload(ctx, object, reconstruction).unwrap())
         .collect();
     let mut outs: Vec<_> = kernels.iter().map(|_| None).collect();
     let mut reports = vec![Report::default(); kernels.len()];
@@ -334,7 +335,9 @@ fn workgroup_and_scratch_patches_match_cpu_bitwise_at_levels_0_to_5() {
     };
     for (i, (name, creases)) in meshes.into_iter().enumerate() {
         let object = baked(name, &data_mesh(name, creases).mesh, 300 + i as u64);
-        let uploaded = auto.upload(&ctx, &object).unwrap();
+        let uploaded = auto
+            .upload(&ctx, &object, Reconstruction::default())
+            .unwrap();
         for level in 1..=5 {
             assert_eq!(
                 auto.scheme_for(&ctx, &uploaded, level).unwrap(),
@@ -458,7 +461,9 @@ fn reusing_outputs_keeps_buffers_when_the_level_does_not_grow() {
         5,
     );
     let kernel = LoopKernel::new(&ctx);
-    let uploaded = kernel.upload(&ctx, &object).unwrap();
+    let uploaded = kernel
+        .upload(&ctx, &object, Reconstruction::default())
+        .unwrap();
     let mut out = None;
     kernel
         .refine_into(&ctx, &uploaded, 3, &mut out, false)
@@ -494,7 +499,9 @@ fn malformed_tables_are_upload_errors() {
         9,
     );
     let kernel = LoopKernel::new(&ctx);
-    assert!(kernel.upload(&ctx, &good).is_ok());
+    assert!(kernel
+        .upload(&ctx, &good, Reconstruction::default())
+        .is_ok());
     type Damage = fn(&mut Object);
     let damages: &[(&str, Damage)] = &[
         ("spoke out of range", |o| o.mesh.ring[3] = 1000),
@@ -531,7 +538,7 @@ fn malformed_tables_are_upload_errors() {
     for (what, damage) in damages {
         let mut bad = good.clone();
         damage(&mut bad);
-        match kernel.upload(&ctx, &bad) {
+        match kernel.upload(&ctx, &bad, Reconstruction::default()) {
             Ok(_) => panic!("{what}: upload accepted a damaged object"),
             Err(e) => {
                 let msg = e.to_string();
@@ -681,7 +688,9 @@ fn refinement_in_pieces_writes_the_bytes_of_one_submission() {
                 fine * 2 / 3,
             ];
             for (scheme, kernel) in &loops {
-                let uploaded = kernel.upload(&ctx, &object).unwrap();
+                let uploaded = kernel
+                    .upload(&ctx, &object, Reconstruction::default())
+                    .unwrap();
                 let mut whole = None;
                 kernel
                     .refine_into(&ctx, &uploaded, level, &mut whole, false)
@@ -713,7 +722,14 @@ fn refinement_in_pieces_writes_the_bytes_of_one_submission() {
                     );
                 }
             }
-            let uploaded = flat.upload(&ctx, &object).unwrap();
+            let uploaded = flat
+                .upload(
+                    &ctx,
+                    &object,
+                    Reconstruction::default(),
+                    FlatRefinement::Uniform,
+                )
+                .unwrap();
             let mut whole = None;
             flat.refine_into(&ctx, &uploaded, level, &mut whole, false)
                 .unwrap();

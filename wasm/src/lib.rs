@@ -15,7 +15,7 @@
 //!   `hce_runtime::Asset::from_bytes` does (the same checks and messages as the CLI), and a
 //!   glTF's root rules as `hce validate` words them.
 //! * `hce_tables(ptr, bytes) -> result`: one object's kernel tables and lighting table, as
-//!   the native runtime's `upload_with` builds them.
+//!   the native runtime's kernels' `upload` builds them.
 //! * `hce_refine(ptr, bytes) -> result`: one object refined on the CPU with its baked light, as
 //!   `hce subdivide` refines it, for pages without WebGPU.
 //! * `hce_geometry_hash(ptr, bytes) -> result`: the geometry hash (SPEC.md 2.5).

@@ -14,6 +14,7 @@ use super::util::{
 use super::{GpuContext, GpuError, GpuScene, SceneOptions};
 use crate::asset::Asset;
 use hce_geometry::lighting::Reconstruction;
+use hce_geometry::refine::FlatRefinement;
 
 pub use super::inputs::{grid, octahedron, random_object, small_flat_scene, RandomTrees, SplitMix};
 
@@ -63,7 +64,7 @@ pub fn bench_flat(
     reconstruction: Reconstruction,
 ) -> Result<Vec<BenchRow>, GpuError> {
     let kernel = FlatKernel::new(ctx);
-    let uploaded = kernel.upload_with(ctx, object, reconstruction)?;
+    let uploaded = kernel.upload(ctx, object, reconstruction, FlatRefinement::Uniform)?;
     let coarse = u64::from(uploaded.topology.triangle_count);
     let mut rows = Vec::new();
     for &level in levels {
@@ -101,7 +102,7 @@ pub fn bench_loop(
     reconstruction: Reconstruction,
 ) -> Result<Vec<BenchRow>, GpuError> {
     let kernel = LoopKernel::with_scheme(ctx, scheme);
-    let uploaded = kernel.upload_with(ctx, object, reconstruction)?;
+    let uploaded = kernel.upload(ctx, object, reconstruction)?;
     let coarse = u64::from(uploaded.triangle_count);
     let mut rows = Vec::new();
     for &level in levels {

@@ -1,6 +1,6 @@
 //! Flat refinement on the GPU (`flat.wgsl`), one of SPEC.md F.7's two:
 //!
-//! * the **adaptive** refinement (F.7.1, [`FlatKernel::upload_adaptive`]): one triangle per leaf
+//! * the **adaptive** refinement (F.7.1, [`FlatKernel::upload`] with [`FlatRefinement::Adaptive`]): one triangle per leaf
 //!   of the object's trees plus those its finer neighbours' corners need. Its connectivity
 //!   depends on the trees alone, so the CPU lists it once at upload
 //!   ([`hce_geometry::adaptive_flat`]: per vertex its coarse triangle and point, per triangle
@@ -34,6 +34,7 @@ use hce_geometry::adaptive_flat::{refine_adaptive_flat, AdaptiveFlat};
 use hce_geometry::decode::MAX_PATH_LEVEL;
 use hce_geometry::flat::{FlatTopology, RefinedMesh};
 use hce_geometry::lighting::Reconstruction;
+use hce_geometry::refine::FlatRefinement;
 use hce_geometry::split::SplitTables;
 use hce_geometry::tables::validate_tables;
 
@@ -143,46 +144,25 @@ impl FlatKernel {
         compute_pipeline(ctx, &self.module, entry)
     }
 
-    /// Validates `object` (tables and topology) and uploads it for the uniform refinement
-    /// (SPEC.md F.7.2).
-    pub fn upload(&self, ctx: &GpuContext, object: &Object) -> Result<FlatObject, GpuError> {
-        self.upload_with(ctx, object, Reconstruction::default())
-    }
-
-    /// [`FlatKernel::upload`] with the colour reconstruction chosen.
-    pub fn upload_with(
+    /// Validates `object` (tables and topology) and uploads it with its colours reconstructed
+    /// by `reconstruction`, for `refinement`: the adaptive one (SPEC.md F.7.1), whose lists
+    /// are built here from the trees on the CPU (once: they depend on nothing else), or the
+    /// uniform one (F.7.2).
+    pub fn upload(
         &self,
         ctx: &GpuContext,
         object: &Object,
         reconstruction: Reconstruction,
-    ) -> Result<FlatObject, GpuError> {
-        self.upload_as(ctx, object, reconstruction, false)
-    }
-
-    /// Validates `object` and uploads it for the adaptive refinement (SPEC.md F.7.1), whose
-    /// lists it builds from the trees on the CPU (once: they depend on nothing else).
-    pub fn upload_adaptive(
-        &self,
-        ctx: &GpuContext,
-        object: &Object,
-        reconstruction: Reconstruction,
-    ) -> Result<FlatObject, GpuError> {
-        self.upload_as(ctx, object, reconstruction, true)
-    }
-
-    fn upload_as(
-        &self,
-        ctx: &GpuContext,
-        object: &Object,
-        reconstruction: Reconstruction,
-        adaptive: bool,
+        refinement: FlatRefinement,
     ) -> Result<FlatObject, GpuError> {
         validate_tables(object)?;
         let topology = FlatTopology::new(&object.name, &object.mesh)?;
         // The split where the surface folds (SPEC.md F.5): its slot lists replace the
         // topology's vertex and edge incidence, so each region gathers its own side only.
         let split = SplitTables::from_topology(&object.mesh, &topology, object.kind);
-        let lists = if adaptive {
+        let [edge_slots, edge_sides, corner_slots, corner_corners, corner_copy, edge_copy, _] =
+            split.tables();
+        let lists = if refinement == FlatRefinement::Adaptive {
             let mesh = refine_adaptive_flat(object).map_err(|e| GpuError::InvalidObject {
                 object: object.name.clone(),
                 reason: e.to_string(),
@@ -199,12 +179,12 @@ impl FlatKernel {
                 &object.mesh.triangles,
                 &object.mesh.edges,
                 &topology.edge_verts,
-                &split.edge_slot_offsets,
-                &split.edge_slot_sides,
-                &split.corner_slot_offsets,
-                &split.corner_slot_corners,
-                &split.corner_copy,
-                &split.edge_copy,
+                edge_slots,
+                edge_sides,
+                corner_slots,
+                corner_corners,
+                corner_copy,
+                edge_copy,
                 list(0),
                 list(1),
                 list(2),
@@ -409,7 +389,7 @@ pub fn refine_flat_with(
     reconstruction: Reconstruction,
 ) -> Result<RefinedMesh, GpuError> {
     let kernel = FlatKernel::new(ctx);
-    let uploaded = kernel.upload_with(ctx, object, reconstruction)?;
+    let uploaded = kernel.upload(ctx, object, reconstruction, FlatRefinement::Uniform)?;
     let mut out = None;
     kernel.refine_into(ctx, &uploaded, level, &mut out, false)?;
     out.expect("refine_into allocates").read_back(ctx)
@@ -423,7 +403,7 @@ pub fn refine_flat_adaptive(
     reconstruction: Reconstruction,
 ) -> Result<RefinedMesh, GpuError> {
     let kernel = FlatKernel::new(ctx);
-    let uploaded = kernel.upload_adaptive(ctx, object, reconstruction)?;
+    let uploaded = kernel.upload(ctx, object, reconstruction, FlatRefinement::Adaptive)?;
     let mut out = None;
     kernel.refine_into(ctx, &uploaded, 0, &mut out, false)?;
     out.expect("refine_into allocates").read_back(ctx)

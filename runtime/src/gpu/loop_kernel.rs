@@ -357,12 +357,9 @@ impl LoopKernel {
     /// table is an error here, never an out-of-bounds read on the GPU.
     ///
     /// [`hce_geometry::subdivide`]: mod@hce_geometry::subdivide
-    pub fn upload(&self, ctx: &GpuContext, object: &Object) -> Result<LoopObject, GpuError> {
-        self.upload_with(ctx, object, Reconstruction::default())
-    }
-
-    /// [`LoopKernel::upload`] with the colour reconstruction chosen.
-    pub fn upload_with(
+    ///
+    /// Its colours are reconstructed by `reconstruction`.
+    pub fn upload(
         &self,
         ctx: &GpuContext,
         object: &Object,

@@ -357,14 +357,12 @@ impl GpuScene {
             let refiner = match (o.kind(), options.multires) {
                 (ObjectKind::Flat, _) => {
                     let kernel = flat.get_or_insert_with(|| FlatKernel::new(ctx));
-                    let object = match options.flat_refinement {
-                        FlatRefinement::Adaptive => {
-                            kernel.upload_adaptive(ctx, &o.object, options.reconstruction)?
-                        }
-                        FlatRefinement::Uniform => {
-                            kernel.upload_with(ctx, &o.object, options.reconstruction)?
-                        }
-                    };
+                    let object = kernel.upload(
+                        ctx,
+                        &o.object,
+                        options.reconstruction,
+                        options.flat_refinement,
+                    )?;
                     Refiner::Flat {
                         object: Box::new(object),
                         out: None,
@@ -375,11 +373,7 @@ impl GpuScene {
                 (ObjectKind::Multiresolution, MultiresPath::Gpu) => {
                     let kernel = loop_kernel.get_or_insert_with(|| LoopKernel::new(ctx));
                     Refiner::Loop {
-                        object: Box::new(kernel.upload_with(
-                            ctx,
-                            &o.object,
-                            options.reconstruction,
-                        )?),
+                        object: Box::new(kernel.upload(ctx, &o.object, options.reconstruction)?),
                         out: None,
                         next: None,
                         spare: None,

@@ -506,7 +506,12 @@ fn run_plain(args: &RenderArgs, camera: hce_runtime::gpu::CameraChoice) -> Resul
     };
 
     let kernel = FlatKernel::new(&ctx);
-    let uploaded = kernel.upload(&ctx, &object)?;
+    let uploaded = kernel.upload(
+        &ctx,
+        &object,
+        hce_geometry::lighting::Reconstruction::default(),
+        hce_geometry::refine::FlatRefinement::Uniform,
+    )?;
     let mut out = None;
     kernel.refine_into(&ctx, &uploaded, level, &mut out, false)?;
     let out = out.context("refinement produced no output")?;

@@ -251,7 +251,7 @@ impl Content {
         // for the next file).
         let view = PlainView::new(&object)?;
         let kernel = FlatKernel::new(ctx);
-        let uploaded = kernel.upload_with(ctx, &object, reconstruction)?;
+        let uploaded = kernel.upload(ctx, &object, reconstruction, FlatRefinement::Uniform)?;
         let objects = vec![ObjectStats {
             name: object.name.clone(),
             kind: "plain mesh, previewed flat",
