@@ -382,8 +382,8 @@ impl LoopKernel {
         // The split at sharp edges (SPEC.md F.5): its slot lists replace the topology's vertex
         // and edge incidence, so that each region of a split vertex gathers its own side only.
         let split = SplitTables::from_topology(mesh, &topology, ObjectKind::Multiresolution);
-        let [edge_slots, edge_sides, corner_slots, corner_corners, corner_copy, edge_copy, slot_split] =
-            split.tables();
+        // Edge slots, corner slots, the copies and slot_split, in SplitTables::tables' order.
+        let s = split.tables();
         let (packed, offsets) = pack_sections(
             ctx,
             [
@@ -397,13 +397,13 @@ impl LoopKernel {
                 &tri_flags,
                 &crease,
                 &weights,
-                edge_slots,
-                edge_sides,
-                corner_slots,
-                corner_corners,
-                corner_copy,
-                edge_copy,
-                slot_split,
+                s[0],
+                s[1],
+                s[2],
+                s[3],
+                s[4],
+                s[5],
+                s[6],
             ],
         )?;
         check_size(ctx, "coarse positions", mesh.positions.len() as u64 * 4)?;

@@ -72,7 +72,13 @@ for (const name of Object.keys(SAMPLES)) {
       const validate = spawnSync(hce, ['validate', output], { encoding: 'utf8' });
       assert.equal(validate.status, 0, `${command}: ${validate.stdout}`);
       if (VALID.includes(command)) {
-        if (command !== 'join') assert.equal(kept.links, original.links, `${command}: links lost`);
+        // `join` (and `optimize`, which joins and simplifies) drops the links of the primitives it
+        // merges across objects, with a warning; every other command keeps them all.
+        if (command === 'join' || command === 'optimize') {
+          assert.ok(kept.links > 0 && kept.links <= original.links, `${command}: ${kept.links} links`);
+        } else {
+          assert.equal(kept.links, original.links, `${command}: links lost`);
+        }
       } else {
         const warnings = validate.stderr.split('\n').filter((line) => line.startsWith('warning:'));
         assert.ok(warnings.length > 0, `${command}: no warning`);
