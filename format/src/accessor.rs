@@ -8,7 +8,7 @@
 //! A buffer view compressed with `EXT_meshopt_compression` is read decoded ([`crate::meshopt`]);
 //! the view's own `buffer` is then the extension's fallback, possibly without data.
 
-use crate::gltf::{buffer_view_bytes, GltfError};
+use crate::gltf_json::{buffer_view_bytes, GltfError};
 use serde_json::Value;
 
 /// An accessor's values, converted to `f64` (exact for every glTF component type), with what

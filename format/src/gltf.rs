@@ -7,6 +7,7 @@
 //! panics on any input.
 
 use crate::accessor::{read_primitive, PrimitiveMesh, DRACO};
+pub use crate::gltf_json::{buffer_view_bytes, GltfError};
 use crate::model::geometry_hash;
 use crate::same_geometry::{primitive_box, same_surface, Mismatch, Placement};
 use serde_json::{json, Map, Value};
@@ -16,24 +17,6 @@ pub const EXTENSION_NAME: &str = "EXT_hce_baked_lighting";
 const GLB_MAGIC: &[u8; 4] = b"glTF";
 const CHUNK_JSON: u32 = 0x4E4F_534A;
 const CHUNK_BIN: u32 = 0x004E_4942;
-
-/// Why an asset cannot be read or extended.
-#[derive(Debug, thiserror::Error, Clone, PartialEq, Eq)]
-pub enum GltfError {
-    #[error("GLB: {0} (glTF 2.0 specification, section 4.4 GLB File Format)")]
-    Glb(String),
-    #[error("glTF JSON: {0}")]
-    Json(String),
-    #[error("{location}: {message} (SPEC.md 3.3)")]
-    Extension { location: String, message: String },
-    #[error("buffers[{index}]: {message}")]
-    Buffer { index: usize, message: String },
-    /// Data compressed with an extension hce's readers do not decode (SPEC.md 2.6).
-    #[error(
-        "{location}: cannot check: {extension}-compressed data is not decoded by hce (SPEC.md 2.6)"
-    )]
-    Compressed { location: String, extension: String },
-}
 
 fn u32_le(b: &[u8], at: usize) -> Option<u32> {
     Some(u32::from_le_bytes(
@@ -352,49 +335,6 @@ pub fn scan_primitive_links(json: &Value) -> (Vec<PrimitiveLink>, Vec<GltfError>
         }
     }
     (out, errors)
-}
-
-fn index_of(v: &Value, key: &str, loc: &str) -> Result<usize, GltfError> {
-    v.get(key)
-        .and_then(Value::as_u64)
-        .and_then(|i| usize::try_from(i).ok())
-        .ok_or_else(|| GltfError::Json(format!("{loc}.{key} is missing or not an index")))
-}
-
-fn item<'a>(json: &'a Value, array: &str, i: usize) -> Result<&'a Value, GltfError> {
-    json.get(array)
-        .and_then(Value::as_array)
-        .and_then(|a| a.get(i))
-        .ok_or_else(|| GltfError::Json(format!("{array}[{i}] does not exist")))
-}
-
-/// The bytes of a buffer view.
-pub fn buffer_view_bytes<'a>(
-    json: &Value,
-    buffers: &'a [Vec<u8>],
-    view: usize,
-) -> Result<&'a [u8], GltfError> {
-    let loc = format!("bufferViews[{view}]");
-    let v = item(json, "bufferViews", view)?;
-    let buffer = index_of(v, "buffer", &loc)?;
-    let offset = v.get("byteOffset").and_then(Value::as_u64).unwrap_or(0);
-    let length = v
-        .get("byteLength")
-        .and_then(Value::as_u64)
-        .ok_or_else(|| GltfError::Json(format!("{loc}.byteLength is missing")))?;
-    let data = buffers
-        .get(buffer)
-        .ok_or_else(|| GltfError::Json(format!("{loc}.buffer {buffer} does not exist")))?;
-    let end = offset
-        .checked_add(length)
-        .filter(|&e| e <= data.len() as u64)
-        .ok_or_else(|| {
-            GltfError::Json(format!(
-                "{loc}: bytes {offset}+{length} run past buffer {buffer} ({} bytes)",
-                data.len()
-            ))
-        })?;
-    Ok(&data[offset as usize..end as usize])
 }
 
 /// The container bytes of an asset that uses the extension, or `None` if it does not.

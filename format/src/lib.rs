@@ -20,6 +20,7 @@ mod error;
 #[cfg(any(test, feature = "testing"))]
 pub mod example;
 mod gltf;
+mod gltf_json;
 mod layout;
 mod meshopt;
 mod model;

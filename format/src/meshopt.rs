@@ -8,7 +8,7 @@
 //! allocated. The `OCTAHEDRAL` and `QUATERNION` filters (normals, tangents, rotations: never
 //! positions) are [`GltfError::Compressed`].
 
-use crate::gltf::GltfError;
+use crate::gltf_json::GltfError;
 use serde_json::Value;
 
 /// The extension's name, on buffer views and on the fallback buffer.
