@@ -20,9 +20,7 @@
 
 use hce_format::Object;
 
-use super::bindings::{
-    COARSE_POSITIONS, HCE_LIGHT, OUT_COLOURS, OUT_FACES, OUT_INDICES, OUT_POSITIONS, TOPO,
-};
+use super::bindings::{COARSE_POSITIONS, OUT_POSITIONS, TOPO};
 use super::job::{Lanes, RefineJob, Step};
 use super::outputs::{OutputShape, RefinedOutput};
 use super::util::{
@@ -283,14 +281,6 @@ impl FlatKernel {
             uses_off: s[13],
         };
         // The bindings (hce_bindings.wgsl) each step reads or writes.
-        let lit = &object.lighting;
-        let mut faces = vec![
-            (TOPO, object.topo.clone()),
-            (OUT_POSITIONS, o.positions.clone()),
-            (OUT_INDICES, o.indices.clone()),
-            (OUT_FACES, o.faces.clone()),
-        ];
-        faces.extend(lit.tree_bindings());
         let steps = vec![
             Step {
                 pipeline: self.positions.clone(),
@@ -302,23 +292,8 @@ impl FlatKernel {
                 items: u64::from(v),
                 lanes: Lanes::PerItem,
             },
-            Step {
-                pipeline: self.faces.clone(),
-                bindings: faces,
-                items: u64::from(f),
-                lanes: Lanes::PerItem,
-            },
-            Step {
-                pipeline: self.colours.clone(),
-                bindings: vec![
-                    (TOPO, object.topo.clone()),
-                    (OUT_FACES, o.faces.clone()),
-                    (OUT_COLOURS, o.colours.clone()),
-                    (HCE_LIGHT, lit.light.clone()),
-                ],
-                items: u64::from(v),
-                lanes: Lanes::PerItem,
-            },
+            Step::faces(&self.faces, &object.topo, o, &object.lighting),
+            Step::colours(&self.colours, &object.topo, o, &object.lighting),
         ];
         RefineJob::new(
             ctx,

@@ -20,7 +20,13 @@
 //! [`FlatKernel::refine_into`]: super::FlatKernel::refine_into
 //! [`GpuScene::refine_batch`]: super::GpuScene::refine_batch
 
-use super::util::{bind_buffers_at, dispatch_size, uniform_words, PassTimer, WORKGROUP};
+use super::bindings::{
+    HCE_LIGHT, OUT_COLOURS, OUT_FACES, OUT_INDICES, OUT_NORMALS, OUT_POSITIONS, TOPO,
+};
+use super::outputs::RefinedOutput;
+use super::util::{
+    bind_buffers_at, dispatch_size, uniform_words, LightingBuffers, PassTimer, WORKGROUP,
+};
 use super::{GpuContext, GpuError};
 
 /// How the invocations of a dispatch cover a range of `n` items.
@@ -53,6 +59,58 @@ pub(super) struct Step {
     pub(super) bindings: Vec<(u32, wgpu::Buffer)>,
     pub(super) items: u64,
     pub(super) lanes: Lanes,
+}
+
+impl Step {
+    /// The faces step both kernels share: a gather over fine triangles that reads the refined
+    /// positions and the lighting tree, and writes each fine triangle's indices and face colour.
+    pub(super) fn faces(
+        pipeline: &wgpu::ComputePipeline,
+        topo: &wgpu::Buffer,
+        out: &RefinedOutput,
+        lighting: &LightingBuffers,
+    ) -> Self {
+        let mut bindings = vec![
+            (TOPO, topo.clone()),
+            (OUT_POSITIONS, out.positions.clone()),
+            (OUT_INDICES, out.indices.clone()),
+            (OUT_FACES, out.faces.clone()),
+        ];
+        bindings.extend(lighting.tree_bindings());
+        Self {
+            pipeline: pipeline.clone(),
+            bindings,
+            items: u64::from(out.triangle_count),
+            lanes: Lanes::PerItem,
+        }
+    }
+
+    /// The colours step both kernels end with: a gather over output vertices from the face
+    /// colours and the lighting table. A Loop output's vertices also read their positions and
+    /// normals (the smooth reconstruction at a curved vertex); a flat output has no normals.
+    pub(super) fn colours(
+        pipeline: &wgpu::ComputePipeline,
+        topo: &wgpu::Buffer,
+        out: &RefinedOutput,
+        lighting: &LightingBuffers,
+    ) -> Self {
+        let mut bindings = vec![(TOPO, topo.clone())];
+        if let Some(normals) = &out.normals {
+            bindings.push((OUT_POSITIONS, out.positions.clone()));
+            bindings.push((OUT_NORMALS, normals.clone()));
+        }
+        bindings.extend([
+            (OUT_FACES, out.faces.clone()),
+            (OUT_COLOURS, out.colours.clone()),
+            (HCE_LIGHT, lighting.light.clone()),
+        ]);
+        Self {
+            pipeline: pipeline.clone(),
+            bindings,
+            items: u64::from(out.vertex_count),
+            lanes: Lanes::PerItem,
+        }
+    }
 }
 
 /// What one call of [`RefineJob::encode`] recorded.

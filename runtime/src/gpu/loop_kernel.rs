@@ -40,10 +40,7 @@
 
 use hce_format::{Object, ObjectKind};
 
-use super::bindings::{
-    COARSE_POSITIONS, HCE_LIGHT, OUT_COLOURS, OUT_FACES, OUT_INDICES, OUT_NORMALS, OUT_POSITIONS,
-    SCRATCH, TOPO,
-};
+use super::bindings::{COARSE_POSITIONS, OUT_NORMALS, OUT_POSITIONS, SCRATCH, TOPO};
 use super::flat::KernelTiming;
 use super::job::{Lanes, RefineJob, Step};
 use super::outputs::{OutputShape, RefinedOutput};
@@ -528,7 +525,7 @@ impl LoopKernel {
             (COARSE_POSITIONS, object.coarse_positions.clone()),
             (TOPO, object.topo.clone()),
             (OUT_POSITIONS, o.positions.clone()),
-            (OUT_NORMALS, normals.clone()),
+            (OUT_NORMALS, normals),
         ];
         let patch = match plan {
             PatchPlan::Workgroup(shape) => Step {
@@ -548,32 +545,8 @@ impl LoopKernel {
                 lanes: Lanes::Slots(slots),
             },
         };
-        let mut faces_bindings = vec![
-            (TOPO, object.topo.clone()),
-            (OUT_POSITIONS, o.positions.clone()),
-            (OUT_INDICES, o.indices.clone()),
-            (OUT_FACES, o.faces.clone()),
-        ];
-        faces_bindings.extend(object.lighting.tree_bindings());
-        let faces = Step {
-            pipeline: self.faces.clone(),
-            bindings: faces_bindings,
-            items: u64::from(f),
-            lanes: Lanes::PerItem,
-        };
-        let colours = Step {
-            pipeline: self.colours.clone(),
-            bindings: vec![
-                (TOPO, object.topo.clone()),
-                (OUT_POSITIONS, o.positions.clone()),
-                (OUT_NORMALS, normals),
-                (OUT_FACES, o.faces.clone()),
-                (OUT_COLOURS, o.colours.clone()),
-                (HCE_LIGHT, object.lighting.light.clone()),
-            ],
-            items: u64::from(v),
-            lanes: Lanes::PerItem,
-        };
+        let faces = Step::faces(&self.faces, &object.topo, o, &object.lighting);
+        let colours = Step::colours(&self.colours, &object.topo, o, &object.lighting);
         RefineJob::new(
             ctx,
             "hce loop",
