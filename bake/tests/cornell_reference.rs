@@ -5,7 +5,7 @@
 //! `HCE_REFERENCE_PATHS=N` sets the paths per surface (default 16384, which keeps the test
 //! within the CI budget); BENCHMARKS.md records a run with many more.
 //!
-//! Tolerances (relative error of the RGB sum, BENCHMARKS.md "Baker against a path tracer"):
+//! Tolerances (relative error of the RGB sum, BENCHMARKS.md "Cornell box surface by surface"):
 //! the light, the floor and the block tops, which the light sees directly, within 2 %; the
 //! walls and the ceiling, lit mostly by interreflection, within 3.5 %; the vertical block faces
 //! within 12 %. Each bound leaves about three of the reference's standard errors (printed with
@@ -13,7 +13,7 @@
 //! block's front face (in the block's own shadow, a tenth of the mean radiance), is checked
 //! on its own against 2^20 paths (standard error about 0.3 %) within 4 %: it was 6-10 % too
 //! bright while the refinement weighed every receiver's error against the scene's power alone
-//! (now +2.4 %, `DIM_RECEIVER_FLOOR` in `hierarchical.rs`).
+//! (`DIM_RECEIVER_FLOOR` in `radiosity/source_variation.rs`; BENCHMARKS.md has the current figure).
 
 mod common;
 

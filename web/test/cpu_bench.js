@@ -1,4 +1,4 @@
-// BENCHMARKS.md "CPU refinement in the browser": `node test/cpu_bench.js BAKED.glb LEVEL
+// BENCHMARKS.md "hce.wasm in the browser": `node test/cpu_bench.js BAKED.glb LEVEL
 // [REPEATS]` prints the time to refine every object of BAKED at LEVEL on the CPU in hce.wasm
 // (cpu_refine.js) in a headless Chromium with WebGPU switched off: the median of REPEATS
 // (default 5) after one warm-up. Run `hce subdivide BAKED --level LEVEL --flat uniform --merge --stats` beside it.
