@@ -587,9 +587,12 @@ struct LinkProblems<'a> {
 impl LinkSink for LinkProblems<'_> {
     fn fault(&mut self, link: &PrimitiveLink, at: &str, fault: LinkFault) -> LinkNext {
         if let LinkFault::Unchecked(e) = &fault {
+            // The error names its own location; where that is the primitive's, say it once.
+            let text = e.to_string();
+            let text = text.strip_prefix(&format!("{at}: ")).unwrap_or(&text);
             self.warnings.push(
                 at,
-                format!("{e}; loaders draw its plain primitive without the baked lighting"),
+                format!("{text}; loaders draw its plain primitive without the baked lighting"),
             );
             return LinkNext::Continue;
         }

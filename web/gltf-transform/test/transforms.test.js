@@ -83,7 +83,8 @@ for (const name of Object.keys(SAMPLES)) {
         const warnings = validate.stderr.split('\n').filter((line) => line.startsWith('warning:'));
         assert.ok(warnings.length > 0, `${command}: no warning`);
         for (const line of warnings) {
-          assert.match(line, /cannot check: KHR_draco_mesh_compression/, `${command}: unexpected warning ${line}`);
+          assert.match(line, /^warning: meshes\[\d+\]\.primitives\[\d+\]: cannot check: KHR_draco_mesh_compression/,
+            `${command}: unexpected warning ${line}`);
         }
       }
     }
