@@ -25,7 +25,7 @@
 #   HCE  the binary [target/release/hce]; build first: cargo build --release -p hce-tools
 set -euo pipefail
 
-root="$(cd "$(dirname "$0")/../.." && pwd)"
+root="$(cd -P "$(dirname "$0")/../.." && pwd)"
 scene="${1:-$root/samples/cornell-box.glb}"
 size="${SIZE:-160x160}"
 reference_samples="${REFERENCE_SAMPLES:-8192}"

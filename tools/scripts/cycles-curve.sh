@@ -30,7 +30,7 @@
 # Writes OUT/cycles-curve.md (the table) and OUT/cycles-curve.csv.
 set -euo pipefail
 
-root="$(cd "$(dirname "$0")/../.." && pwd)"
+root="$(cd -P "$(dirname "$0")/../.." && pwd)"
 scene="${1:-$root/samples/cornell-box.glb}"
 reference_samples="${REFERENCE_SAMPLES:-2048}"
 reference_seeds="${REFERENCE_SEEDS:-8}"

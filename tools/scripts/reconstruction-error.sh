@@ -31,7 +31,7 @@
 # Build first: cargo build --release -p hce-tools -p hce-samples
 set -euo pipefail
 
-root="$(cd "$(dirname "$0")/../.." && pwd)"
+root="$(cd -P "$(dirname "$0")/../.." && pwd)"
 meshes_dir="${HCE_EXTRA_MESHES:-/work/shared/meshes}"
 size="${SIZE:-320x240}"
 samples="${SAMPLES:-256}"
