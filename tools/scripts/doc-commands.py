@@ -2,8 +2,8 @@
 """Runs the commands of BENCHMARKS.md as written, section by section (standard library only).
 
 A section is a `## ` heading with its `### ` subsections. Its code (blocks indented by four
-spaces after a blank line, and ``` fences) runs as one bash script (`set -euo pipefail`), in
-order, in a fresh folder `target/doc-commands/SLUG/` that links the repository's `samples`,
+spaces after a blank line, and shell ``` fences) runs as one bash script (`set -euo pipefail`),
+in order, in a fresh folder `target/doc-commands/SLUG/` that links the repository's `samples`,
 `tools`, `web`, `geometry` and `pipeline`, so that a command reads `samples/teatime.glb` as a
 reader in the repository root would and writes its outputs beside the others of its section.
 `hce` and `gen-samples` are the release binaries (`cargo build --release -p hce-tools -p
@@ -45,7 +45,7 @@ def sections(text):
     """[(slug, title, script)] for each `## ` section that has code, in file order."""
     out = []
     title, lines = None, []
-    fenced = False
+    fenced = shell = False
     prev_blank = True
     in_indented = False
 
@@ -60,10 +60,15 @@ def sections(text):
             prev_blank, in_indented = True, False
             continue
         if line.lstrip().startswith("```"):
+            if not fenced:
+                # Only shell fences are commands; a ```toml or ```text block is data.
+                lang = line.lstrip()[3:].strip()
+                shell = lang in ("", "sh", "bash", "shell")
             fenced = not fenced
             continue
         if fenced:
-            lines.append(line)
+            if shell:
+                lines.append(line)
             continue
         if line.startswith("    ") and (prev_blank or in_indented) and line.strip():
             in_indented = True
