@@ -97,6 +97,45 @@ impl AdaptiveFlat {
         }
         (offsets, uses)
     }
+
+    /// The lists a GPU kernel reads to draw this refinement (`runtime/src/gpu/flat.wgsl`, its
+    /// sections after `Params::range_end`; the browser packs the same words): per vertex its
+    /// coarse triangle and packed point (`x | y << 16` on the 4096 lattice); per triangle its
+    /// coarse triangle, leaf and three packed corner points; per triangle its indices; the
+    /// offsets and the uses of [`AdaptiveFlat::incidence`].
+    pub fn kernel_lists(&self) -> KernelLists {
+        let pack = |[x, y]: [u32; 2]| x | y << 16;
+        let sources = self
+            .sources
+            .iter()
+            .flat_map(|&(t, p)| [t, pack(p)])
+            .collect();
+        let mut faces = Vec::with_capacity(5 * self.triangle_count());
+        for t in 0..self.triangle_start.len().saturating_sub(1) {
+            let range = self.triangle_start[t] as usize..self.triangle_start[t + 1] as usize;
+            for f in range {
+                faces.extend([t as u32, self.leaves[f]]);
+                faces.extend(self.points[f].map(pack));
+            }
+        }
+        let indices = self.indices.iter().flatten().copied().collect();
+        let (use_offsets, uses) = self.incidence();
+        KernelLists {
+            // refine_adaptive_flat keeps both counts within u32.
+            vertices: self.vertex_count() as u32,
+            triangles: self.triangle_count() as u32,
+            sections: [sources, faces, indices, use_offsets, uses],
+        }
+    }
+}
+
+/// What a kernel reads of an [`AdaptiveFlat`] ([`AdaptiveFlat::kernel_lists`]).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct KernelLists {
+    pub vertices: u32,
+    pub triangles: u32,
+    /// Sources, faces, indices, use offsets, uses: in the order `flat.wgsl` reads them.
+    pub sections: [Vec<u32>; 5],
 }
 
 /// The leaves of coarse triangle `t`: breadth-first node number and lattice triangle (G.2).

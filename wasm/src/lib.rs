@@ -17,7 +17,8 @@
 //! * `hce_tables(ptr, bytes) -> result`: one object's kernel tables and lighting table, as
 //!   the native runtime's kernels' `upload` builds them.
 //! * `hce_refine(ptr, bytes) -> result`: one object refined on the CPU with its baked light, as
-//!   `hce subdivide` refines it, for pages without WebGPU.
+//!   `hce subdivide` refines it (a flat object adaptively or uniformly, as asked), for pages
+//!   without WebGPU.
 //! * `hce_geometry_hash(ptr, bytes) -> result`: the geometry hash (SPEC.md 2.5).
 //!
 //! A result is a word buffer `[words, status, payload…]`: `words` its length in words (free it
@@ -39,9 +40,11 @@ use std::path::Path;
 
 use hce_format::root_problems;
 use hce_format::{ControlMesh, Object, ObjectKind, TriangleRecord};
+use hce_geometry::adaptive_flat::refine_adaptive_flat;
 use hce_geometry::flat::FlatTopology;
 use hce_geometry::lighting::{LightingTable, Reconstruction};
 use hce_geometry::loop_tables::LoopKernelTables;
+use hce_geometry::refine::FlatRefinement;
 use hce_geometry::split::SplitTables;
 use hce_geometry::tables::validate_tables;
 use hce_runtime::asset::{AssetFormat, GltfSource, OpenOptions};
@@ -212,6 +215,19 @@ fn read_reconstruction(r: &mut Reader) -> Result<Reconstruction, String> {
     })
 }
 
+/// A flat refinement word (SPEC.md F.7): 0 adaptive (F.7.1), 1 uniform (F.7.2).
+fn read_flat_refinement(r: &mut Reader) -> Result<FlatRefinement, String> {
+    Ok(match r.u32()? {
+        0 => FlatRefinement::Adaptive,
+        1 => FlatRefinement::Uniform,
+        k => {
+            return Err(format!(
+                "flat refinement {k} is neither 0 (adaptive) nor 1 (uniform)"
+            ))
+        }
+    })
+}
+
 fn read_object(r: &mut Reader) -> Result<Object, String> {
     let name = r.string()?;
     let kind = match r.u32()? {
@@ -273,18 +289,25 @@ fn read_object(r: &mut Reader) -> Result<Object, String> {
 /// The tables the kernels read of one object, checked first as the native runtime's upload
 /// checks them. Request: `u32` index (names the object in messages), the object as [`load`]
 /// writes it from `name` to `colours`, `u32` reconstruction (0 smooth, 1 nearest: no lighting
-/// table, 2 Gouraud).
+/// table, 2 Gouraud), `u32` flat refinement (0 adaptive, 1 uniform; read for every object, used
+/// for flat ones).
 ///
 /// Result: `u32` deepest tree; the incidence: `u32` vertex, triangle and edge counts, `words`
 /// edge end points; the split (SPEC.md F.5): `u32` copies and split edges, `words` edge slot
 /// offsets, edge slot sides, corner slot offsets, corner slot corners, corner copy, edge copy,
 /// slot split; `u32` has-Loop then, when 1, `words` triangle flags, crease spokes, weights and
-/// `u32` largest valence and ring points; `words` lighting table (one zero word for nearest).
+/// `u32` largest valence and ring points; `words` lighting table (one zero word for nearest);
+/// `u32` has-adaptive then, when 1 (a flat object asked for adaptively), the adaptive refinement
+/// (SPEC.md F.7.1) as the flat kernel reads it: `u32` vertex and triangle counts, `words`
+/// sources, faces, indices, use offsets, uses
+/// ([`hce_geometry::adaptive_flat::AdaptiveFlat::kernel_lists`]) and triangle starts (per
+/// coarse triangle its first triangle, then the count).
 pub fn tables(request: &[u32]) -> Result<Vec<u32>, String> {
     let mut r = Reader::new(request);
     let index = r.u32()?;
     let object = read_object(&mut r).map_err(|e| format!("objects[{index}]: {e}"))?;
     let reconstruction = read_reconstruction(&mut r)?;
+    let refinement = read_flat_refinement(&mut r)?;
     let at = |e: &dyn std::fmt::Display| format!("objects[{index}]: {e}");
     let summary = validate_tables(&object).map_err(|e| at(&e))?;
     let mesh = &object.mesh;
@@ -327,6 +350,19 @@ pub fn tables(request: &[u32]) -> Result<Vec<u32>, String> {
         }
     }
     w.words(&light);
+    if object.kind == ObjectKind::Flat && refinement == FlatRefinement::Adaptive {
+        let adaptive = refine_adaptive_flat(&object).map_err(|e| at(&e))?;
+        let lists = adaptive.kernel_lists();
+        w.u32(1);
+        w.u32(lists.vertices);
+        w.u32(lists.triangles);
+        for section in &lists.sections {
+            w.words(section);
+        }
+        w.words(&adaptive.triangle_start);
+    } else {
+        w.u32(0);
+    }
     Ok(w.finish())
 }
 

@@ -3,9 +3,11 @@
 
 use std::path::{Path, PathBuf};
 
+use hce_format::ObjectKind;
+use hce_geometry::adaptive_flat::refine_adaptive_flat;
 use hce_geometry::lighting::{LightingTable, Reconstruction};
 use hce_geometry::loop_tables::LoopKernelTables;
-use hce_geometry::refine::refine_object_with;
+use hce_geometry::refine::{refine_object_as, FlatRefinement};
 use hce_runtime::Asset;
 use hce_wasm::{load, refine, tables, Reader, Writer};
 
@@ -103,11 +105,17 @@ fn object_frames(file: &str) -> Vec<(u32, Vec<u32>)> {
     frames
 }
 
-/// A `refine` request: index, object words, level, reconstruction.
-fn refine_request(index: u32, object: &[u32], level: u32, reconstruction: u32) -> Vec<u32> {
+/// A `refine` request: index, object words, level, reconstruction, flat refinement.
+fn refine_request(
+    index: u32,
+    object: &[u32],
+    level: u32,
+    reconstruction: u32,
+    flat: u32,
+) -> Vec<u32> {
     let mut request = vec![index];
     request.extend_from_slice(object);
-    request.extend([level, reconstruction]);
+    request.extend([level, reconstruction, flat]);
     request
 }
 
@@ -117,15 +125,24 @@ fn refine_is_hce_subdivides_refinement() {
     let asset = Asset::open(conformance("valid/cornell-box.glb")).unwrap();
     let frames = object_frames("valid/cornell-box.glb");
     for ((index, words), o) in frames.iter().zip(&asset.objects) {
-        for (level, reconstruction, code) in [
-            (0, Reconstruction::Smooth, 0),
-            (2, Reconstruction::Smooth, 0),
-            (1, Reconstruction::NearestNormal, 1),
-            (1, Reconstruction::Gouraud, 2),
+        for (level, reconstruction, code, flat, flat_code) in [
+            (0, Reconstruction::Smooth, 0, FlatRefinement::Uniform, 1),
+            (2, Reconstruction::Smooth, 0, FlatRefinement::Uniform, 1),
+            (
+                1,
+                Reconstruction::NearestNormal,
+                1,
+                FlatRefinement::Uniform,
+                1,
+            ),
+            (1, Reconstruction::Gouraud, 2, FlatRefinement::Uniform, 1),
+            (2, Reconstruction::Smooth, 0, FlatRefinement::Adaptive, 0),
+            (1, Reconstruction::Gouraud, 2, FlatRefinement::Adaptive, 0),
         ] {
-            let out = refine(&refine_request(*index, words, level, code)).unwrap();
-            let native = refine_object_with(&o.object, level, reconstruction).unwrap();
+            let out = refine(&refine_request(*index, words, level, code, flat_code)).unwrap();
+            let native = refine_object_as(&o.object, level, reconstruction, flat).unwrap();
             let mut r = Reader::new(&out);
+            assert_eq!(r.u32().unwrap(), native.mesh.level);
             let bits = |v: &[[f32; 3]]| -> Vec<u32> {
                 v.as_flattened().iter().map(|x| x.to_bits()).collect()
             };
@@ -141,13 +158,17 @@ fn refine_is_hce_subdivides_refinement() {
             assert_eq!(got(&mut r), bits(&native.mesh.normals));
             assert_eq!(got(&mut r), bits(&native.colours));
             assert_eq!(r.words().unwrap(), native.mesh.indices.as_flattened());
+            let starts: Vec<u32> = native.triangle_start.iter().map(|&s| s as u32).collect();
+            assert_eq!(r.words().unwrap(), starts);
         }
     }
     let (index, words) = &frames[0];
-    let deep = refine(&refine_request(*index, words, 7, 0)).unwrap_err();
+    let deep = refine(&refine_request(*index, words, 7, 0, 1)).unwrap_err();
     assert!(deep.contains("level 7"), "{deep}");
-    let recon = refine(&refine_request(*index, words, 1, 3)).unwrap_err();
+    let recon = refine(&refine_request(*index, words, 1, 3, 1)).unwrap_err();
     assert!(recon.contains("reconstruction 3"), "{recon}");
+    let flat = refine(&refine_request(*index, words, 1, 0, 2)).unwrap_err();
+    assert!(flat.contains("flat refinement 2"), "{flat}");
 }
 
 #[test]
@@ -196,7 +217,8 @@ fn tables_are_the_crates_own() {
         w.u32(o.index);
         let mut request = w.finish();
         request.extend_from_slice(object_words);
-        request.push(0);
+        // Smooth, adaptive.
+        request.extend([0, 0]);
         let t = tables(&request).unwrap();
         let mut r = Reader::new(&t);
         assert_eq!(r.u32().unwrap(), o.tree_depth);
@@ -222,5 +244,22 @@ fn tables_are_the_crates_own() {
             .to_words()
             .unwrap();
         assert_eq!(r.words().unwrap(), light, "{}", o.object.name);
+        let has_adaptive = r.u32().unwrap() == 1;
+        assert_eq!(has_adaptive, o.object.kind == ObjectKind::Flat);
+        if has_adaptive {
+            let native = refine_adaptive_flat(&o.object).unwrap();
+            let lists = native.kernel_lists();
+            assert_eq!(r.u32().unwrap(), lists.vertices);
+            assert_eq!(r.u32().unwrap(), lists.triangles);
+            for section in &lists.sections {
+                assert_eq!(&r.words().unwrap(), section);
+            }
+            assert_eq!(r.words().unwrap(), native.triangle_start);
+        }
+        // Asked for uniformly, a flat object has no adaptive lists.
+        let n = request.len();
+        request[n - 1] = 1;
+        let t = tables(&request).unwrap();
+        assert_eq!(*t.last().unwrap(), 0, "{}", o.object.name);
     }
 }

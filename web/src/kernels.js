@@ -4,7 +4,7 @@
 // bind-group layout per entry point ('auto'), so every step stays within WebGPU's default
 // limit of 8 storage buffers per stage.
 import { HceError } from './errors.js';
-import { MAX_LOOP_LEVEL, MAX_PATH_LEVEL, objectTables } from './native.js';
+import { MAX_LOOP_LEVEL, MAX_PATH_LEVEL, objectTables, uniformTriangleStart } from './native.js';
 
 /** @typedef {import('./native.js').HceObject} HceObject */
 /** @typedef {import('./native.js').Reconstruction} Reconstruction */
@@ -56,6 +56,8 @@ const recordsWords = (o) => o.records;
  * @property {GPUBuffer} indices u32 ×3 per fine triangle
  * @property {GPUBuffer} faces linear r, g, b, area per fine triangle
  * @property {GPUBuffer | null} scratch
+ * @property {Uint32Array} triangleStart per coarse triangle its first refined triangle, then
+ *   the count (`t · 4^level`, or an adaptive flat object's own)
  */
 
 /**
@@ -67,6 +69,8 @@ const recordsWords = (o) => o.records;
  * @property {import('./native.js').ObjectTables['topology']} topology
  * @property {import('./native.js').ObjectTables['loop']} loop
  * @property {import('./native.js').ObjectTables['split']} split the split where the surface folds (F.5)
+ * @property {import('./native.js').AdaptiveLists | null} adaptive a flat object's adaptive
+ *   refinement (SPEC.md F.7.1), drawn whatever the level; null for the uniform one
  * @property {number[]} offsets where the packed sections start in `topo`
  * @property {Record<string, GPUBuffer>} buffers
  */
@@ -159,14 +163,16 @@ export class Kernels {
 
   /**
    * Checks `object` (every table the kernels index, SPEC.md Appendix C), builds the derived
-   * tables and the lighting table, and uploads them.
+   * tables and the lighting table, and uploads them; a flat object with the lists of its
+   * adaptive refinement (SPEC.md F.7.1) unless `flat` is 'uniform'.
    * @param {HceObject} object
    * @param {Reconstruction} [reconstruction]
+   * @param {import('./native.js').FlatRefinement} [flat]
    * @returns {UploadedObject}
    */
-  upload(object, reconstruction = 'smooth') {
+  upload(object, reconstruction = 'smooth', flat = 'adaptive') {
     // Checked and built by the Rust of the native upload (hce.wasm): the same words.
-    const { treeDepth, topology, split, loop, light } = objectTables(object, reconstruction);
+    const { treeDepth, topology, split, loop, light, adaptive } = objectTables(object, reconstruction, flat);
     const m = object.mesh;
     // The split where the surface folds (SPEC.md F.5): its slot lists replace the vertex and
     // edge incidence, as loop_kernel.rs and flat.rs `upload_with` pack them.
@@ -179,9 +185,13 @@ export class Kernels {
         split.slotSplit,
       ]);
     } else {
+      // Then the adaptive lists (empty for the uniform refinement), as flat.rs `upload` packs
+      // its 14 sections.
+      const none = new Uint32Array(0);
       packed = packSections([
         m.triangles, m.edges, topology.edgeVerts, split.edgeSlotOffsets, split.edgeSlotSides,
         split.cornerSlotOffsets, split.cornerSlotCorners, split.cornerCopy, split.edgeCopy,
+        ...(adaptive ? adaptive.sections : [none, none, none, none, none]),
       ]);
     }
     return {
@@ -191,6 +201,7 @@ export class Kernels {
       topology,
       loop,
       split,
+      adaptive,
       offsets: packed.offsets,
       buffers: {
         positions: this.storage('coarse positions', m.positions),
@@ -205,11 +216,13 @@ export class Kernels {
   }
 
   /**
-   * Vertex and triangle counts of `u` at `level`, checked (F.5).
+   * Vertex and triangle counts of `u` at `level`, checked (F.5); an adaptive flat object's
+   * own, whatever the level (F.7.1).
    * @param {UploadedObject} u
    * @param {number} level
    */
   counts(u, level) {
+    if (u.adaptive) return { v: u.adaptive.vertices, f: u.adaptive.triangles, appended: 0 };
     const max = u.loop ? MAX_LOOP_LEVEL : MAX_PATH_LEVEL;
     if (!Number.isInteger(level) || level < 0 || level > max) throw new HceError('', `level ${level} is out of range; use 0..=${max}`);
     const t = u.topology;
@@ -235,14 +248,18 @@ export class Kernels {
 
   /**
    * Refines `u` to `level` into `out` (reallocated when absent or too small) and submits the
-   * work; await `device.queue.onSubmittedWorkDone()` to time it.
+   * work; await `device.queue.onSubmittedWorkDone()` to time it. An adaptive flat object is
+   * refined from its trees whatever `level` (its buffers' level is 0).
    * @param {UploadedObject} u
-   * @param {number} level
+   * @param {number} asked
    * @param {RefinedBuffers | null} [out]
    * @returns {RefinedBuffers}
    */
-  refine(u, level, out = null) {
-    const { v, f, appended } = this.counts(u, level);
+  refine(u, asked, out = null) {
+    const { v, f, appended } = this.counts(u, asked);
+    // The uniform lattice's level; the adaptive lists have none (flat.rs `begin`).
+    const level = u.adaptive ? 0 : asked;
+    const triangleStart = u.adaptive ? u.adaptive.triangleStart : uniformTriangleStart(u.topology.triangleCount, level);
     const d = this.device;
     const isLoop = u.loop !== null;
     const output = (/** @type {string} */ label, /** @type {number} */ bytes, /** @type {number} */ extra) =>
@@ -259,11 +276,13 @@ export class Kernels {
       indices: output('refined indices', f * 12, INDEX),
       faces: output('refined faces', f * 16, 0),
       scratch: null,
+      triangleStart,
     };
     if (!fits && out !== null) destroyRefined(out);
     o.level = level;
     o.vertexCount = v;
     o.triangleCount = f;
+    o.triangleStart = triangleStart;
     const b = u.buffers;
     const smooth = u.reconstruction === 'nearest' ? 0 : 1;
     const n = 2 ** level;
@@ -278,12 +297,12 @@ export class Kernels {
     if (!isLoop) {
       const params = new Uint32Array([
         level, n, t.vertexCount, t.edgeCount, t.triangleCount, n < 2 ? 0 : ((n - 1) * (n - 2)) / 2, v, f,
-        ...u.offsets.slice(0, 7), smooth, u.offsets[7], u.offsets[8], v - appended, u.split.copies,
+        // split_base and split_copies: an adaptive object's lists hold its split vertices.
+        ...u.offsets.slice(0, 7), smooth, u.offsets[7], u.offsets[8], u.adaptive ? v : v - appended, u.adaptive ? 0 : u.split.copies,
         // range_first, range_end: every item of each step in one dispatch.
         0, 0xffffffff,
-        // adaptive and its lists' five sections: the browser draws the uniform refinement
-        // (SPEC.md F.7.2), so 0 and no lists.
-        0, 0, 0, 0, 0, 0,
+        // adaptive, then where its lists' five sections start.
+        u.adaptive ? 1 : 0, ...u.offsets.slice(9, 14),
       ]);
       uniform = d.createBuffer({ label: 'flat params', size: params.byteLength, usage: UNIFORM | COPY_DST });
       d.queue.writeBuffer(uniform, 0, params);
@@ -380,6 +399,7 @@ export class Kernels {
     }));
     return {
       level: o.level,
+      triangleStart: o.triangleStart,
       positions: new Float32Array(/** @type {ArrayBuffer} */ (out.positions ?? new ArrayBuffer(0))),
       normals: out.normals ? new Float32Array(out.normals) : null,
       colours: new Float32Array(/** @type {ArrayBuffer} */ (out.colours ?? new ArrayBuffer(0))),

@@ -342,6 +342,15 @@ export const MAX_PATH_LEVEL = 15;
 const RECONSTRUCTION_WORD = { smooth: 0, nearest: 1, gouraud: 2 };
 
 /**
+ * How a flat object is refined (SPEC.md F.7): 'adaptive' from its trees, one triangle per leaf
+ * plus those its finer neighbours need (F.7.1, the default: the same field with a fraction of
+ * the triangles); 'uniform' split 1-to-4 to a level (F.7.2).
+ * @typedef {'adaptive' | 'uniform'} FlatRefinement
+ */
+
+const FLAT_REFINEMENT_WORD = { adaptive: 0, uniform: 1 };
+
+/**
  * A request that starts with an object: its index, then the object as `hce_load` wrote it.
  * @param {HceObject} object
  */
@@ -371,6 +380,16 @@ function objectRequest(object) {
  * @property {{ triFlags: Uint32Array, crease: Uint32Array, weights: Uint32Array, maxValence: number, ringPoints: number } | null} loop
  *   the Loop kernel's tables (geometry/src/loop_tables.rs), null for a flat object
  * @property {Uint32Array} light the `hce_light` words (SPEC.md Appendix G); one zero word for 'nearest'
+ * @property {AdaptiveLists | null} adaptive a flat object's adaptive refinement (SPEC.md F.7.1) as
+ *   the flat kernel reads it; null for a multiresolution object or a uniform one
+ */
+
+/**
+ * @typedef {object} AdaptiveLists geometry/src/adaptive_flat.rs `KernelLists`
+ * @property {number} vertices
+ * @property {number} triangles
+ * @property {Uint32Array[]} sections sources, faces, indices, use offsets, uses (flat.wgsl's order)
+ * @property {Uint32Array} triangleStart per coarse triangle its first triangle, then the count
  */
 
 /**
@@ -378,11 +397,13 @@ function objectRequest(object) {
  * builds its derived tables and lighting table: the same Rust, so the same words.
  * @param {HceObject} object
  * @param {Reconstruction} [reconstruction]
+ * @param {FlatRefinement} [flat] how a flat object will be refined
  * @returns {ObjectTables}
  */
-export function objectTables(object, reconstruction = 'smooth') {
+export function objectTables(object, reconstruction = 'smooth', flat = 'adaptive') {
   const w = objectRequest(object);
   w.u32(RECONSTRUCTION_WORD[reconstruction]);
+  w.u32(FLAT_REFINEMENT_WORD[flat]);
   const r = call('hce_tables', w.finish());
   const treeDepth = r.u32();
   const topology = { vertexCount: r.u32(), triangleCount: r.u32(), edgeCount: r.u32(), edgeVerts: r.words() };
@@ -391,29 +412,63 @@ export function objectTables(object, reconstruction = 'smooth') {
     cornerSlotCorners: r.words(), cornerCopy: r.words(), edgeCopy: r.words(), slotSplit: r.words(),
   };
   const loop = r.u32() === 1 ? { triFlags: r.words(), crease: r.words(), weights: r.words(), maxValence: r.u32(), ringPoints: r.u32() } : null;
-  return { treeDepth, topology, split, loop, light: r.words() };
+  const light = r.words();
+  const adaptive = r.u32() === 1
+    ? { vertices: r.u32(), triangles: r.u32(), sections: [r.words(), r.words(), r.words(), r.words(), r.words()], triangleStart: r.words() }
+    : null;
+  return { treeDepth, topology, split, loop, light, adaptive };
 }
 
 /**
  * @typedef {object} CpuRefined one object refined on the CPU (wasm/src/refine.rs)
+ * @property {number} level the level of the triangles' numbering (0 for an adaptive flat object)
  * @property {Float32Array} positions x, y, z per vertex
  * @property {Float32Array} normals unit, x, y, z per vertex
  * @property {Float32Array} colours linear radiance, r, g, b per vertex
- * @property {Uint32Array} indices 3 per triangle, fine triangle `t · 4^level + path`
+ * @property {Uint32Array} indices 3 per triangle, grouped by coarse triangle
+ * @property {Uint32Array} triangleStart per coarse triangle its first triangle, then the count
  */
 
 /**
- * Refines `object` to `level` (0 to MAX_LOOP_LEVEL, flat objects too) on the CPU with its baked
- * light, as `hce subdivide` refines it: the same Rust, so the same positions, bit for bit.
+ * Refines `object` to `level` (0 to MAX_LOOP_LEVEL) on the CPU with its baked light, as
+ * `hce subdivide` refines it: the same Rust, so the same positions, bit for bit. A flat object
+ * is refined from its trees whatever the level unless `flat` is 'uniform'.
  * @param {HceObject} object
  * @param {number} level
  * @param {Reconstruction} [reconstruction]
+ * @param {FlatRefinement} [flat]
  * @returns {CpuRefined}
  */
-export function refineOnCpu(object, level, reconstruction = 'smooth') {
+export function refineOnCpu(object, level, reconstruction = 'smooth', flat = 'adaptive') {
   const w = objectRequest(object);
   w.u32(level);
   w.u32(RECONSTRUCTION_WORD[reconstruction]);
+  w.u32(FLAT_REFINEMENT_WORD[flat]);
   const r = call('hce_refine', w.finish());
-  return { positions: r.floats(), normals: r.floats(), colours: r.floats(), indices: r.words() };
+  return { level: r.u32(), positions: r.floats(), normals: r.floats(), colours: r.floats(), indices: r.words(), triangleStart: r.words() };
+}
+
+/**
+ * The indices of the refined triangles of coarse triangles `first .. first + count` (a
+ * primitive's range, SPEC.md 2.3): refined triangles are grouped by coarse triangle, and
+ * `triangleStart` says where each group starts.
+ * @param {Uint32Array} indices 3 per refined triangle
+ * @param {Uint32Array} triangleStart per coarse triangle its first triangle, then the count
+ * @param {number} first
+ * @param {number} count
+ */
+export function coarseRangeIndices(indices, triangleStart, first, count) {
+  const at = (/** @type {number} */ t) => triangleStart[Math.min(t, triangleStart.length - 1)];
+  return indices.subarray(3 * at(first), 3 * at(first + count));
+}
+
+/**
+ * `triangleStart` of a uniform refinement to `level` of `coarse` triangles: `t · 4^level`.
+ * @param {number} coarse
+ * @param {number} level
+ */
+export function uniformTriangleStart(coarse, level) {
+  const out = new Uint32Array(coarse + 1);
+  for (let t = 0; t <= coarse; t++) out[t] = t * 4 ** level;
+  return out;
 }

@@ -39,8 +39,10 @@ export const DEFAULT_TRIANGLE_BUDGET = 16_000_000;
 /**
  * The level each object should be drawn at for `camera` (forced levels win; flat objects get
  * their tree depth), lowered while the scene is over the triangle budget: the rule of
- * HceScene.levelsFor, for any path that draws a scene (the WebGL2 one too).
- * @param {{ source: import('./native.js').AssetObject, forced: number | null, treeDepth: number }[]} objects
+ * HceScene.levelsFor, for any path that draws a scene (the WebGL2 one too). An object with
+ * `triangles` (an adaptive flat object, SPEC.md F.7.1) draws that many whatever its level, so
+ * lowering it gains nothing: it keeps its level, as scene.rs `levels_within` keeps it.
+ * @param {{ source: import('./native.js').AssetObject, forced: number | null, treeDepth: number, triangles?: number | null }[]} objects
  * @param {Camera} camera
  * @param {number} viewportHeight
  * @param {import('./view.js').LodParams} lod
@@ -53,12 +55,12 @@ export function sceneLevels(objects, camera, viewportHeight, lod, triangleBudget
     if (o.source.object.kind === 'flat') return flatLevel(o.treeDepth, o.source.object.records.length / 4);
     return o.forced ?? objectLevel(o.source, camera, viewportHeight, lod);
   });
-  const tris = (/** @type {number} */ i, /** @type {number} */ l) => (objects[i].source.object.records.length / 4) * 4 ** l * objects[i].source.instances.length;
+  const tris = (/** @type {number} */ i, /** @type {number} */ l) => (objects[i].triangles ?? (objects[i].source.object.records.length / 4) * 4 ** l) * objects[i].source.instances.length;
   const total = () => levels.reduce((s, l, i) => s + (l >= 0 ? tris(i, l) : 0), 0);
   while (total() > triangleBudget) {
     let worst = -1;
     for (let i = 0; i < levels.length; i++) {
-      const lowerable = levels[i] > 0 && (objects[i].forced === null || objects[i].source.object.kind === 'flat');
+      const lowerable = levels[i] > 0 && (objects[i].forced === null || objects[i].source.object.kind === 'flat') && objects[i].triangles == null;
       if (lowerable && (worst < 0 || tris(i, levels[i]) > tris(worst, levels[worst]))) worst = i;
     }
     if (worst < 0) break;
@@ -81,12 +83,15 @@ export class HceScene {
   /**
    * @param {Kernels} kernels
    * @param {Asset} asset
-   * @param {{ reconstruction?: Reconstruction, triangleBudget?: number }} [options]
+   * @param {{ reconstruction?: Reconstruction, triangleBudget?: number, flatRefinement?: import('./native.js').FlatRefinement }} [options]
+   *   `flatRefinement`: how flat objects are drawn, 'adaptive' from their trees (the default,
+   *   SPEC.md F.7.1) or 'uniform' to their tree depth (F.7.2, scene.rs `SceneOptions::flat_refinement`)
    */
   constructor(kernels, asset, options = {}) {
     this.kernels = kernels;
     this.asset = asset;
     this.reconstruction = options.reconstruction ?? 'smooth';
+    this.flatRefinement = options.flatRefinement ?? 'adaptive';
     this.triangleBudget = options.triangleBudget ?? DEFAULT_TRIANGLE_BUDGET;
     /** @type {SceneObject[]} */
     this.objects = asset.objects.map((source) => ({ source, uploaded: null, refined: null, forced: null, level: -1, refineMs: 0 }));
@@ -95,7 +100,7 @@ export class HceScene {
   /** Uploads every drawn object (checks its tables first: a damaged object throws here). */
   upload() {
     for (const o of this.objects) {
-      if (o.uploaded === null && o.source.instances.length > 0) o.uploaded = this.kernels.upload(o.source.object, this.reconstruction);
+      if (o.uploaded === null && o.source.instances.length > 0) o.uploaded = this.kernels.upload(o.source.object, this.reconstruction, this.flatRefinement);
     }
   }
 
@@ -122,7 +127,9 @@ export class HceScene {
    * @returns {number[]} -1 for objects that are not drawn
    */
   levelsFor(camera, viewportHeight, lod = DEFAULT_LOD) {
-    return sceneLevels(this.objects.map((o) => ({ source: o.source, forced: o.forced, treeDepth: o.uploaded?.treeDepth ?? o.source.object.treeDepth })), camera, viewportHeight, lod, this.triangleBudget);
+    // Adaptive counts are known once uploaded; levels are asked for after upload().
+    const objects = this.objects.map((o) => ({ source: o.source, forced: o.forced, treeDepth: o.uploaded?.treeDepth ?? o.source.object.treeDepth, triangles: o.uploaded?.adaptive?.triangles ?? null }));
+    return sceneLevels(objects, camera, viewportHeight, lod, this.triangleBudget);
   }
 
   /**

@@ -16,9 +16,10 @@ const q = new URLSearchParams(location.search);
 
 /**
  * What tests and scripts can read: `state` is 'starting', 'compiling', 'loading', 'ready' or
- * 'error'.
+ * 'error'; `frameMs` the wall time of the last frame, from choosing its levels to the GPU done
+ * (its refinements included).
  */
-const status = { present: '', state: 'starting', error: /** @type {string | null} */ (null), frames: 0, levels: /** @type {number[]} */ ([]), triangles: 0, camera: /** @type {Camera | null} */ (null) };
+const status = { present: '', state: 'starting', error: /** @type {string | null} */ (null), frames: 0, levels: /** @type {number[]} */ ([]), triangles: 0, camera: /** @type {Camera | null} */ (null), frameMs: 0 };
 /** @type {any} */ (window).hceViewer = status;
 /** Opens a URL as ?url= does; resolves when it is shown or refused (for tests and scripts). */
 /** @type {any} */ (window).hceOpen = (/** @type {string} */ url) => openUrl(url);
@@ -222,7 +223,10 @@ async function open(bytes, name, resolveUri) {
   scene = null;
   const asset = await loadAsset(bytes, { name, resolveUri });
   const reconstruction = /** @type {any} */ ($('recon')).value;
-  const next = present?.kind === 'webgl2' ? new GlScene(present.gl, asset, { reconstruction }) : new HceScene(/** @type {NonNullable<typeof runtime>} */ (runtime).kernels, asset, { reconstruction });
+  // Flat objects are drawn from their trees (SPEC.md F.7.1) unless ?flat=uniform.
+  const flatRefinement = q.get('flat') === 'uniform' ? 'uniform' : 'adaptive';
+  const options = { reconstruction, flatRefinement: /** @type {import('./native.js').FlatRefinement} */ (flatRefinement) };
+  const next = present?.kind === 'webgl2' ? new GlScene(present.gl, asset, options) : new HceScene(/** @type {NonNullable<typeof runtime>} */ (runtime).kernels, asset, options);
   next.upload();
   const forced = q.get('level');
   if (forced !== null) for (const o of next.objects) o.forced = Math.max(0, Math.min(6, Number(forced)));
@@ -252,7 +256,7 @@ function buildTable() {
     const select = document.createElement('select');
     select.dataset.object = String(i);
     if (o.source.object.kind === 'flat') {
-      select.innerHTML = '<option value="">tree depth</option>';
+      select.innerHTML = q.get('flat') === 'uniform' ? '<option value="">tree depth</option>' : '<option value="">trees</option>';
       select.disabled = true;
     } else {
       select.innerHTML = '<option value="">auto</option>' + [0, 1, 2, 3, 4, 5, 6].map((l) => `<option value="${l}">${l}</option>`).join('');
@@ -308,6 +312,7 @@ function tick() {
   if (!dirty) return;
   dirty = false;
   busy = true;
+  const t0 = performance.now();
   const current = scene;
   const camera = { ...view.camera };
   const levels = current.levelsFor(camera, canvas.height);
@@ -316,7 +321,10 @@ function tick() {
     const ev = Number(/** @type {HTMLInputElement} */ ($('exposure')).value);
     if (current instanceof GlScene) {
       current.render(camera, bounds, ev);
-      finishFrame(current, camera);
+      // readPixels waits for the frame, so that frameMs counts the drawing too.
+      const gl = current.gl;
+      gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
+      finishFrame(current, camera, t0);
       return;
     }
     if (!runtime?.renderer) return;
@@ -327,18 +335,18 @@ function tick() {
       const [w, h] = [canvas.width, canvas.height];
       return runtime.renderer.renderToPixels(current, camera, bounds, w, h, ev).then((pixels) => {
         context.putImageData(new ImageData(pixels, w, h), 0, 0);
-        finishFrame(current, camera);
+        finishFrame(current, camera, t0);
       });
     }
-    finishFrame(current, camera);
-    return runtime.device.queue.onSubmittedWorkDone();
+    return runtime.device.queue.onSubmittedWorkDone().then(() => finishFrame(current, camera, t0));
   }).catch(showError).finally(() => {
     busy = false;
   });
 }
 
-/** @param {HceScene | GlScene} current @param {Camera} camera */
-function finishFrame(current, camera) {
+/** @param {HceScene | GlScene} current @param {Camera} camera @param {number} t0 when the frame began */
+function finishFrame(current, camera, t0) {
+  status.frameMs = performance.now() - t0;
   status.levels = current.objects.map((o) => o.level);
   status.triangles = current.drawnTriangles();
   status.camera = camera;

@@ -54,12 +54,14 @@ export class GlScene {
   /**
    * @param {WebGL2RenderingContext} gl
    * @param {Asset} asset
-   * @param {{ reconstruction?: Reconstruction, triangleBudget?: number }} [options]
+   * @param {{ reconstruction?: Reconstruction, triangleBudget?: number, flatRefinement?: import('./native.js').FlatRefinement }} [options]
+   *   as HceScene's
    */
   constructor(gl, asset, options = {}) {
     this.gl = gl;
     this.asset = asset;
     this.reconstruction = options.reconstruction ?? 'smooth';
+    this.flatRefinement = options.flatRefinement ?? 'adaptive';
     this.triangleBudget = options.triangleBudget ?? DEFAULT_TRIANGLE_BUDGET;
     /** @type {GlObject[]} */
     this.objects = asset.objects.map((source) => ({ source, forced: null, level: -1, refined: null, refineMs: 0 }));
@@ -82,8 +84,19 @@ export class GlScene {
    * @param {number} viewportHeight
    */
   levelsFor(camera, viewportHeight) {
-    const levels = sceneLevels(this.objects.map((o) => ({ source: o.source, forced: o.forced, treeDepth: o.source.object.treeDepth })), camera, viewportHeight, DEFAULT_LOD, this.triangleBudget);
+    const levels = sceneLevels(this.objects.map((o) => ({ source: o.source, forced: o.forced, treeDepth: o.source.object.treeDepth, triangles: this.adaptiveTriangles(o) })), camera, viewportHeight, DEFAULT_LOD, this.triangleBudget);
     return levels.map((l, i) => (l < 0 ? l : cpuLevel(this.objects[i].source.object, l)));
+  }
+
+  /**
+   * The triangles an adaptive flat object draws whatever its level (SPEC.md F.7.1), null for
+   * the others. Known once refined; before that, its coarse triangle count, the fewest it can
+   * draw (the CPU path has no tables built ahead of its refinement).
+   * @param {GlObject} o
+   */
+  adaptiveTriangles(o) {
+    if (o.source.object.kind !== 'flat' || this.flatRefinement !== 'adaptive') return null;
+    return o.refined?.triangleCount ?? o.source.object.records.length / 4;
   }
 
   /**
@@ -95,7 +108,7 @@ export class GlScene {
     for (let i = 0; i < this.objects.length; i++) {
       const o = this.objects[i];
       if (levels[i] < 0 || (levels[i] === o.level && o.refined !== null)) continue;
-      const mesh = refineCpu(o.source.object, levels[i], this.reconstruction);
+      const mesh = refineCpu(o.source.object, levels[i], this.reconstruction, this.flatRefinement);
       if (o.refined) release(gl, o.refined);
       o.refined = upload(gl, mesh);
       o.refineMs = mesh.ms;

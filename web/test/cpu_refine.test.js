@@ -1,7 +1,8 @@
 // The path without WebGPU, refinement: in a Chromium with WebGPU switched off, every object of
 // Teatime and the Cornell box, baked by the workspace's hce, refined on the CPU in
-// hce.wasm (cpu_refine.js) at levels 1 and 2 against `hce subdivide --merge` of the same file
-// and level: positions and normals bit-identical, the same indices, and the colours (hce writes
+// hce.wasm (cpu_refine.js) at levels 1 and 2 (flat objects uniformly) and with flat objects
+// from their trees (SPEC.md F.7.1) against `hce subdivide --merge` of the same file, level and
+// `--flat`: positions and normals bit-identical, the same indices, and the colours (hce writes
 // them clamped to [0, 1]) equal once clamped. The same Rust runs on both sides, so anything
 // short of equality is a bug in the frames between them.
 import test from 'node:test';
@@ -23,12 +24,12 @@ test('without WebGPU, the CPU refinement is hce subdivide\'s bit for bit', { tim
     for (const name of ['teatime', 'cornell-box']) {
       const baked = bakedSample(hce, name);
       fs.copyFileSync(baked, path.join(dir, `${name}.glb`));
-      for (const level of [1, 2]) {
-        const ref = `${name}-${level}.glb`;
-        runHce(hce, ['subdivide', baked, '--level', String(level), '--flat', 'uniform', '--merge', '-o', path.join(dir, ref)]);
+      for (const [level, flat] of /** @type {[number, string][]} */ ([[1, 'uniform'], [2, 'uniform'], [2, 'adaptive']])) {
+        const ref = `${name}-${level}-${flat}.glb`;
+        runHce(hce, ['subdivide', baked, '--level', String(level), '--flat', flat, '--merge', '-o', path.join(dir, ref)]);
         /** @type {any} */
-        const r = await b.page.evaluate(([u, l, rf]) => /** @type {any} */ (window).hceCpuCompare(u, l, rf), [`/files/${name}.glb`, level, `/files/${ref}`]);
-        const at = `${name} level ${level}`;
+        const r = await b.page.evaluate(([u, l, rf, fl]) => /** @type {any} */ (window).hceCpuCompare(u, l, rf, fl), [`/files/${name}.glb`, level, `/files/${ref}`, flat]);
+        const at = `${name} level ${level}, flat ${flat}`;
         assert.ok(r.ok, `${at}: ${r.error}`);
         assert.equal(r.webgpu, false, 'the page gets no WebGPU adapter');
         assert.equal(r.totalVertices, r.refVertices, `${at}: vertex count`);

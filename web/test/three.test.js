@@ -1,11 +1,14 @@
 // The three.js GLTFLoader plugin: on a WebGPURenderer's own device, every linked primitive of
 // a baked glTF gets its refined surface with the baked lighting as vertex colours, at the
-// requested level (flat objects at their tree depth), agreeing with the conformance manifest.
+// requested level (flat objects from their trees, or at their tree depth on asking), agreeing
+// with the conformance manifest and `hce subdivide`.
 import test from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
-import { openBrowser, REPO } from './browser.js';
+import os from 'node:os';
+import { openBrowser, hceBinary, REPO } from './browser.js';
+import { runHce } from './samples.js';
 
 const manifest = JSON.parse(fs.readFileSync(path.join(REPO, 'conformance/manifest.json'), 'utf8'));
 
@@ -28,20 +31,38 @@ test('the three.js plugin refines and colours every linked mesh on three.js\'s d
     assert.ok(m.vertexColors && m.unlit && m.hasColour);
     const probe = want.probes.find((/** @type {any} */ p) => p.vertex === 0);
     assert.deepEqual(m.colour0.slice(0, 3).map((/** @type {number} */ x) => Math.round(x * 1e5)), probe.colour_smooth.xyz.map((/** @type {number} */ x) => Math.round(x * 1e5)));
-    // The Cornell box: eight flat objects, each at its tree depth.
-    /** @type {any} */
-    const box = await b.page.evaluate(() => /** @type {any} */ (window).hceThree('/conformance/valid/cornell-box.glb', 3));
-    assert.ok(box.ok, box.error);
-    assert.equal(box.meshes.length, 8);
+    // The Cornell box: eight flat objects, drawn from their trees (SPEC.md F.7.1) with the
+    // triangles `hce subdivide` (adaptive, its default) gives them, then uniformly at their tree
+    // depth on asking.
     const cornell = manifest.cases.find((/** @type {any} */ c) => c.file === 'valid/cornell-box.glb');
-    for (const mesh of box.meshes) {
-      assert.ok(mesh.hce, `${mesh.name} refined`);
-      const r = box.report.find((/** @type {any} */ x) => x.name === mesh.hce.object);
-      assert.equal(mesh.indices, 3 * r.triangles);
-      const level1 = cornell.refined.find((/** @type {any} */ x) => x.name === mesh.hce.object && x.level === 1);
-      // The coarse triangle count, from the manifest's level 1 (four per coarse triangle).
-      assert.equal(r.triangles, (level1.triangle_count / 4) * 4 ** mesh.hce.level, mesh.name);
-      assert.ok(mesh.colour0.slice(0, 3).some((/** @type {number} */ x) => x > 0), `${mesh.name} is lit`);
+    const hce = hceBinary(t);
+    if (!hce) return;
+    /** @type {Map<string, number>} */
+    const adaptiveTriangles = new Map();
+    const stats = runHce(hce, ['subdivide', path.join(REPO, 'conformance/valid/cornell-box.glb'), '--stats', '-o', path.join(os.tmpdir(), `hce-three-${process.pid}.glb`)]);
+    for (const m of stats.matchAll(/^object '([^']+)' \(flat, adaptive\): \d+ vertices, (\d+) triangles$/gm)) adaptiveTriangles.set(m[1], Number(m[2]));
+    assert.equal(adaptiveTriangles.size, 8, stats);
+    for (const flat of ['adaptive', 'uniform']) {
+      /** @type {any} */
+      const box = await b.page.evaluate(([f]) => /** @type {any} */ (window).hceThree('/conformance/valid/cornell-box.glb', 3, f), [flat]);
+      assert.ok(box.ok, box.error);
+      assert.equal(box.meshes.length, 8);
+      for (const mesh of box.meshes) {
+        assert.ok(mesh.hce, `${mesh.name} refined`);
+        const r = box.report.find((/** @type {any} */ x) => x.name === mesh.hce.object);
+        assert.equal(mesh.indices, 3 * r.triangles);
+        assert.equal(r.adaptive, flat === 'adaptive');
+        if (flat === 'adaptive') {
+          assert.equal(mesh.hce.level, 0, `${mesh.name}: an adaptive refinement has no level`);
+          assert.equal(r.triangles, adaptiveTriangles.get(mesh.hce.object), mesh.name);
+        } else {
+          const level1 = cornell.refined.find((/** @type {any} */ x) => x.name === mesh.hce.object && x.level === 1);
+          // The coarse triangle count, from the manifest's level 1 (four per coarse triangle).
+          assert.equal(r.triangles, (level1.triangle_count / 4) * 4 ** mesh.hce.level, mesh.name);
+        }
+        assert.ok(mesh.lit > 0.5, `${mesh.name} is lit (${(100 * mesh.lit).toFixed(1)}% of its vertices)`);
+      }
+      t.diagnostic(`Cornell box, flat ${flat}: ${box.report.map((/** @type {any} */ x) => `${x.name} ${x.triangles}`).join(', ')}`);
     }
     assert.deepEqual(b.pageErrors, []);
   } finally {

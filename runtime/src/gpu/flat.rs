@@ -28,7 +28,7 @@ use super::util::{
 };
 use super::wgsl::flat_source;
 use super::{GpuContext, GpuError};
-use hce_geometry::adaptive_flat::{refine_adaptive_flat, AdaptiveFlat};
+use hce_geometry::adaptive_flat::refine_adaptive_flat;
 use hce_geometry::decode::MAX_PATH_LEVEL;
 use hce_geometry::flat::{FlatTopology, RefinedMesh};
 use hce_geometry::lighting::Reconstruction;
@@ -66,7 +66,7 @@ pub(super) struct Params {
     pub(super) range_first: u32,
     pub(super) range_end: u32,
     /// 1 for the adaptive refinement (SPEC.md F.7.1), and its lists' sections of `topo`
-    /// ([`adaptive_sections`]).
+    /// ([`AdaptiveFlat::kernel_lists`](hce_geometry::adaptive_flat::AdaptiveFlat::kernel_lists)).
     pub(super) adaptive: u32,
     pub(super) sources_off: u32,
     pub(super) faces_off: u32,
@@ -165,12 +165,12 @@ impl FlatKernel {
                 object: object.name.clone(),
                 reason: e.to_string(),
             })?;
-            Some(adaptive_sections(&mesh))
+            Some(mesh.kernel_lists())
         } else {
             None
         };
         let empty = Vec::new();
-        let list = |k: usize| lists.as_ref().map_or(&empty, |(l, _)| &l[k]);
+        let list = |k: usize| lists.as_ref().map_or(&empty, |l| &l.sections[k]);
         let (packed, section_offsets) = pack_sections(
             ctx,
             [
@@ -200,7 +200,7 @@ impl FlatKernel {
             coarse_positions: storage_init(ctx, "coarse positions", &object.mesh.positions),
             topo: storage_init(ctx, "topology", &packed),
             section_offsets,
-            adaptive: lists.map(|(_, counts)| counts),
+            adaptive: lists.map(|l| (l.vertices, l.triangles)),
             topology,
             split,
         })
@@ -323,32 +323,6 @@ fn shape(object: &FlatObject, level: u32) -> Result<OutputShape, GpuError> {
         object.topology.refined_triangle_count(level),
         false,
     )
-}
-
-/// The lists of `mesh` that `flat.wgsl` reads (the sections after `Params::range_end`): per
-/// vertex its coarse triangle and packed point (`x | y << 16` on the 4096 lattice); per triangle
-/// its coarse triangle, leaf and three packed corner points; per triangle its indices; the
-/// offsets and the uses of [`AdaptiveFlat::incidence`]. With the vertex and triangle counts.
-fn adaptive_sections(mesh: &AdaptiveFlat) -> ([Vec<u32>; 5], (u32, u32)) {
-    let pack = |[x, y]: [u32; 2]| x | y << 16;
-    let sources = mesh
-        .sources
-        .iter()
-        .flat_map(|&(t, p)| [t, pack(p)])
-        .collect();
-    let mut faces = Vec::with_capacity(5 * mesh.triangle_count());
-    for t in 0..mesh.triangle_start.len().saturating_sub(1) {
-        let range = mesh.triangle_start[t] as usize..mesh.triangle_start[t + 1] as usize;
-        for f in range {
-            faces.extend([t as u32, mesh.leaves[f]]);
-            faces.extend(mesh.points[f].map(pack));
-        }
-    }
-    let indices = mesh.indices.iter().flatten().copied().collect();
-    let (offsets, uses) = mesh.incidence();
-    // refine_adaptive_flat keeps both counts within u32.
-    let counts = (mesh.vertex_count() as u32, mesh.triangle_count() as u32);
-    ([sources, faces, indices, offsets, uses], counts)
 }
 
 /// One-shot convenience: upload `object`, refine it to `level` and read the mesh back.

@@ -1,6 +1,6 @@
 // A Babylon.js glTF loader extension for EXT_hce_baked_lighting (SPEC.md section 3): every
 // primitive linked to a container object gets that object refined (Loop for multiresolution
-// objects, linear for flat ones) by the same Rust as `hce subdivide`, in hce.wasm on the CPU
+// objects; flat ones from their trees, SPEC.md F.7.1) by the same Rust as `hce subdivide`, in hce.wasm on the CPU
 // (cpu_refine.js), with the baked lighting as vertex colours drawn unlit. The CPU path serves
 // Babylon's WebGL2 Engine and its WebGPUEngine alike; the runtime's WGSL kernels are not run
 // on Babylon's device yet. Registered once, with options per load:
@@ -18,7 +18,7 @@ import { Color3 } from '@babylonjs/core/Maths/math.color.js';
 import { Logger } from '@babylonjs/core/Misc/logger.js';
 import { ArrayItem } from '@babylonjs/loaders/glTF/2.0/glTFLoader.js';
 import { registerGLTFExtension, unregisterGLTFExtension } from '@babylonjs/loaders/glTF/2.0/glTFLoaderExtensionRegistry.js';
-import { loadAsset } from '../native.js';
+import { coarseRangeIndices, loadAsset } from '../native.js';
 import { CpuRefiner } from '../cpu_refine.js';
 
 export const EXT = 'EXT_hce_baked_lighting';
@@ -28,8 +28,10 @@ export const EXT = 'EXT_hce_baked_lighting';
  * loader's plugin options.
  * @typedef {object} ExtensionOptions
  * @property {number | ((object: import('../native.js').HceObject) => number)} [level] the Loop
- *   level of multiresolution objects (default 3, at most 6); flat objects are split to their
- *   tree depth (at most 6)
+ *   level of multiresolution objects (default 3, at most 6)
+ * @property {import('../native.js').FlatRefinement} [flatRefinement] how flat objects are
+ *   refined: 'adaptive' from their trees (default, SPEC.md F.7.1), or 'uniform' to their tree
+ *   depth (at most 6, F.7.2)
  * @property {import('../native.js').Reconstruction} [reconstruction] default 'smooth'
  * @property {boolean} [unlit] give each refined mesh an unlit material showing the baked
  *   lighting (default true: the colours already hold the light); false keeps the file's
@@ -38,7 +40,7 @@ export const EXT = 'EXT_hce_baked_lighting';
  *   with the extension: its `report` (per object: level, vertices, triangles) and `warnings`
  */
 
-/** @typedef {{ level: number, positions: Float32Array, normals: Float32Array, colours: Float32Array, indices: Uint32Array }} Refined */
+/** @typedef {{ level: number, positions: Float32Array, normals: Float32Array, colours: Float32Array, indices: Uint32Array, triangleStart: Uint32Array }} Refined */
 
 export class HceGLTFExtension {
   /** @param {any} loader Babylon's GLTFLoader (glTF 2.0) */
@@ -59,7 +61,7 @@ export class HceGLTFExtension {
     this._fallbackMeshes = new Set();
     /** @type {Map<any, any>} */
     this._unlitMaterials = new Map();
-    /** What the load did, per object: level, vertices, triangles, and where it refined. @type {{ name: string, level: number, vertices: number, triangles: number, path: 'cpu' }[]} */
+    /** What the load did, per object: level, vertices, triangles, and where it refined. `level` is the triangles' numbering level, 0 for a flat object drawn from its trees (`adaptive`). @type {{ name: string, level: number, adaptive: boolean, vertices: number, triangles: number, path: 'cpu' }[]} */
     this.report = [];
     /** @type {string[]} */
     this.warnings = [];
@@ -144,13 +146,12 @@ export class HceGLTFExtension {
       const coarse = ArrayItem.Get(`${context}/indices`, accessors, primitive.indices ?? primitive.attributes.POSITION).count / 3;
       const first = link.firstTriangle ?? 0;
       // The primitive's refined triangles: those of its coarse range (SPEC.md 2.3).
-      const per = 4 ** r.level;
       const geometry = new Geometry(babylonMesh.name, this._loader.babylonScene);
       geometry.setVerticesData(VertexBuffer.PositionKind, r.positions, false, 3);
       geometry.setVerticesData(VertexBuffer.NormalKind, r.normals, false, 3);
       // Linear radiance, r, g, b, 1 per vertex.
       geometry.setVerticesData(VertexBuffer.ColorKind, r.colours, false, 4);
-      geometry.setIndices(r.indices.subarray(3 * first * per, 3 * (first + coarse) * per), r.positions.length / 3);
+      geometry.setIndices(coarseRangeIndices(r.indices, r.triangleStart, first, coarse), r.positions.length / 3);
       babylonMesh.hasVertexAlpha = false;
       babylonMesh.metadata = { ...babylonMesh.metadata, hce: { object: object.name, level: r.level } };
       this._refinedMeshes.add(babylonMesh);
@@ -166,8 +167,9 @@ export class HceGLTFExtension {
     let r = this._refined.get(object.index);
     if (!r) {
       const asked = typeof this.options.level === 'function' ? this.options.level(object) : this.options.level ?? 3;
-      r = this._refiner.refine(object, asked, this.options.reconstruction ?? 'smooth');
-      this.report.push({ name: object.name, level: r.level, vertices: r.positions.length / 3, triangles: r.indices.length / 3, path: 'cpu' });
+      const flat = this.options.flatRefinement ?? 'adaptive';
+      r = this._refiner.refine(object, asked, this.options.reconstruction ?? 'smooth', flat);
+      this.report.push({ name: object.name, level: r.level, adaptive: object.kind === 'flat' && flat === 'adaptive', vertices: r.positions.length / 3, triangles: r.indices.length / 3, path: 'cpu' });
       this._refined.set(object.index, r);
     }
     return r;

@@ -1,6 +1,7 @@
 // A three.js GLTFLoader plugin for EXT_hce_baked_lighting (SPEC.md section 3): every
 // primitive linked to a container object gets that object refined (Loop for multiresolution
-// objects, linear for flat ones), with the baked lighting as vertex colours. On a
+// objects; flat ones from their trees, SPEC.md F.7.1), with the baked lighting as vertex
+// colours. On a
 // WebGPURenderer with a WebGPU backend the hce runtime's kernels run on three.js's own device;
 // on a WebGL2 backend (`forceWebGL: true`, or a browser without WebGPU) or a WebGLRenderer, the
 // same Rust as `hce subdivide` refines on the CPU in hce.wasm (cpu_refine.js). Registered the
@@ -11,7 +12,7 @@
 //
 // Nothing global: the plugin works on the parser it is given and the meshes it built.
 import { BufferAttribute, BufferGeometry, MeshBasicMaterial } from 'three';
-import { loadAsset } from '../native.js';
+import { coarseRangeIndices, loadAsset } from '../native.js';
 import { fetchWgsl, KernelSources } from '../wgsl.js';
 import { Kernels, destroyRefined, destroyUploaded } from '../kernels.js';
 import { flatLevel } from '../scene.js';
@@ -22,7 +23,10 @@ const EXT = 'EXT_hce_baked_lighting';
 /**
  * @typedef {object} PluginOptions
  * @property {number | ((object: import('../native.js').HceObject) => number)} [level] the Loop
- *   level of multiresolution objects (default 3); flat objects are split to their tree depth
+ *   level of multiresolution objects (default 3)
+ * @property {import('../native.js').FlatRefinement} [flatRefinement] how flat objects are
+ *   refined: 'adaptive' from their trees (default, SPEC.md F.7.1), or 'uniform' to their tree
+ *   depth (F.7.2)
  * @property {import('../kernels.js').Reconstruction} [reconstruction] default 'smooth'
  * @property {boolean} [unlit] replace each refined mesh's material by an unlit one showing the
  *   baked lighting (default true: the colours already hold the light)
@@ -57,7 +61,7 @@ export class HceGLTFPlugin {
     this.parser = parser;
     this.kernels = kernels;
     this.options = options;
-    /** What the last load did, per object: level, vertices, triangles, and where it refined. @type {{ name: string, level: number, vertices: number, triangles: number, path: 'gpu' | 'cpu' }[]} */
+    /** What the last load did, per object: level, vertices, triangles, and where it refined. `level` is the triangles' numbering level, 0 for a flat object drawn from its trees (`adaptive`). @type {{ name: string, level: number, adaptive: boolean, vertices: number, triangles: number, path: 'gpu' | 'cpu' }[]} */
     this.report = [];
   }
 
@@ -82,7 +86,7 @@ export class HceGLTFPlugin {
       });
     });
     // One refinement per object, shared by its primitives and instances.
-    /** @type {Map<number, Promise<{ level: number, positions: Float32Array, normals: Float32Array | null, colours: Float32Array, indices: Uint32Array }>>} */
+    /** @type {Map<number, Promise<{ level: number, positions: Float32Array, normals: Float32Array | null, colours: Float32Array, indices: Uint32Array, triangleStart: Uint32Array }>>} */
     const refined = new Map();
     const refine = (/** @type {import('../native.js').HceObject} */ object) => {
       let p = refined.get(object.index);
@@ -91,18 +95,19 @@ export class HceGLTFPlugin {
           const kernels = this.kernels;
           const reconstruction = this.options.reconstruction ?? 'smooth';
           const asked = typeof this.options.level === 'function' ? this.options.level(object) : this.options.level ?? 3;
+          const flat = this.options.flatRefinement ?? 'adaptive';
           let mesh;
           if (kernels instanceof CpuRefiner) {
-            mesh = kernels.refine(object, asked, reconstruction);
+            mesh = kernels.refine(object, asked, reconstruction, flat);
           } else {
             const level = object.kind === 'flat' ? flatLevel(object.treeDepth, object.records.length / 4) : asked;
-            const uploaded = kernels.upload(object, reconstruction);
+            const uploaded = kernels.upload(object, reconstruction, flat);
             const buffers = kernels.refine(uploaded, level);
             mesh = await kernels.readBack(buffers);
             destroyRefined(buffers);
             destroyUploaded(uploaded);
           }
-          this.report.push({ name: object.name, level: mesh.level, vertices: mesh.positions.length / 3, triangles: mesh.indices.length / 3, path: kernels instanceof CpuRefiner ? 'cpu' : 'gpu' });
+          this.report.push({ name: object.name, level: mesh.level, adaptive: object.kind === 'flat' && flat === 'adaptive', vertices: mesh.positions.length / 3, triangles: mesh.indices.length / 3, path: kernels instanceof CpuRefiner ? 'cpu' : 'gpu' });
           return mesh;
         })();
         refined.set(object.index, p);
@@ -126,8 +131,7 @@ export class HceGLTFPlugin {
         const prim = json.meshes[assoc.meshes].primitives[assoc.primitives];
         const coarse = json.accessors[prim.indices ?? prim.attributes.POSITION].count / 3;
         // The primitive's refined triangles: those of its coarse range (SPEC.md 2.3).
-        const per = 4 ** r.level;
-        const indices = r.indices.subarray(3 * link.first * per, 3 * (link.first + coarse) * per);
+        const indices = coarseRangeIndices(r.indices, r.triangleStart, link.first, coarse);
         geometry = new BufferGeometry();
         geometry.setAttribute('position', new BufferAttribute(r.positions, 3));
         if (r.normals) geometry.setAttribute('normal', new BufferAttribute(r.normals, 3));
