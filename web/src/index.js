@@ -1,6 +1,6 @@
 // hce in the browser: the public API (web/README.md).
 export { HceError } from './errors.js';
-export { loadAsset, objectTables, geometryHash, MAX_LOOP_LEVEL, MAX_PATH_LEVEL } from './native.js';
+export { loadAsset, objectTables, geometryHash, coarseRangeIndices, MAX_LOOP_LEVEL, MAX_PATH_LEVEL } from './native.js';
 export { fetchWgsl, importOrder, KernelSources, loadWgsl, WgShape, WGSL_ROOTS } from './wgsl.js';
 export { everyKernel } from './pipelines.js';
 export { Kernels, destroyRefined, destroyUploaded } from './kernels.js';

@@ -7,10 +7,8 @@
 // values, both images tone-mapped by present.wgsl's curve from a float render target. They
 // agree when the mean of that difference is at most 0.5 levels and at most 0.5% of the pixels
 // differ by more than 24 levels. The two paths refine with the same rules (GPU and CPU agree
-// within 1e-5, subdivide.test.js), except that the CPU refines the flat objects to at most
-// level 6 where the GPU goes to their tree depth (Teatime's floor, ceiling and table: 7 and 8);
-// what remains is that and rasterisation by two backends. Measured: mean 0.24 levels, 0.21%
-// of the pixels over 24. Where the plugin cannot refine at all, HceGLTFPlugin.runtime says why.
+// within 1e-5, subdivide.test.js; flat objects from their trees on both), so what remains is
+// rasterisation by two backends. Measured: mean 0.000 levels, 0.00% of the pixels over 24. Where the plugin cannot refine at all, HceGLTFPlugin.runtime says why.
 // The images are written to target/hce-web/three-*.png.
 import test from 'node:test';
 import assert from 'node:assert/strict';

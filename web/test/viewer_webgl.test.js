@@ -4,8 +4,8 @@
 //
 // Metric (as render.test.js): per pixel, the largest difference over R, G, B of the 8-bit sRGB
 // values; the images agree when the mean is at most 0.5 levels and at most 0.5% of the pixels
-// differ by more than 24 levels (measured: Teatime 0.26 levels and 0.22%, the Cornell box 0.11
-// and 0.04%: the flat objects refined to at most level 6 on the CPU, and two rasterisers).
+// differ by more than 24 levels (measured: Teatime 0.05 levels and 0.03%, the Cornell box 0.04
+// and 0.01%: two rasterisers; both draw flat objects from their trees).
 // The viewer's image is written to
 // target/hce-web/viewer-webgl2-NAME.png beside hce's (NAME.png).
 import test from 'node:test';
