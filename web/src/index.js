@@ -1,7 +1,7 @@
 // hce in the browser: the public API (web/README.md).
 export { HceError } from './errors.js';
 export { loadAsset, objectTables, geometryHash, coarseRangeIndices, MAX_LOOP_LEVEL, MAX_PATH_LEVEL } from './native.js';
-export { fetchWgsl, importOrder, KernelSources, loadWgsl, WgShape, WGSL_ROOTS } from './wgsl.js';
+export { fetchWgsl, importOrder, kernelFiles, KernelSources, loadWgsl, packagedWgsl, WgShape, WGSL_ROOTS } from './wgsl.js';
 export { everyKernel } from './pipelines.js';
 export { Kernels, destroyRefined, destroyUploaded } from './kernels.js';
 export { HceScene, Renderer, FLAT_MAX_LEVEL, FLAT_MAX_TRIANGLES, flatLevel } from './scene.js';
@@ -12,19 +12,20 @@ export { requestDevice } from './device.js';
  * Everything a page needs, built once: a device (or the caller's), the kernels' pipelines and
  * the renderer.
  * @param {object} options
- * @param {string | URL} options.wgslBase the URL of runtime/src/gpu/ (ending in `/`)
+ * @param {string | URL} [options.wgslBase] the URL of runtime/src/gpu/ (ending in `/`); by
+ *   default the kernel sources the npm package ships (`packagedWgsl`)
  * @param {GPUDevice} [options.device] draw on this device (e.g. three.js's) instead of a new one
  * @param {GPUTextureFormat} [options.canvasFormat] build the renderer for this canvas format
  * @param {(done: number, total: number, label: string) => void} [options.progress]
  */
 export async function createRuntime(options) {
-  const { KernelSources, fetchWgsl } = await import('./wgsl.js');
+  const { KernelSources, kernelFiles } = await import('./wgsl.js');
   const { Kernels } = await import('./kernels.js');
   const { Renderer } = await import('./scene.js');
   const { requestDevice } = await import('./device.js');
   const requested = options.device ? null : await requestDevice();
   const device = options.device ?? /** @type {NonNullable<typeof requested>} */ (requested).device;
-  const sources = new KernelSources(await fetchWgsl(options.wgslBase));
+  const sources = new KernelSources(await kernelFiles(options.wgslBase));
   const kernels = await Kernels.create(device, sources, options.progress);
   let renderer = null;
   if (options.canvasFormat) {

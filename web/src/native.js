@@ -10,7 +10,9 @@ const WASM_URL = new URL('./hce.wasm', import.meta.url);
 /** Compiles hce.wasm: fetched beside this module, or read from disk when run by node. */
 async function compile() {
   if (WASM_URL.protocol === 'file:') {
-    const { readFile } = await import('node:fs/promises');
+    // Through a variable: a bundler leaves this node-only import alone.
+    const fsModule = 'node:fs/promises';
+    const { readFile } = /** @type {typeof import('node:fs/promises')} */ (await import(/* @vite-ignore */ fsModule));
     return WebAssembly.compile(await readFile(WASM_URL));
   }
   const response = await fetch(WASM_URL);

@@ -115,6 +115,35 @@ export async function fetchWgsl(base, fetchImpl = fetch) {
 }
 
 /**
+ * The kernels' files as the npm package ships them (`wgsl/`, copied byte for byte from
+ * runtime/src/gpu/ when the package is packed: `scripts/prepack.js`), each reached through
+ * `import.meta.url` so that a bundler (Vite, Rollup, webpack) emits it with the bundle.
+ * @param {typeof fetch} [fetchImpl]
+ * @returns {Promise<WgslFiles>}
+ */
+export async function packagedWgsl(fetchImpl = fetch) {
+  return loadWgsl(async (name) => {
+    const url = new URL(`../wgsl/${name}`, import.meta.url);
+    const response = await fetchImpl(url).catch((e) => {
+      throw new Error(`cannot load the kernel source ${url}: ${e}`);
+    });
+    if (!response.ok) {
+      throw new Error(`cannot load the kernel source ${url}: HTTP ${response.status} (outside the npm package, pass wgslBase: the URL of runtime/src/gpu/)`);
+    }
+    return response.text();
+  });
+}
+
+/**
+ * The kernels' files from `wgslBase` when given ({@link fetchWgsl}), else the package's own
+ * ({@link packagedWgsl}).
+ * @param {string | URL | undefined} wgslBase
+ */
+export function kernelFiles(wgslBase) {
+  return wgslBase === undefined ? packagedWgsl() : fetchWgsl(wgslBase);
+}
+
+/**
  * The assembled modules, as `wgsl.rs` builds them.
  */
 export class KernelSources {

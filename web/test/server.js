@@ -13,6 +13,7 @@ const TYPES = /** @type {Record<string, string>} */ ({
   '.gltf': 'model/gltf+json',
   '.bin': 'application/octet-stream',
   '.hce': 'application/octet-stream',
+  '.wasm': 'application/wasm',
   '.png': 'image/png',
   '.css': 'text/css',
 });

@@ -7,13 +7,15 @@
 // same Rust as `hce subdivide` refines on the CPU in hce.wasm (cpu_refine.js). Registered the
 // usual way:
 //
-//   const runtime = await HceGLTFPlugin.runtime(renderer, { wgslBase });
+//   const runtime = await HceGLTFPlugin.runtime(renderer);
 //   loader.register((parser) => new HceGLTFPlugin(parser, runtime, { level: 3 }));
 //
 // Nothing global: the plugin works on the parser it is given and the meshes it built.
-import { BufferAttribute, BufferGeometry, MeshBasicMaterial } from 'three';
+// From three/webgpu, the build a WebGPURenderer app already imports (its core classes are the
+// ones `three` exports too, so a WebGLRenderer app draws them as well).
+import { BufferAttribute, BufferGeometry, MeshBasicMaterial } from 'three/webgpu';
 import { coarseRangeIndices, loadAsset } from '../native.js';
-import { fetchWgsl, KernelSources } from '../wgsl.js';
+import { kernelFiles, KernelSources } from '../wgsl.js';
 import { Kernels, destroyRefined, destroyUploaded } from '../kernels.js';
 import { flatLevel } from '../scene.js';
 import { CpuRefiner } from '../cpu_refine.js';
@@ -38,7 +40,8 @@ export class HceGLTFPlugin {
    * WebGPURenderer on its WebGPU backend (after `await renderer.init()`), else the CPU.
    * @param {any} renderer a three.js WebGPURenderer (either backend) or WebGLRenderer
    * @param {{ wgslBase?: string | URL, progress?: (done: number, total: number, label: string) => void }} options
-   *   `wgslBase`: the URL of the runtime's WGSL (runtime/src/gpu/), needed on WebGPU only
+   *   `wgslBase`: the URL of the runtime's WGSL (runtime/src/gpu/), on WebGPU only; by default
+   *   the kernel sources the npm package ships
    * @returns {Promise<Kernels | CpuRefiner>}
    */
   static async runtime(renderer, options = {}) {
@@ -46,8 +49,7 @@ export class HceGLTFPlugin {
     if (!renderer?.isWebGPURenderer) throw new Error('HceGLTFPlugin.runtime needs a three.js WebGPURenderer or WebGLRenderer');
     const device = /** @type {GPUDevice | undefined} */ (renderer.backend?.device);
     if (!device) throw new Error('HceGLTFPlugin.runtime: the WebGPURenderer has no device yet; call it after `await renderer.init()`');
-    if (options.wgslBase === undefined) throw new Error('HceGLTFPlugin.runtime: on WebGPU it needs `wgslBase`, the URL of the runtime\'s WGSL (runtime/src/gpu/)');
-    const sources = new KernelSources(await fetchWgsl(options.wgslBase));
+    const sources = new KernelSources(await kernelFiles(options.wgslBase));
     return Kernels.create(device, sources, options.progress);
   }
 
