@@ -64,6 +64,27 @@ test('the three.js plugin refines and colours every linked mesh on three.js\'s d
       }
       t.diagnostic(`Cornell box, flat ${flat}: ${box.report.map((/** @type {any} */ x) => `${x.name} ${x.triangles}`).join(', ')}`);
     }
+    // Level of detail: `level: 'auto'` and `plugin.update(camera, height)` each frame. The
+    // triangle (one multiresolution object) from near, from far, from far again and near
+    // again: its level follows the distance, only a change refines, and the drawn triangles
+    // are those of the level.
+    /** @type {any} */
+    const lod = await b.page.evaluate(() => /** @type {any} */ (window).hceThreeLod('/conformance/valid/triangle.glb', [0.4, 40, 40, 0.4]));
+    assert.ok(lod.ok, lod.error);
+    const levels = lod.steps.map((/** @type {any} */ s) => s.report[0].level);
+    t.diagnostic(`triangle.glb with level 'auto': levels ${levels.join(', ')} at distances ${lod.steps.map((/** @type {any} */ s) => s.distance).join(', ')}; refined ${lod.steps.map((/** @type {any} */ s) => s.refined).join(', ')}; pixels drawn ${lod.steps.map((/** @type {any} */ s) => s.drawn).join(', ')}`);
+    assert.ok(levels[0] > levels[1], `nearer is finer: ${levels}`);
+    assert.equal(levels[2], levels[1]);
+    assert.equal(levels[3], levels[0]);
+    assert.deepEqual(lod.steps.map((/** @type {any} */ s) => s.refined), [1, 1, 0, 1]);
+    for (const step of lod.steps) {
+      const m = step.meshes[0];
+      assert.equal(m.hce.level, step.report[0].level);
+      assert.equal(m.indices, 3 * 4 ** m.hce.level, `distance ${step.distance}: the triangles of level ${m.hce.level}`);
+      assert.ok(m.lit > 0.99, `distance ${step.distance}: lit`);
+      assert.equal(step.report[0].path, 'gpu');
+      assert.ok(step.drawn > 0, `distance ${step.distance}: the frame shows the triangle`);
+    }
     assert.deepEqual(b.pageErrors, []);
   } finally {
     await b.close();
