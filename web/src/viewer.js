@@ -6,7 +6,7 @@
 // error is shown on the page; none escapes.
 import { createRuntime, loadAsset, HceScene, resolveCamera, assetBounds, HceError } from './index.js';
 import { GlScene, webgl2Context } from './webgl_scene.js';
-import { add, cross, length, normalize, scale, sub } from './math.js';
+import { add, cross, dot, length, normalize, scale, sub } from './math.js';
 
 /** @typedef {import('./view.js').Camera} Camera */
 
@@ -234,6 +234,16 @@ async function open(bytes, name, resolveUri) {
   const resolved = resolveCamera(asset, canvas.width / canvas.height, q.get('camera') === 'auto' ? 'auto' : 'scene-or-auto');
   if (resolved === null) throw new HceError('', `${name} has nothing to draw (no object is used by a node of the scene)`);
   bounds = assetBounds(asset);
+  if (bounds) {
+    // Orbit about the point straight ahead nearest the scene's centre, not the file's target (a
+    // direction only, placed at the scene's radius), as `hce view` does.
+    const c = resolved.camera;
+    const forward = normalize(sub(c.target, c.eye));
+    const centre = scale(add(bounds.min, bounds.max), 0.5);
+    const radius = Math.max(0.5 * length(sub(bounds.max, bounds.min)), 1e-3);
+    const ahead = Math.min(Math.max(dot(sub(centre, c.eye), forward), 0.05 * radius), 2 * radius);
+    resolved.camera.target = add(c.eye, scale(forward, ahead));
+  }
   view.camera = { ...resolved.camera };
   view.initial = { ...resolved.camera };
   $('camera').textContent = `through ${resolved.source}`;
