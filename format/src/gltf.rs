@@ -588,8 +588,7 @@ impl LinkSink for LinkProblems<'_> {
     fn fault(&mut self, link: &PrimitiveLink, at: &str, fault: LinkFault) -> LinkNext {
         if let LinkFault::Unchecked(e) = &fault {
             // The error names its own location; where that is the primitive's, say it once.
-            let text = e.to_string();
-            let text = text.strip_prefix(&format!("{at}: ")).unwrap_or(&text);
+            let text = e.text_at(at);
             self.warnings.push(
                 at,
                 format!("{text}; loaders draw its plain primitive without the baked lighting"),
@@ -674,7 +673,7 @@ impl LinkFault {
                     link.object
                 ),
             ),
-            LinkFault::Geometry(e) | LinkFault::Unchecked(e) => (at.to_owned(), e.to_string()),
+            LinkFault::Geometry(e) | LinkFault::Unchecked(e) => (at.to_owned(), e.text_at(at)),
             LinkFault::Stale { computed, stored } => (
                 at.to_owned(),
                 format!(

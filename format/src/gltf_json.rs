@@ -23,6 +23,18 @@ pub enum GltfError {
     Compressed { location: String, extension: String },
 }
 
+impl GltfError {
+    /// The message as it reads after `at: ` (a located error's text without its location when
+    /// that is `at`): for the messages that name the place they are about themselves.
+    pub fn text_at(&self, at: &str) -> String {
+        let text = self.to_string();
+        match text.strip_prefix(at).and_then(|t| t.strip_prefix(": ")) {
+            Some(rest) => rest.to_owned(),
+            None => text,
+        }
+    }
+}
+
 pub(crate) fn index_of(v: &Value, key: &str, loc: &str) -> Result<usize, GltfError> {
     v.get(key)
         .and_then(Value::as_u64)
@@ -64,4 +76,26 @@ pub fn buffer_view_bytes<'a>(
             ))
         })?;
     Ok(&data[offset as usize..end as usize])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_located_message_drops_its_location_only_where_it_is_the_one_asked_for() {
+        let e = GltfError::Compressed {
+            location: "meshes[0].primitives[0]".into(),
+            extension: "KHR_draco_mesh_compression".into(),
+        };
+        assert_eq!(
+            e.text_at("meshes[0].primitives[0]"),
+            "cannot check: KHR_draco_mesh_compression-compressed data is not decoded by hce (SPEC.md 2.6)"
+        );
+        // Another place (a prefix of it, too) keeps the whole message.
+        assert_eq!(e.text_at("meshes[0]"), e.to_string());
+        assert_eq!(e.text_at("meshes[1].primitives[0]"), e.to_string());
+        let json = GltfError::Json("accessors[3] does not exist".into());
+        assert_eq!(json.text_at("meshes[0].primitives[0]"), json.to_string());
+    }
 }

@@ -820,9 +820,12 @@ impl hce_format::LinkSink for LinkPolicy<'_> {
                 "object {} is out of range; the container has {objects} objects",
                 link.object
             )),
-            LinkFault::Geometry(e) => link_err(format!("cannot read its geometry: {e}")),
+            LinkFault::Geometry(e) => {
+                link_err(format!("cannot read its geometry: {}", e.text_at(at)))
+            }
             LinkFault::Unchecked(e) => link_err(format!(
-                "{e}; its baked lighting is not applied (SPEC.md 3.5)"
+                "{}; its baked lighting is not applied (SPEC.md 3.5)",
+                e.text_at(at)
             )),
             LinkFault::Stale { computed, stored } | LinkFault::WholeObject { computed, stored } => {
                 AssetError::StaleGeometry {
