@@ -59,6 +59,7 @@ const EMBEDDED: &[Embedded] = embed! {
     "/web/src/webgl_scene.js" => "web/src/webgl_scene.js",
     "/web/src/wgsl.js" => "web/src/wgsl.js",
     "/web/src/three/HceGLTFPlugin.js" => "web/src/three/HceGLTFPlugin.js",
+    "/web/src/three/gpu_geometry.js" => "web/src/three/gpu_geometry.js",
     "/runtime/src/gpu/decode.wgsl" => "runtime/src/gpu/decode.wgsl",
     "/runtime/src/gpu/fill.wgsl" => "runtime/src/gpu/fill.wgsl",
     "/runtime/src/gpu/flat.wgsl" => "runtime/src/gpu/flat.wgsl",
