@@ -212,10 +212,36 @@ fn main() -> std::process::ExitCode {
     }
 }
 
+/// What `--help` prints.
+const USAGE: &str = "\
+usage: gen-samples [OUT_DIR]
+       gen-samples room --mesh MESH.obj [--triangles N] [--mesh ...] -o ROOM.glb [--name NAME]
+                        [--turn DEG] [--furnace]
+
+Writes teatime.glb, chesstime.glb and cornell-box.glb into OUT_DIR (default: samples/ of the
+repository), or with `room` a closed lit test room around one or more meshes.";
+
 fn run() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     if args.first().map(String::as_str) == Some("room") {
         return room(&args[1..]);
+    }
+    match args.first().map(String::as_str) {
+        Some("-h" | "--help") => {
+            println!("{USAGE}");
+            return Ok(());
+        }
+        // An option is not a folder name: `gen-samples --help` once made a folder `--help`.
+        Some(a) if a.starts_with('-') => {
+            return Err(usage_error(format!("unknown option {a}\n\n{USAGE}")));
+        }
+        _ => {}
+    }
+    if args.len() > 1 {
+        return Err(usage_error(format!(
+            "one output folder at most, got {}\n\n{USAGE}",
+            args.len()
+        )));
     }
     let out: PathBuf = match std::env::args_os().nth(1) {
         Some(dir) => dir.into(),
