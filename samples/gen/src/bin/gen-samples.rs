@@ -231,7 +231,7 @@ fn run() -> Result<()> {
             println!("{USAGE}");
             return Ok(());
         }
-        // An option is not a folder name: `gen-samples --help` once made a folder `--help`.
+        // An option is never a folder name: a mistyped flag must not write the samples into it.
         Some(a) if a.starts_with('-') => {
             return Err(usage_error(format!("unknown option {a}\n\n{USAGE}")));
         }
