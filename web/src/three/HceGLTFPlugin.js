@@ -133,7 +133,7 @@ export class HceGLTFPlugin {
       const prim = json.meshes[assoc.meshes].primitives[assoc.primitives];
       linked.push({ mesh, key, link, coarse: json.accessors[prim.indices ?? prim.attributes.POSITION].count / 3 });
     }
-    const renderer = this.kernels instanceof Kernels ? (this.options.renderer ?? RENDERERS.get(this.kernels) ?? null) : null;
+    const renderer = this.gpuRenderer();
     if (renderer !== null) this.attachGpu(renderer, linked, assets);
     else await this.attachRead(linked);
     for (const { mesh } of linked) {
@@ -145,6 +145,15 @@ export class HceGLTFPlugin {
         if (!mesh.geometry.attributes.normal) mesh.material.flatShading = true;
       }
     }
+  }
+
+  /**
+   * The WebGPURenderer the kernels' output is drawn into where it is (`options.renderer`, or
+   * the one {@link HceGLTFPlugin.runtime} made the kernels for); null on the CPU path.
+   * @private
+   */
+  gpuRenderer() {
+    return this.kernels instanceof Kernels ? (this.options.renderer ?? RENDERERS.get(this.kernels) ?? null) : null;
   }
 
   /** The level asked for `object` by a fixed `level` option. @param {import('../native.js').HceObject} object */
@@ -232,7 +241,7 @@ export class HceGLTFPlugin {
    * @param {number} viewportHeight in pixels
    */
   update(camera, viewportHeight) {
-    const renderer = this.kernels instanceof Kernels ? (this.options.renderer ?? RENDERERS.get(this.kernels) ?? null) : null;
+    const renderer = this.gpuRenderer();
     if (this.options.level !== 'auto' || renderer === null) return 0;
     camera.updateMatrixWorld();
     const eye = camera.getWorldPosition(new Vector3());
