@@ -1,17 +1,20 @@
-//! Batched flat refinement (`SceneOptions::flat_batch`, runtime/src/gpu/flat_batch.rs): the
-//! small flat objects that `GpuScene::refine_batch` refines whole are refined together, one
-//! dispatch per step for all of them, and must write exactly the bytes of each object refined
-//! alone with its own dispatches, at any mix of levels, with either colour reconstruction, as
-//! the levels change (the pooled outputs reused and grown) and beside objects refined in pieces,
-//! for both refinements (SPEC.md F.7.1, whose triangles do not depend on the level, and F.7.2).
+//! Batched refinement (`SceneOptions::batch`, runtime/src/gpu/batch.rs): the small objects that
+//! `GpuScene::refine_batch` refines whole are refined together, one dispatch per step for all
+//! the flat ones and one for all the multiresolution ones, and must write exactly the bytes of
+//! each object refined alone with its own dispatches, at any mix of levels, with either colour
+//! reconstruction, as the levels change (the pooled outputs reused and grown) and beside
+//! objects refined in pieces: flat objects with both refinements (SPEC.md F.7.1, whose
+//! triangles do not depend on the level, and F.7.2), multiresolution ones whose own refinement
+//! may build its patches with the other patch kernel.
 //!
 //! Runs on any adapter, Mesa lavapipe included. Without one the tests skip with a message,
 //! unless `HCE_REQUIRE_GPU=1`, which makes them fail.
 #![cfg(feature = "gpu")]
 
+use hce_format::ObjectKind;
 use hce_geometry::lighting::Reconstruction;
 use hce_runtime::asset::Asset;
-use hce_runtime::gpu::testing::{context_or_skip, small_flat_scene};
+use hce_runtime::gpu::testing::{context_or_skip, small_flat_scene, small_scene};
 use hce_runtime::gpu::{FlatRefinement, GpuContext, GpuScene, ObjectMesh, SceneOptions};
 
 /// A mesh's bytes, so that equal means bit-identical (and a NaN equals itself).
@@ -21,7 +24,9 @@ fn bytes(m: &ObjectMesh) -> Vec<u8> {
     out.extend_from_slice(bytemuck::cast_slice(&m.positions));
     out.extend_from_slice(bytemuck::cast_slice(&m.colours));
     out.extend_from_slice(bytemuck::cast_slice(&m.indices));
-    assert!(m.normals.is_none(), "flat objects have no vertex normals");
+    if let Some(normals) = &m.normals {
+        out.extend_from_slice(bytemuck::cast_slice(normals));
+    }
     out
 }
 
@@ -37,7 +42,7 @@ fn scene(
         asset,
         &SceneOptions {
             reconstruction,
-            flat_batch: batch,
+            batch,
             flat_refinement: flat,
             ..SceneOptions::default()
         },
@@ -45,7 +50,13 @@ fn scene(
     .unwrap()
 }
 
-const BOTH: [FlatRefinement; 2] = [FlatRefinement::Adaptive, FlatRefinement::Uniform];
+/// The scenes the tests batch: small flat objects with either refinement, and small
+/// multiresolution objects (whose refinement does not depend on the flat one).
+const SCENES: [(ObjectKind, FlatRefinement); 3] = [
+    (ObjectKind::Flat, FlatRefinement::Adaptive),
+    (ObjectKind::Flat, FlatRefinement::Uniform),
+    (ObjectKind::Multiresolution, FlatRefinement::Adaptive),
+];
 
 /// Every object of `reference` refined alone to `levels[i]` (one object per call: its own
 /// dispatches), read back.
@@ -63,12 +74,12 @@ fn a_batch_writes_the_bytes_of_each_object_refined_alone() {
     let Some(ctx) = context_or_skip("a_batch_writes_the_bytes_of_each_object_refined_alone") else {
         return;
     };
-    let asset = small_flat_scene(14, 5).unwrap();
-    let n = asset.objects.len();
-    let runs = BOTH.into_iter().flat_map(|flat| {
-        [Reconstruction::Smooth, Reconstruction::NearestNormal].map(|r| (flat, r))
+    let runs = SCENES.into_iter().flat_map(|scene| {
+        [Reconstruction::Smooth, Reconstruction::NearestNormal].map(|r| (scene, r))
     });
-    for (flat, reconstruction) in runs {
+    for ((kind, flat), reconstruction) in runs {
+        let asset = small_scene(14, 5, kind).unwrap();
+        let n = asset.objects.len();
         let mut batched = scene(&ctx, &asset, reconstruction, true, flat);
         let mut reference = scene(&ctx, &asset, reconstruction, false, flat);
         // Levels 0 to 3 mixed, then each object to another (reusing the pooled outputs), then
@@ -100,7 +111,7 @@ fn a_batch_writes_the_bytes_of_each_object_refined_alone() {
             let expected: Vec<usize> = (0..n).filter(|&i| !(pieces && i == 0)).collect();
             assert_eq!(
                 together, expected,
-                "{flat:?} {reconstruction:?}, round {round}"
+                "{kind:?} {flat:?} {reconstruction:?}, round {round}"
             );
             assert_eq!(reports.len(), n);
             assert!(reports
@@ -119,8 +130,8 @@ fn a_batch_writes_the_bytes_of_each_object_refined_alone() {
                 assert_eq!(batched.level(i), Some(levels[i]));
                 assert!(
                     got == *want,
-                    "{flat:?} {reconstruction:?}, round {round}: object {i} at level {} differs from its \
-                     refinement alone",
+                    "{kind:?} {flat:?} {reconstruction:?}, round {round}: object {i} at level {} \
+                     differs from its refinement alone",
                     levels[i]
                 );
             }
@@ -138,17 +149,24 @@ fn several_batches_in_one_call_write_the_bytes_of_each_object_alone() {
     else {
         return;
     };
-    let asset = small_flat_scene(12, 3).unwrap();
-    let n = asset.objects.len();
-    let levels: Vec<u32> = (0..n).map(|i| 2 + (i % 2) as u32).collect();
-    for flat in BOTH {
+    for (kind, flat) in SCENES {
+        let asset = small_scene(12, 3, kind).unwrap();
+        let n = asset.objects.len();
+        let levels: Vec<u32> = (0..n).map(|i| 2 + (i % 2) as u32).collect();
         let mut reference = scene(&ctx, &asset, Reconstruction::Smooth, false, flat);
         // A batch of a third of the scene, at least its largest object.
         let fine: Vec<u64> = (0..n)
             .map(|i| reference.triangles_at(i, levels[i]))
             .collect();
         let batch_fine = (fine.iter().sum::<u64>() / 3).max(*fine.iter().max().unwrap());
-        several_batches(&ctx, &asset, &mut reference, &levels, flat, batch_fine);
+        several_batches(
+            &ctx,
+            &asset,
+            &mut reference,
+            &levels,
+            (kind, flat),
+            batch_fine,
+        );
     }
 }
 
@@ -157,12 +175,12 @@ fn several_batches(
     asset: &Asset,
     reference: &mut GpuScene,
     levels: &[u32],
-    flat: FlatRefinement,
+    (kind, flat): (ObjectKind, FlatRefinement),
     batch_fine: u64,
 ) {
     let n = levels.len();
     let options = SceneOptions {
-        flat_batch_fine: batch_fine,
+        batch_fine,
         flat_refinement: flat,
         ..SceneOptions::default()
     };
@@ -179,7 +197,7 @@ fn several_batches(
     let total: u64 = fine.iter().sum();
     assert!(
         total > 2 * batch_fine,
-        "{flat:?}: the scene ({total} fine triangles) must take three batches or more"
+        "{kind:?} {flat:?}: the scene ({total} fine triangles) must take three batches or more"
     );
     let reports = batched.refine_batch(ctx, &work, false).unwrap();
     assert_eq!(reports.len(), n);
@@ -187,14 +205,14 @@ fn several_batches(
     let together = reports.iter().filter(|r| r.batched).count();
     assert!(
         together >= n - 1,
-        "only {together} of {n} objects went in batches"
+        "{kind:?}: only {together} of {n} objects went in batches"
     );
     let want = alone(ctx, reference, levels);
     for (i, want) in want.iter().enumerate() {
         let got = bytes(&batched.read_back(ctx, i).unwrap());
         assert!(
             got == *want,
-            "{flat:?}: object {i} at level {} differs from its refinement alone",
+            "{kind:?} {flat:?}: object {i} at level {} differs from its refinement alone",
             levels[i]
         );
     }
@@ -230,34 +248,39 @@ fn objects_too_large_for_a_batch_keep_their_own_dispatches() {
     else {
         return;
     };
-    // At level 5 of the uniform refinement an octahedron is 8,192 fine triangles (batched), a
-    // grid of 8 to 50 triangles 8,192 to 51,200: the larger ones exceed 16,384 and are refined
-    // alone.
-    let asset = small_flat_scene(9, 3).unwrap();
-    let n = asset.objects.len();
-    let levels = vec![5; n];
-    let uniform = FlatRefinement::Uniform;
-    let mut batched = scene(&ctx, &asset, Reconstruction::Smooth, true, uniform);
-    let mut reference = scene(&ctx, &asset, Reconstruction::Smooth, false, uniform);
-    let work: Vec<(usize, u64)> = (0..n)
-        .map(|i| {
-            assert!(batched.begin_refine(&ctx, i, 5).unwrap());
-            (i, u64::MAX)
-        })
-        .collect();
-    let reports = batched.refine_batch(&ctx, &work, false).unwrap();
-    assert_eq!(reports.len(), n);
-    let small = |i: usize| batched.triangles_at(i, 5) <= 16_384;
-    for r in &reports {
-        assert!(r.finished);
-        assert_eq!(r.batched, small(r.object), "object {}", r.object);
-    }
-    let together = (0..n).filter(|&i| small(i)).count();
-    assert!(together >= 2 && together < n, "{together} of {n} batched");
-    for (i, want) in alone(&ctx, &mut reference, &levels).iter().enumerate() {
+    // At level 5 of the uniform refinement and of Loop subdivision an octahedron is 8,192 fine
+    // triangles (batched), a grid of 8 to 50 triangles 8,192 to 51,200: the larger ones exceed
+    // 16,384 and are refined alone.
+    for kind in [ObjectKind::Flat, ObjectKind::Multiresolution] {
+        let asset = small_scene(9, 3, kind).unwrap();
+        let n = asset.objects.len();
+        let levels = vec![5; n];
+        let uniform = FlatRefinement::Uniform;
+        let mut batched = scene(&ctx, &asset, Reconstruction::Smooth, true, uniform);
+        let mut reference = scene(&ctx, &asset, Reconstruction::Smooth, false, uniform);
+        let work: Vec<(usize, u64)> = (0..n)
+            .map(|i| {
+                assert!(batched.begin_refine(&ctx, i, 5).unwrap());
+                (i, u64::MAX)
+            })
+            .collect();
+        let reports = batched.refine_batch(&ctx, &work, false).unwrap();
+        assert_eq!(reports.len(), n);
+        let small = |i: usize| batched.triangles_at(i, 5) <= 16_384;
+        for r in &reports {
+            assert!(r.finished);
+            assert_eq!(r.batched, small(r.object), "{kind:?}: object {}", r.object);
+        }
+        let together = (0..n).filter(|&i| small(i)).count();
         assert!(
-            bytes(&batched.read_back(&ctx, i).unwrap()) == *want,
-            "object {i}"
+            together >= 2 && together < n,
+            "{kind:?}: {together} of {n} batched"
         );
+        for (i, want) in alone(&ctx, &mut reference, &levels).iter().enumerate() {
+            assert!(
+                bytes(&batched.read_back(&ctx, i).unwrap()) == *want,
+                "{kind:?}: object {i}"
+            );
+        }
     }
 }

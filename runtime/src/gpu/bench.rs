@@ -16,7 +16,9 @@ use crate::asset::Asset;
 use hce_geometry::lighting::Reconstruction;
 use hce_geometry::refine::FlatRefinement;
 
-pub use super::inputs::{grid, octahedron, random_object, small_flat_scene, RandomTrees, SplitMix};
+pub use super::inputs::{
+    grid, octahedron, random_object, small_flat_scene, small_scene, RandomTrees, SplitMix,
+};
 
 /// Where a time came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -80,7 +80,7 @@ const SECTIONS: usize = 14;
 
 /// The compiled pipelines of the three steps.
 pub struct FlatKernel {
-    /// The module, whose batched entry points [`FlatPool`](super::flat_batch::FlatPool)
+    /// The module, whose batched entry points [`Pool`](super::batch::Pool)
     /// compiles when a scene has objects to batch.
     module: wgpu::ShaderModule,
     positions: wgpu::ComputePipeline,

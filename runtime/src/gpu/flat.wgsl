@@ -23,6 +23,7 @@
 // #import hce_light
 // #import hce_lattice
 // #import hce_gather
+// #import hce_batch
 
 struct Params {
     level: u32,
@@ -72,8 +73,8 @@ struct Params {
 }
 
 // The parameters every function reads: the uniform's, copied at the start of the per-object
-// entry points; the object's entry of the batch table in the batched ones (below). The other
-// bindings are hce_bindings.wgsl's.
+// entry points; the object's entry of the batch table in the batched ones (below,
+// hce_batch.wgsl). The other bindings are hce_bindings.wgsl's.
 @group(0) @binding(0) var<uniform> params_in: Params;
 var<private> params: Params;
 
@@ -346,56 +347,10 @@ fn adaptive_colour(v: u32) {
     out_colours[lattice_out_base + v] = vec4<f32>(acc_mean(acc), 1.0);
 }
 
-// Batched refinement (runtime/src/gpu/flat_batch.rs): the three steps of many objects in one
-// dispatch each, over buffers that pool the objects' tables (bindings 1 to 6 and 11: each
-// object's tables copied whole, one after another) and their outputs (bindings 7 to 10: each
-// object's range, one after another, copied out to its own buffers afterwards). Per object of
-// the batch, `topo` holds, from the offsets in `batch`:
-//   first_vertices[k], first_faces[k]   its first output vertex and first fine triangle in the
-//                                       pooled outputs (ascending: the objects' ranges in order)
-//   entries[k]: FLAT_ENTRY_WORDS words  its first coarse vertex, first record, first bit,
-//                                       first colour, first normal and first word of the
-//                                       lighting table in the pooled buffers (the first
-//                                       FLAT_ENTRY_BASES words), then its Params (the section
-//                                       offsets already counted in the pool).
-// An invocation finds its object by binary search over its step's first items, sets the bases
-// of hce_lattice.wgsl, hce_gather.wgsl, hce_tree.wgsl and hce_light.wgsl to the object's, and
-// runs the step on its item within the object: the same operations on the same values as the
-// object's own dispatch, so the same bits.
-struct Batch {
-    count: u32,
-    first_vertices: u32,
-    first_faces: u32,
-    entries: u32,
-    vertex_total: u32,
-    fine_total: u32,
-}
-
-@group(0) @binding(14) var<uniform> batch: Batch;
-
-// The object k (of batch.count) whose items first[k] .. first[k + 1] hold item g (< the total).
-fn batch_object(first: u32, g: u32) -> u32 {
-    var lo = 0u;
-    var hi = batch.count;
-    while (hi - lo > 1u) {
-        let mid = (lo + hi) / 2u;
-        if (topo[first + mid] <= g) {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    return lo;
-}
-
+// Batched refinement (hce_batch.wgsl): the three steps of many flat objects in one dispatch
+// each.
 fn batch_enter(k: u32) {
-    let e = batch.entries + FLAT_ENTRY_WORDS * k;
-    lattice_coarse_base = topo[e];
-    hce_tree_base = vec4<u32>(topo[e + 1u], topo[e + 2u], topo[e + 3u], topo[e + 4u]);
-    hce_light_base = topo[e + 5u];
-    lattice_out_base = topo[batch.first_vertices + k];
-    gather_face_base = topo[batch.first_faces + k];
-    let p = e + FLAT_ENTRY_BASES;
+    let p = batch_bases(k, batch.entries + FLAT_ENTRY_WORDS * k);
     params = Params(topo[p], topo[p + 1u], topo[p + 2u], topo[p + 3u], topo[p + 4u],
                     topo[p + 5u], topo[p + 6u], topo[p + 7u], topo[p + 8u], topo[p + 9u],
                     topo[p + 10u], topo[p + 11u], topo[p + 12u], topo[p + 13u], topo[p + 14u],

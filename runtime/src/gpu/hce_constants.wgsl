@@ -25,7 +25,9 @@ const HCE_EVAL_BITS: u32 = 0x10u;
 const HCE_TREE_BITS: u32 = 0xcu;
 // a leaf's node word; lighting.rs LEAF
 const HCE_LEAF: u32 = 0x80000000u;
-// words of a batch entry before the object's Params; flat_batch.rs ENTRY_BASES
-const FLAT_ENTRY_BASES: u32 = 0x6u;
-// words of a batch entry; flat_batch.rs ENTRY_WORDS
+// words of a batch entry before the object's Params; batch.rs ENTRY_BASES
+const BATCH_ENTRY_BASES: u32 = 0x6u;
+// words of a flat batch entry; batch.rs FLAT_ENTRY_WORDS
 const FLAT_ENTRY_WORDS: u32 = 0x22u;
+// words of a Loop batch entry; batch.rs LOOP_ENTRY_WORDS
+const LOOP_ENTRY_WORDS: u32 = 0x29u;

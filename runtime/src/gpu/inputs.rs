@@ -170,10 +170,20 @@ pub fn grid(nx: u32, ny: u32) -> (Vec<f32>, Vec<u32>) {
 }
 
 /// A scene of `count` small flat objects, as architecture and props give: bumpy grids of 2×2
-/// to 5×5 quads (8 to 50 triangles) and octahedra (every third object) side by side, each with random trees of depth 1 to 3 (so
-/// their levels differ), one instance each, in a `.hce` container loaded from memory. The same
-/// `seed` gives the same scene.
+/// to 5×5 quads (8 to 50 triangles) and octahedra (every third object) side by side, each with
+/// random trees of depth 1 to 3 (so their levels differ), one instance each, in a `.hce`
+/// container loaded from memory. The same `seed` gives the same scene.
 pub fn small_flat_scene(count: usize, seed: u64) -> Result<crate::asset::Asset, super::GpuError> {
+    small_scene(count, seed, hce_format::ObjectKind::Flat)
+}
+
+/// [`small_flat_scene`] with objects of `kind`: multiresolution objects have up to four
+/// representative normals per triangle besides the geometric one.
+pub fn small_scene(
+    count: usize,
+    seed: u64,
+    kind: hce_format::ObjectKind,
+) -> Result<crate::asset::Asset, super::GpuError> {
     use crate::asset::{Asset, AssetFormat, OpenOptions};
     let mut rng = SplitMix(seed);
     let objects = (0..count)
@@ -196,7 +206,10 @@ pub fn small_flat_scene(count: usize, seed: u64) -> Result<crate::asset::Asset, 
             // Flat objects have one normal per triangle (SPEC.md).
             let shape = RandomTrees {
                 max_depth: 1 + rng.below(3),
-                max_extra_normals: 0,
+                max_extra_normals: match kind {
+                    hce_format::ObjectKind::Flat => 0,
+                    hce_format::ObjectKind::Multiresolution => 4,
+                },
                 ..RandomTrees::default()
             };
             // The container carries the full control mesh (SPEC.md A.5), flat objects too.
@@ -222,6 +235,7 @@ pub fn small_flat_scene(count: usize, seed: u64) -> Result<crate::asset::Asset, 
                 rng.next_u64(),
             );
             object.mesh = mesh;
+            object.kind = kind;
             object.geometry_hash = hce_format::geometry_hash(
                 (0..object.mesh.triangle_count())
                     .flat_map(|t| object.mesh.triangle(t))
@@ -232,7 +246,7 @@ pub fn small_flat_scene(count: usize, seed: u64) -> Result<crate::asset::Asset, 
         .collect::<Result<Vec<_>, super::GpuError>>()?;
     let container = hce_format::Container {
         metadata: hce_format::Metadata {
-            generator: "hce-runtime small_flat_scene".into(),
+            generator: "hce-runtime small_scene".into(),
             ..Default::default()
         },
         objects,
@@ -240,7 +254,7 @@ pub fn small_flat_scene(count: usize, seed: u64) -> Result<crate::asset::Asset, 
     let bytes = hce_format::write(&container)
         .map_err(|e| super::GpuError::InvalidParams(format!("a generated scene: {e}")))?;
     Asset::from_bytes(
-        std::path::Path::new("small flat scene.hce"),
+        std::path::Path::new("small scene.hce"),
         AssetFormat::Hce,
         &bytes,
         |_| Err("a container has no external buffers".into()),

@@ -1,8 +1,8 @@
 //! A refinement as a list of steps whose items can be dispatched in pieces: the one way the Loop
 //! and flat kernels record their work, whether all of it at once ([`LoopKernel::refine_into`],
 //! [`FlatKernel::refine_into`]) or a piece per frame ([`GpuScene::refine_batch`]). The one
-//! exception: [`GpuScene::refine_batch`] records the whole refinements of many small flat
-//! objects together (`flat_batch.rs`), with the parameters their jobs hold, and marks the jobs
+//! exception: [`GpuScene::refine_batch`] records the whole refinements of many small
+//! objects together (`batch.rs`), with the parameters their jobs hold, and marks the jobs
 //! recorded.
 //!
 //! Each step of a kernel is a pure gather or an owned write over its items (coarse triangles,
@@ -190,7 +190,7 @@ impl RefineJob {
     }
 
     /// Marks the whole refinement as recorded by someone else, who wrote the same outputs (the
-    /// batched flat path, `flat_batch.rs`); returns its work.
+    /// batched path, `batch.rs`); returns its work.
     pub(super) fn recorded_elsewhere(&mut self) -> u64 {
         let work = self.work_left();
         self.step = self.steps.len();

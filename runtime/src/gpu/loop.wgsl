@@ -34,6 +34,7 @@
 // #import hce_light
 // #import hce_lattice
 // #import hce_gather
+// #import hce_batch
 
 struct Params {
     level: u32,
@@ -91,8 +92,11 @@ struct Params {
 // file's flags (RULE_CREASE, RULE_CORNER, SPOKE_SHARP, VERTEX_BOUNDARY) come from
 // hce_constants.wgsl, generated from the Rust constants.
 
-// The kernel's uniform; the other bindings are hce_bindings.wgsl's.
-@group(0) @binding(0) var<uniform> params: Params;
+// The parameters every function reads: the kernel's uniform, copied at the start of the
+// per-object entry points (patch_wg_main too); the object's entry of the batch table in the
+// batched ones (below, hce_batch.wgsl). The other bindings are hce_bindings.wgsl's.
+@group(0) @binding(0) var<uniform> params_in: Params;
+var<private> params: Params;
 
 // ---------------------------------------------------------------------------------------------
 // The Loop rules, in the CPU's order of arithmetic.
@@ -376,7 +380,8 @@ fn grid_neighbours() -> array<vec2<i32>, 6> {
                                vec2<i32>(-1, 0), vec2<i32>(0, -1), vec2<i32>(1, -1));
 }
 
-fn write_vertex(index: u32, p: vec3<f32>, nrm: vec3<f32>) {
+fn write_vertex(i: u32, p: vec3<f32>, nrm: vec3<f32>) {
+    let index = lattice_out_base + i;
     out_positions[3u * index] = p.x;
     out_positions[3u * index + 1u] = p.y;
     out_positions[3u * index + 2u] = p.z;
@@ -390,77 +395,84 @@ fn write_vertex(index: u32, p: vec3<f32>, nrm: vec3<f32>) {
 @compute @workgroup_size(64)
 fn patch_main(@builtin(global_invocation_id) gid: vec3<u32>,
               @builtin(num_workgroups) groups: vec3<u32>) {
+    params = params_in;
     let slot = linear_id(gid, groups);
     if (slot >= params.slots) {
         return;
     }
     slot_id = slot;
+    let t_end = min(params.triangle_count, params.range_end);
+    for (var t = params.range_first + slot; t < t_end; t += params.slots) {
+        loop_patch(t);
+    }
+}
+
+// Refines coarse triangle t's patch in this invocation's scratch slot (`slot_id`, of
+// `params.slots`) and writes the vertices it owns.
+fn loop_patch(t: u32) {
     let ring_floats = 9u * params.ring_cap;
     let sq_a = 0u;
     let sq_b = params.square_floats;
     let rg_a = 2u * params.square_floats;
     let rg_b = rg_a + ring_floats;
     let mm = i32(params.m);
-    let t_end = min(params.triangle_count, params.range_end);
-    for (var t = params.range_first + slot; t < t_end; t += params.slots) {
-        var cs = array<Corner, 3>(load_corner(t, 0u), load_corner(t, 1u), load_corner(t, 2u));
-        let flags = topo[params.tri_flags_off + t];
-        // Level 0: the three corners, their rings and the one opposite vertex per band.
-        for (var c = 0u; c < 3u; c++) {
-            let lc = corner_lattice(1, c);
-            sq_set(sq_a, 1, lc.x, lc.y, coarse_position(corner(t, c)));
-            for (var s = 0u; s < cs[c].n; s++) {
-                ring_set(rg_a, c * params.ring_cap + s, coarse_position(topo[params.ring_off + cs[c].off + s]));
-            }
+    var cs = array<Corner, 3>(load_corner(t, 0u), load_corner(t, 1u), load_corner(t, 2u));
+    let flags = topo[params.tri_flags_off + t];
+    // Level 0: the three corners, their rings and the one opposite vertex per band.
+    for (var c = 0u; c < 3u; c++) {
+        let lc = corner_lattice(1, c);
+        sq_set(sq_a, 1, lc.x, lc.y, coarse_position(corner(t, c)));
+        for (var s = 0u; s < cs[c].n; s++) {
+            ring_set(rg_a, c * params.ring_cap + s, coarse_position(topo[params.ring_off + cs[c].off + s]));
         }
-        for (var e = 0u; e < 3u; e++) {
-            if ((flags & (INTERIOR << e)) != 0u) {
-                let cr = cs[e];
-                let l = band_lattice(1, e, 0);
-                sq_set(sq_a, 1, l.x, l.y, ring_at(rg_a, e * params.ring_cap + (cr.k + cr.n - 1u) % cr.n));
-            }
+    }
+    for (var e = 0u; e < 3u; e++) {
+        if ((flags & (INTERIOR << e)) != 0u) {
+            let cr = cs[e];
+            let l = band_lattice(1, e, 0);
+            sq_set(sq_a, 1, l.x, l.y, ring_at(rg_a, e * params.ring_cap + (cr.k + cr.n - 1u) % cr.n));
         }
-        // Ping-pong between the two squares and ring sets.
-        var sq = sq_a;
-        var nsq = sq_b;
-        var rg = rg_a;
-        var nrg = rg_b;
-        var n = 1;
-        while (n < mm) {
-            refine_step(sq, nsq, rg, nrg, cs, flags, n);
-            let ts = sq;
-            sq = nsq;
-            nsq = ts;
-            let tr = rg;
-            rg = nrg;
-            nrg = tr;
-            n *= 2;
+    }
+    // Ping-pong between the two squares and ring sets.
+    var sq = sq_a;
+    var nsq = sq_b;
+    var rg = rg_a;
+    var nrg = rg_b;
+    var n = 1;
+    while (n < mm) {
+        refine_step(sq, nsq, rg, nrg, cs, flags, n);
+        let ts = sq;
+        sq = nsq;
+        nsq = ts;
+        let tr = rg;
+        rg = nrg;
+        nrg = tr;
+        n *= 2;
+    }
+    // Owned output vertices, numbered as subdivide.rs numbers them.
+    for (var c = 0u; c < 3u; c++) {
+        if ((flags & (OWNS_VERTEX << c)) != 0u) {
+            let lc = corner_lattice(mm, c);
+            write_vertex(corner(t, c), sq_at(sq, mm, lc.x, lc.y),
+                         normalize_or_z(corner_normal(sq, rg, cs[c], c * params.ring_cap, mm, c)));
         }
-        // Owned output vertices, numbered as subdivide.rs numbers them.
-        for (var c = 0u; c < 3u; c++) {
-            if ((flags & (OWNS_VERTEX << c)) != 0u) {
-                let lc = corner_lattice(mm, c);
-                write_vertex(corner(t, c), sq_at(sq, mm, lc.x, lc.y),
-                             normalize_or_z(corner_normal(sq, rg, cs[c], c * params.ring_cap, mm, c)));
-            }
+    }
+    for (var e = 0u; e < 3u; e++) {
+        if ((flags & (OWNS_EDGE << e)) == 0u) {
+            continue;
         }
-        for (var e = 0u; e < 3u; e++) {
-            if ((flags & (OWNS_EDGE << e)) == 0u) {
-                continue;
-            }
-            let ebase = params.coarse_vertices + topo[params.edges_off + 3u * t + e] * params.per_edge;
-            for (var k = 1; k < mm; k++) {
-                let l = edge_lattice(mm, e, k);
-                write_vertex(ebase + u32(k - 1), sq_at(sq, mm, l.x, l.y),
-                             normalize_or_z(grid_normal(sq, flags, mm, l.x, l.y)));
-            }
+        let ebase = params.coarse_vertices + topo[params.edges_off + 3u * t + e] * params.per_edge;
+        for (var k = 1; k < mm; k++) {
+            let l = edge_lattice(mm, e, k);
+            write_vertex(ebase + u32(k - 1), sq_at(sq, mm, l.x, l.y),
+                         normalize_or_z(grid_normal(sq, flags, mm, l.x, l.y)));
         }
-        var q = params.coarse_vertices + params.edge_count * params.per_edge + t * params.per_tri;
-        for (var j = 1; j < mm; j++) {
-            for (var i = 1; i < mm - j; i++) {
-                write_vertex(q, sq_at(sq, mm, i, j), normalize_or_z(grid_normal(sq, flags, mm, i, j)));
-                q++;
-            }
+    }
+    var q = params.coarse_vertices + params.edge_count * params.per_edge + t * params.per_tri;
+    for (var j = 1; j < mm; j++) {
+        for (var i = 1; i < mm - j; i++) {
+            write_vertex(q, sq_at(sq, mm, i, j), normalize_or_z(grid_normal(sq, flags, mm, i, j)));
+            q++;
         }
     }
 }
@@ -505,10 +517,15 @@ fn lattice_split_copies() -> u32 {
 @compute @workgroup_size(64)
 fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
               @builtin(num_workgroups) groups: vec3<u32>) {
+    params = params_in;
     let g = params.range_first + linear_id(gid, groups);
     if (g >= min(params.fine_total, params.range_end)) {
         return;
     }
+    loop_face(g);
+}
+
+fn loop_face(g: u32) {
     // 4^L fine triangles per coarse one: a shift and a mask, not a division.
     let t = g >> (2u * params.level);
     let path = g & ((1u << (2u * params.level)) - 1u);
@@ -518,9 +535,10 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
     let i2 = vertex_index(t, cs[2].x, cs[2].y);
     // Drawn with the split vertices; measured with the F.5 ones, whose positions step 1 wrote
     // (the copies get theirs in step 3).
-    out_indices[3u * g] = split_index(t, cs[0].x, cs[0].y, i0);
-    out_indices[3u * g + 1u] = split_index(t, cs[1].x, cs[1].y, i1);
-    out_indices[3u * g + 2u] = split_index(t, cs[2].x, cs[2].y, i2);
+    let o = 3u * (gather_face_base + g);
+    out_indices[o] = split_index(t, cs[0].x, cs[0].y, i0);
+    out_indices[o + 1u] = split_index(t, cs[1].x, cs[1].y, i1);
+    out_indices[o + 2u] = split_index(t, cs[2].x, cs[2].y, i2);
 
     let p0 = out_position(i0);
     let x = cross3(out_position(i1) - p0, out_position(i2) - p0);
@@ -529,7 +547,7 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
     if (params.smooth_light == 0u) {
         rgb = hce_nearest_colour(t, params.level, path, x);
     }
-    out_faces[g] = vec4<f32>(rgb, 0.5 * len);
+    out_faces[gather_face_base + g] = vec4<f32>(rgb, 0.5 * len);
 }
 
 // Step 3 (one invocation per output vertex, copies of the split included): a copy takes its
@@ -539,18 +557,26 @@ fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
 @compute @workgroup_size(64)
 fn colours_main(@builtin(global_invocation_id) gid: vec3<u32>,
                 @builtin(num_workgroups) groups: vec3<u32>) {
+    params = params_in;
     let v = params.range_first + linear_id(gid, groups);
     if (v >= min(params.vertex_total, params.range_end)) {
         return;
     }
+    loop_colour(v);
+}
+
+fn loop_colour(v: u32) {
     let slot = vertex_slot(v);
+    // Where vertex v is written in the output buffers (past the first vertices of the objects
+    // before it in a batch).
+    let o = 3u * (lattice_out_base + v);
     if (v >= params.split_base) {
         let p = out_position(slot_source(slot));
-        out_positions[3u * v] = p.x;
-        out_positions[3u * v + 1u] = p.y;
-        out_positions[3u * v + 2u] = p.z;
+        out_positions[o] = p.x;
+        out_positions[o + 1u] = p.y;
+        out_positions[o + 2u] = p.z;
     }
-    var normal = vec3<f32>(out_normals[3u * v], out_normals[3u * v + 1u], out_normals[3u * v + 2u]);
+    var normal = vec3<f32>(out_normals[o], out_normals[o + 1u], out_normals[o + 2u]);
     var split = 0u;
     if (slot.kind == SLOT_CORNER) {
         split = topo[params.slot_split_off + slot.index];
@@ -559,12 +585,68 @@ fn colours_main(@builtin(global_invocation_id) gid: vec3<u32>,
     }
     if (split != 0u) {
         normal = normalize_or_z(region_normal(slot));
-        out_normals[3u * v] = normal.x;
-        out_normals[3u * v + 1u] = normal.y;
-        out_normals[3u * v + 2u] = normal.z;
+        out_normals[o] = normal.x;
+        out_normals[o + 1u] = normal.y;
+        out_normals[o + 2u] = normal.z;
     }
     if (params.smooth_light == 0u) {
         normal = vec3<f32>(0.0);
     }
-    out_colours[v] = vec4<f32>(slot_colour(slot, normal), 1.0);
+    out_colours[lattice_out_base + v] = vec4<f32>(slot_colour(slot, normal), 1.0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Batched refinement (hce_batch.wgsl, runtime/src/gpu/batch.rs): the three steps of many small
+// Loop objects in one dispatch each. Step 1 runs the scratch patch kernel, whose output the
+// workgroup kernel matches bit for bit, with one slot per invocation over all the batch's
+// coarse triangles: float k of slot s is scratch[k * batch.slots + s], whatever the object's
+// level.
+
+fn batch_enter(k: u32) {
+    let p = batch_bases(k, batch.entries + LOOP_ENTRY_WORDS * k);
+    params = Params(topo[p], topo[p + 1u], topo[p + 2u], topo[p + 3u], topo[p + 4u], topo[p + 5u],
+                    topo[p + 6u], topo[p + 7u], topo[p + 8u], topo[p + 9u], topo[p + 10u],
+                    topo[p + 11u], topo[p + 12u], topo[p + 13u], topo[p + 14u], topo[p + 15u],
+                    topo[p + 16u], topo[p + 17u], topo[p + 18u], topo[p + 19u], topo[p + 20u],
+                    topo[p + 21u], topo[p + 22u], topo[p + 23u], topo[p + 24u], topo[p + 25u],
+                    topo[p + 26u], topo[p + 27u], topo[p + 28u], topo[p + 29u], topo[p + 30u],
+                    topo[p + 31u], topo[p + 32u], topo[p + 33u], topo[p + 34u]);
+}
+
+@compute @workgroup_size(64)
+fn patch_batch_main(@builtin(global_invocation_id) gid: vec3<u32>,
+                    @builtin(num_workgroups) groups: vec3<u32>) {
+    let slot = linear_id(gid, groups);
+    if (slot >= batch.slots) {
+        return;
+    }
+    slot_id = slot;
+    for (var g = slot; g < batch.triangle_total; g += batch.slots) {
+        let k = batch_object(batch.first_triangles, g);
+        batch_enter(k);
+        params.slots = batch.slots;
+        loop_patch(g - topo[batch.first_triangles + k]);
+    }
+}
+
+@compute @workgroup_size(64)
+fn faces_batch_main(@builtin(global_invocation_id) gid: vec3<u32>,
+                    @builtin(num_workgroups) groups: vec3<u32>) {
+    let g = linear_id(gid, groups);
+    if (g >= batch.fine_total) {
+        return;
+    }
+    batch_enter(batch_object(batch.first_faces, g));
+    loop_face(g - gather_face_base);
+}
+
+@compute @workgroup_size(64)
+fn colours_batch_main(@builtin(global_invocation_id) gid: vec3<u32>,
+                      @builtin(num_workgroups) groups: vec3<u32>) {
+    let g = linear_id(gid, groups);
+    if (g >= batch.vertex_total) {
+        return;
+    }
+    batch_enter(batch_object(batch.first_vertices, g));
+    loop_colour(g - lattice_out_base);
 }

@@ -59,7 +59,7 @@ use hce_geometry::tables::validate_tables;
 
 /// Upper bound of the scratch buffer (bytes): the number of coarse triangles refined at once is
 /// this divided by one triangle's patch size (or the device's storage-binding limit, if lower).
-const SCRATCH_BUDGET: u64 = 256 << 20;
+pub(super) const SCRATCH_BUDGET: u64 = 256 << 20;
 
 /// The kernel's uniform block (`Params` in `loop.wgsl`).
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
@@ -208,6 +208,9 @@ enum PatchPlan {
 /// first use, one per level and triangle shape.
 pub struct LoopKernel {
     scheme: PatchScheme,
+    /// The module, whose batched entry points [`Pool`](super::batch::Pool) compiles when a
+    /// scene has objects to batch.
+    module: wgpu::ShaderModule,
     patch: wgpu::ComputePipeline,
     faces: wgpu::ComputePipeline,
     colours: wgpu::ComputePipeline,
@@ -224,15 +227,15 @@ pub struct LoopObject {
     split_copies: u32,
     split_edges: u32,
     /// Largest valence (ring length) of the control mesh: the ring capacity of a scratch slot.
-    max_valence: u32,
+    pub(super) max_valence: u32,
     /// Largest sum of the valences of a triangle's three corners, rounded up to a multiple of 8
     /// (fewer kernel variants): the ring capacity of a workgroup patch.
     ring_points: u32,
-    coarse_positions: wgpu::Buffer,
-    topo: wgpu::Buffer,
+    pub(super) coarse_positions: wgpu::Buffer,
+    pub(super) topo: wgpu::Buffer,
     offsets: [u32; SECTIONS],
     /// The baked lighting and how vertex colours are reconstructed from it.
-    lighting: LightingBuffers,
+    pub(super) lighting: LightingBuffers,
 }
 
 /// Output buffers of a Loop refinement: [`RefinedOutput`] with normals, in the numbering of
@@ -242,7 +245,7 @@ pub struct LoopObject {
 pub type LoopOutput = RefinedOutput;
 
 /// Floats of one scratch square at `level` and of one slot (two squares, two ring sets).
-fn slot_floats(level: u32, max_valence: u32) -> (u64, u64) {
+pub(super) fn slot_floats(level: u32, max_valence: u32) -> (u64, u64) {
     let w = (1u64 << level) + 3;
     let square = 3 * w * w;
     (square, 2 * square + 2 * 9 * u64::from(max_valence))
@@ -261,8 +264,14 @@ impl LoopKernel {
             patch: compute_pipeline(ctx, &module, "patch_main"),
             faces: compute_pipeline(ctx, &module, "faces_main"),
             colours: compute_pipeline(ctx, &module, "colours_main"),
+            module,
             workgroup: Default::default(),
         }
+    }
+
+    /// The pipeline of one of the module's entry points (the batched ones included).
+    pub(super) fn pipeline(&self, ctx: &GpuContext, entry: &str) -> wgpu::ComputePipeline {
+        compute_pipeline(ctx, &self.module, entry)
     }
 
     /// The scheme step 1 uses for `object` at `level` on this device ([`PatchScheme::Workgroup`]

@@ -25,6 +25,7 @@
 // The modules are private: what a viewer, `hce render` and `hce reference` call is re-exported
 // below, one flat list. Test and benchmark support sit behind the `testing` and `bench`
 // features.
+mod batch;
 #[cfg(feature = "bench")]
 pub mod bench;
 mod bindings;
@@ -33,7 +34,6 @@ mod context;
 mod decode;
 mod draw;
 mod flat;
-mod flat_batch;
 mod framing;
 #[cfg(any(feature = "testing", feature = "bench"))]
 mod inputs;
@@ -48,6 +48,7 @@ pub mod testing;
 mod util;
 mod wgsl;
 
+pub use batch::BATCH_MAX_FINE;
 pub use context::{AdapterDescription, AdapterKind, ContextOptions, GpuContext};
 pub use draw::{
     colour_pass, float_texture_entry, read_texture, render_pipeline, storage_entry, target_texture,
@@ -57,7 +58,6 @@ pub use flat::{
     refine_flat, refine_flat_adaptive, refine_flat_with, FlatKernel, FlatObject, FlatOutput,
     KernelTiming,
 };
-pub use flat_batch::BATCH_MAX_FINE;
 pub use framing::{auto_scene_camera, Placement};
 pub use hce_geometry::flat::RefinedMesh;
 pub use job::{Encoded, RefineJob};

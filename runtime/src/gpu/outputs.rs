@@ -114,7 +114,7 @@ impl RefinedOutput {
 
     fn allocate(ctx: &GpuContext, shape: OutputShape) -> Result<Self, GpuError> {
         let [p, n, c, i, f] = shape.bytes();
-        // Written by a kernel, or copied in from the pooled outputs of a batch (flat_batch.rs).
+        // Written by a kernel, or copied in from the pooled outputs of a batch (batch.rs).
         let copied = wgpu::BufferUsages::COPY_DST;
         let vertex = wgpu::BufferUsages::VERTEX | copied;
         let buffer = |what, bytes, usage| -> Result<wgpu::Buffer, GpuError> {

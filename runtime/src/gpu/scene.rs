@@ -19,16 +19,17 @@
 //!   of the triangles. With [`FlatRefinement::Uniform`] they are split 1-to-4 to their tree
 //!   depth (F.7.2, the level at which every element has its own triangles: a coarser level
 //!   would blur the baked lighting and a finer one adds nothing), bounded by the object's size
-//!   ([`flat_level`]); that level is also the one reported for an adaptive object. The small
-//!   ones that
-//!   [`GpuScene::refine_batch`] refines whole in one call are refined together, one dispatch
-//!   per step of the kernel for all of them ([`SceneOptions::flat_batch`]), into the same bytes.
+//!   ([`flat_level`]); that level is also the one reported for an adaptive object.
 //! * **Multiresolution** objects by the [`LoopKernel`] ([`MultiresPath::Gpu`], the default):
 //!   Loop subdivision of every coarse triangle's patch, subtriangle colours decoded from the HCE
 //!   tree by normal, area-weighted vertex colours, all in compute shaders.
 //!   [`MultiresPath::CpuReference`] does the same on the CPU ([`hce_geometry::subdivide`] and
 //!   [`hce_geometry::colour`]) and uploads the result: it is the reference the kernel is checked
 //!   against, kept as an explicit option (never a silent fallback).
+//!
+//! The small objects of either kernel that [`GpuScene::refine_batch`] refines whole in one call
+//! are refined together, one dispatch per step of the kernel for all of them
+//! ([`SceneOptions::batch`], `batch.rs`), into the same bytes.
 //!
 //! # A viewer loop
 //!
@@ -67,7 +68,7 @@
 use glam::{Mat4, Vec3};
 use hce_format::{Object, ObjectKind};
 
-use super::flat_batch::{BatchObject, FlatPool, BATCH_MAX_FINE, OBJECT_MAX_FINE};
+use super::batch::{BatchObject, Pool, PoolInput, PoolKernel, BATCH_MAX_FINE, OBJECT_MAX_FINE};
 use super::framing::{auto_scene_camera, Placement};
 use super::lod::{choose_level, Camera, LodParams};
 use super::render::{render_draws, MeshDraw, RenderParams, RenderedImage};
@@ -106,14 +107,15 @@ pub struct SceneOptions {
     pub flat_max_triangles: u64,
     /// How baked colours become vertex colours (SPEC.md, Appendix G). Default: smooth.
     pub reconstruction: Reconstruction,
-    /// Refine the small flat objects that [`GpuScene::refine_batch`] refines whole in one call
-    /// together, one dispatch per step of the kernel for all of them, instead of three
-    /// dispatches per object (their tables are copied once into pooled buffers). The output is
-    /// the same bytes. Default `true`; `false` is the per-object path it is checked against.
-    pub flat_batch: bool,
+    /// Refine the small objects that [`GpuScene::refine_batch`] refines whole in one call
+    /// together, the flat ones and the multiresolution ones each in one dispatch per step of
+    /// their kernel for all of them, instead of three dispatches per object (their tables are
+    /// copied once into pooled buffers). The output is the same bytes. Default `true`; `false`
+    /// is the per-object path it is checked against.
+    pub batch: bool,
     /// The most fine triangles one batch refines, the size of the pooled outputs: a call that
     /// refines more refines them in several batches. Default [`BATCH_MAX_FINE`] (2^20).
-    pub flat_batch_fine: u64,
+    pub batch_fine: u64,
     /// How flat objects are refined (SPEC.md F.7): from their trees (the default, F.7.1) or
     /// uniformly to [`flat_level`] (F.7.2).
     pub flat_refinement: FlatRefinement,
@@ -126,8 +128,8 @@ impl Default for SceneOptions {
             flat_max_level: 7,
             flat_max_triangles: 1 << 22,
             reconstruction: Reconstruction::default(),
-            flat_batch: true,
-            flat_batch_fine: BATCH_MAX_FINE,
+            batch: true,
+            batch_fine: BATCH_MAX_FINE,
             flat_refinement: FlatRefinement::default(),
         }
     }
@@ -165,6 +167,13 @@ struct Next<O> {
     job: RefineJob,
 }
 
+/// The kernels whose small objects are batched, each with its pool.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Flat,
+    Loop,
+}
+
 /// How one object is refined, with its uploaded data, its current output, the refinement under
 /// way (if any) and the buffers of the output before, kept for the next refinement.
 enum Refiner {
@@ -186,6 +195,27 @@ enum Refiner {
         scratch: Refined,
         out: Option<CpuOutput>,
     },
+}
+
+impl Refiner {
+    /// The refinement under way of an object of kernel `kind`.
+    fn next_of(&self, kind: Kind) -> Option<&Next<super::RefinedOutput>> {
+        match (self, kind) {
+            (Refiner::Flat { next, .. }, Kind::Flat) | (Refiner::Loop { next, .. }, Kind::Loop) => {
+                next.as_ref()
+            }
+            _ => None,
+        }
+    }
+
+    fn next_of_mut(&mut self, kind: Kind) -> Option<&mut Next<super::RefinedOutput>> {
+        match (self, kind) {
+            (Refiner::Flat { next, .. }, Kind::Flat) | (Refiner::Loop { next, .. }, Kind::Loop) => {
+                next.as_mut()
+            }
+            _ => None,
+        }
+    }
 }
 
 /// The level a flat object of `coarse_triangles` triangles whose deepest leaf is at
@@ -302,8 +332,10 @@ pub struct ObjectMesh {
 pub struct GpuScene {
     objects: Vec<GpuObject>,
     flat: Option<FlatKernel>,
-    /// The small flat objects' tables, pooled for batched refinement.
-    flat_pool: Option<FlatPool>,
+    /// The small flat objects' tables and the small multiresolution objects', pooled for
+    /// batched refinement.
+    flat_pool: Option<Pool>,
+    loop_pool: Option<Pool>,
     loop_kernel: Option<LoopKernel>,
     flat_max_level: u32,
     flat_max_triangles: u64,
@@ -400,15 +432,28 @@ impl GpuScene {
             });
         }
         let flat_pool = match &flat {
-            Some(kernel) if options.flat_batch => {
-                let flats: Vec<Option<&FlatObject>> = objects
+            Some(kernel) if options.batch => {
+                let flats: Vec<Option<PoolInput<'_>>> = objects
                     .iter()
                     .map(|o| match &o.refiner {
-                        Refiner::Flat { object, .. } => Some(&**object),
+                        Refiner::Flat { object, .. } => Some(PoolInput::from(&**object)),
                         _ => None,
                     })
                     .collect();
-                FlatPool::new(ctx, kernel, &flats, options.flat_batch_fine)?
+                Pool::new(ctx, PoolKernel::Flat(kernel), &flats, options.batch_fine)?
+            }
+            _ => None,
+        };
+        let loop_pool = match &loop_kernel {
+            Some(kernel) if options.batch => {
+                let loops: Vec<Option<PoolInput<'_>>> = objects
+                    .iter()
+                    .map(|o| match &o.refiner {
+                        Refiner::Loop { object, .. } => Some(PoolInput::from(&**object)),
+                        _ => None,
+                    })
+                    .collect();
+                Pool::new(ctx, PoolKernel::Loop(kernel), &loops, options.batch_fine)?
             }
             _ => None,
         };
@@ -416,6 +461,7 @@ impl GpuScene {
             objects,
             flat,
             flat_pool,
+            loop_pool,
             loop_kernel,
             flat_max_level: options.flat_max_level,
             flat_max_triangles: options.flat_max_triangles,
@@ -707,9 +753,10 @@ impl GpuScene {
     /// the GPU); flat objects refined together share their dispatches' time in proportion to
     /// their fine triangles.
     ///
-    /// Small flat objects refined whole here (work at least [`RefineJob::total_work`], nothing
-    /// recorded before) are refined together, one dispatch per step for all of them, when there
-    /// are two or more ([`SceneOptions::flat_batch`]); the others with their own dispatches.
+    /// Small objects refined whole here (work at least [`RefineJob::total_work`], nothing
+    /// recorded before) are refined together, one dispatch per step for all the flat ones and
+    /// one for all the multiresolution ones, when there are two or more of a kind
+    /// ([`SceneOptions::batch`]); the others with their own dispatches.
     pub fn refine_batch(
         &mut self,
         ctx: &GpuContext,
@@ -726,7 +773,8 @@ impl GpuScene {
         let mut reports = Vec::with_capacity(work.len());
         // Per report, its timer passes and its share of their time.
         let mut passes = Vec::with_capacity(work.len());
-        let batched = self.batch_flat(ctx, &mut encoder, work, &mut timer)?;
+        let mut batched = self.batch_pooled(ctx, &mut encoder, work, &mut timer, Kind::Flat)?;
+        batched.extend(self.batch_pooled(ctx, &mut encoder, work, &mut timer, Kind::Loop)?);
         let mut in_batch = vec![false; self.objects.len()];
         for b in &batched {
             in_batch[b.object] = true;
@@ -790,31 +838,33 @@ impl GpuScene {
         Ok(reports)
     }
 
-    /// Records in batches ([`FlatPool::encode`]) the flat objects of `work` that are pooled,
-    /// refined whole by this call (nothing recorded before) to at most [`OBJECT_MAX_FINE`] fine
-    /// triangles, when there are two or more; marks their jobs recorded. Each batch takes as
-    /// many as fit [`SceneOptions::flat_batch_fine`]; all but the last are submitted at once
-    /// in encoders of their own (a batch's table is written to the queue, so the next batch
-    /// may be recorded only once it is submitted), the last goes into `encoder` (empty when
-    /// this is called). Returns each object with its work, its batch's timer pass and its share
-    /// of the batch's work.
-    fn batch_flat(
+    /// Records in batches ([`Pool::encode`]) the objects of `work` of kind `kind` that are
+    /// pooled, refined whole by this call (nothing recorded before) to at most
+    /// [`OBJECT_MAX_FINE`] fine triangles, when there are two or more; marks their jobs
+    /// recorded. Each batch takes as many as fit [`SceneOptions::batch_fine`]; all but the last
+    /// are submitted at once in encoders of their own (a batch's table is written to the queue,
+    /// so the next batch may be recorded only once it is submitted), the last goes into
+    /// `encoder` (which holds only earlier batches' work when this is called). Returns each
+    /// object with its work, its batch's timer pass and its share of the batch's work.
+    fn batch_pooled(
         &mut self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         work: &[(usize, u64)],
         timer: &mut PassTimer,
+        kind: Kind,
     ) -> Result<Vec<Batched>, GpuError> {
-        let Some(pool) = self.flat_pool.as_mut() else {
+        let pool = match kind {
+            Kind::Flat => self.flat_pool.as_mut(),
+            Kind::Loop => self.loop_pool.as_mut(),
+        };
+        let Some(pool) = pool else {
             return Ok(Vec::new());
         };
         let mut seen = vec![false; self.objects.len()];
         let mut chosen = Vec::new();
         for &(i, amount) in work {
-            let Some(o) = self.objects.get(i) else {
-                continue;
-            };
-            let Refiner::Flat { next: Some(n), .. } = &o.refiner else {
+            let Some(n) = self.objects.get(i).and_then(|o| o.refiner.next_of(kind)) else {
                 continue;
             };
             if !seen[i]
@@ -840,13 +890,14 @@ impl GpuScene {
             if n < 2 {
                 break;
             }
+            // Each kind has its pool, so the last batch of each can go into `encoder`.
             let pass = if n == rest.len() {
                 pool.encode(ctx, encoder, &rest[..n], Some(&mut *timer))?
             } else {
                 let mut own = ctx
                     .device
                     .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                        label: Some("hce flat batch"),
+                        label: Some("hce batch"),
                     });
                 let pass = pool.encode(ctx, &mut own, &rest[..n], Some(&mut *timer))?;
                 ctx.queue.submit([own.finish()]);
@@ -863,7 +914,7 @@ impl GpuScene {
         for (start, end, pass) in batches {
             let total: u64 = faces[start..end].iter().map(|&(_, f)| f).sum();
             for &(i, f) in &faces[start..end] {
-                if let Refiner::Flat { next: Some(n), .. } = &mut self.objects[i].refiner {
+                if let Some(n) = self.objects[i].refiner.next_of_mut(kind) {
                     batched.push(Batched {
                         object: i,
                         work: n.job.recorded_elsewhere(),
@@ -993,14 +1044,14 @@ pub struct BatchReport {
     pub work: u64,
     /// Whether the refinement is complete and drawn from now on.
     pub finished: bool,
-    /// Whether it was refined together with other flat objects, one dispatch per step for all
-    /// of them ([`SceneOptions::flat_batch`]).
+    /// Whether it was refined together with other objects of its kernel, one dispatch per step
+    /// for all of them ([`SceneOptions::batch`]).
     pub batched: bool,
     /// GPU time of the pieces recorded, when measured with timestamp queries.
     pub gpu_seconds: Option<f64>,
 }
 
-/// A flat object [`GpuScene::batch_flat`] recorded in a batch.
+/// An object [`GpuScene::batch_pooled`] recorded in a batch.
 struct Batched {
     object: usize,
     /// Its work (see [`RefineJob`]).

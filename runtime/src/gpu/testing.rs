@@ -9,7 +9,9 @@
 use super::{ContextOptions, GpuContext, GpuError};
 
 pub use super::decode::{decode_colours, ColourQuery, DecodedColour};
-pub use super::inputs::{grid, octahedron, random_object, small_flat_scene, RandomTrees, SplitMix};
+pub use super::inputs::{
+    grid, octahedron, random_object, small_flat_scene, small_scene, RandomTrees, SplitMix,
+};
 
 /// The environment variable that makes a missing adapter a test failure.
 const REQUIRE_GPU_ENV: &str = "HCE_REQUIRE_GPU";

@@ -19,6 +19,8 @@
 //! * `hce_light.wgsl`: the smooth reconstruction of baked lighting (SPEC.md Appendix G);
 //! * `hce_lattice.wgsl`: the 1-to-4 lattice of a refined triangle and its vertex numbering;
 //! * `hce_gather.wgsl`: the area-weighted vertex colours of the refinement kernels;
+//! * `hce_batch.wgsl`: the table through which the batched entry points of the refinement
+//!   kernels find each invocation's object;
 //! * `loop_normals.wgsl`: the vertex normals of a Loop patch, a template over the patch memory
 //!   (WGSL has no pointer that reaches both storage and workgroup memory), instantiated for the
 //!   scratch kernel of `loop.wgsl` and for the workgroup kernel of `loop_workgroup.wgsl`.
@@ -31,6 +33,7 @@ const MODULES: &[(&str, &str)] = &[
     ("hce_light", include_str!("hce_light.wgsl")),
     ("hce_lattice", include_str!("hce_lattice.wgsl")),
     ("hce_gather", include_str!("hce_gather.wgsl")),
+    ("hce_batch", include_str!("hce_batch.wgsl")),
     ("flat", include_str!("flat.wgsl")),
     ("loop", include_str!("loop.wgsl")),
     ("loop_workgroup", include_str!("loop_workgroup.wgsl")),
@@ -187,14 +190,19 @@ const CONSTANTS: &[(&str, u32, &str)] = &[
         "a leaf's node word; lighting.rs LEAF",
     ),
     (
-        "FLAT_ENTRY_BASES",
-        super::flat_batch::ENTRY_BASES as u32,
-        "words of a batch entry before the object's Params; flat_batch.rs ENTRY_BASES",
+        "BATCH_ENTRY_BASES",
+        super::batch::ENTRY_BASES as u32,
+        "words of a batch entry before the object's Params; batch.rs ENTRY_BASES",
     ),
     (
         "FLAT_ENTRY_WORDS",
-        super::flat_batch::ENTRY_WORDS as u32,
-        "words of a batch entry; flat_batch.rs ENTRY_WORDS",
+        super::batch::FLAT_ENTRY_WORDS as u32,
+        "words of a flat batch entry; batch.rs FLAT_ENTRY_WORDS",
+    ),
+    (
+        "LOOP_ENTRY_WORDS",
+        super::batch::LOOP_ENTRY_WORDS as u32,
+        "words of a Loop batch entry; batch.rs LOOP_ENTRY_WORDS",
     ),
 ];
 
@@ -334,6 +342,7 @@ mod tests {
             "hce_light",
             "hce_lattice",
             "hce_gather",
+            "hce_batch",
         ];
         let flat = import_order("flat", &module_text).unwrap();
         assert_eq!(flat[..shared.len()], shared);
@@ -534,10 +543,10 @@ mod tests {
             offset_of!(FlatParams, range_first)
         );
         assert_eq!(at(&members, "range_end"), offset_of!(FlatParams, range_end));
-        // The batched entry points' uniform, as flat_batch.rs `FlatPool::encode` writes it
-        // into its 32 bytes.
+        // The batched entry points' uniform, as batch.rs `Pool::encode` writes it into its 48
+        // bytes.
         let (size, members) = wgsl_struct(&flat, "Batch");
-        assert!(size <= 32, "{size}");
+        assert!(size <= 48, "{size}");
         let order = [
             "count",
             "first_vertices",
@@ -545,6 +554,9 @@ mod tests {
             "entries",
             "vertex_total",
             "fine_total",
+            "first_triangles",
+            "triangle_total",
+            "slots",
         ];
         for (i, name) in order.iter().enumerate() {
             assert_eq!(at(&members, name), 4 * i, "{name}");

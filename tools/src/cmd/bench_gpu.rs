@@ -7,9 +7,10 @@
 //! kernel it is welded and its control mesh built as `hce subdivide` does (no creases).
 //!
 //! `--kernel scene` measures instead a frame of a viewer in which every object of a generated
-//! scene of many small flat objects (`--objects`) changes level: all refined in one submission
-//! by `GpuScene::refine_batch`, as `hce view` refines them, each object with its own dispatches
-//! and then batched (`SceneOptions::flat_batch`), with the ratio.
+//! scene of many small objects (`--objects`; flat ones, multiresolution ones or both kinds in
+//! turn, `--scene-kind`) changes level: all refined in one submission by
+//! `GpuScene::refine_batch`, as `hce view` refines them, each object with its own dispatches
+//! and then batched (`SceneOptions::batch`), with the ratio.
 
 use std::path::PathBuf;
 
@@ -31,13 +32,17 @@ pub struct BenchGpuArgs {
     #[arg(long)]
     pub software: bool,
     /// Kernels to measure: flat, loop or both; or scene, a frame refining a scene of many small
-    /// flat objects (see --objects).
+    /// objects (see --objects and --scene-kind).
     #[arg(long, default_value = "both", value_parser = ["flat", "loop", "both", "scene"])]
     pub kernel: String,
     /// With --kernel scene: the scenes' object counts, comma-separated (each object 8 to 50
     /// triangles; the frames alternate between the first two of --levels).
     #[arg(long, default_value = "200,1000")]
     pub objects: String,
+    /// With --kernel scene: scenes of flat objects, of multiresolution (Loop) objects, or both
+    /// in turn.
+    #[arg(long, default_value = "both", value_parser = ["flat", "loop", "both"])]
+    pub scene_kind: String,
     /// Step 1 of the Loop kernel: auto (workgroup memory where the patches fit), workgroup,
     /// scratch, or both (scratch then auto, to compare them in one run).
     #[arg(long, default_value = "auto", value_parser = ["auto", "workgroup", "scratch", "both"])]
@@ -232,12 +237,13 @@ pub fn run(args: BenchGpuArgs) -> Result<()> {
     Ok(())
 }
 
-/// `--kernel scene`: the median frame in which every object of a scene of many small flat
-/// objects changes level.
+/// `--kernel scene`: the median frame in which every object of a scene of many small objects
+/// of one kind changes level.
 #[cfg(feature = "gpu")]
 fn scene(ctx: &hce_runtime::gpu::GpuContext, args: &BenchGpuArgs, levels: &[u32]) -> Result<()> {
     use anyhow::Context;
-    use hce_runtime::gpu::bench::{bench_scene_refine, small_flat_scene};
+    use hce_format::ObjectKind;
+    use hce_runtime::gpu::bench::{bench_scene_refine, small_scene};
     use hce_runtime::gpu::SceneOptions;
 
     let counts: Vec<usize> = args
@@ -251,37 +257,47 @@ fn scene(ctx: &hce_runtime::gpu::GpuContext, args: &BenchGpuArgs, levels: &[u32]
         [a] => [*a, *a],
         [] => anyhow::bail!("--levels: give two levels to alternate between"),
     };
-    println!(
-        "input: generated scenes of small flat objects (8-50 triangles, random trees), every \
-         object changing level between {} and {} each frame",
-        pair[0], pair[1]
-    );
-    println!(
-        "{:>8} {:>12} {:>10} {:>12}  path",
-        "objects", "tris/frame", "ms/frame", "us/object"
-    );
-    for &count in &counts {
-        let asset = small_flat_scene(count, 18)?;
-        let mut times = Vec::new();
-        for (name, flat_batch) in [("per object", false), ("batched", true)] {
-            let options = SceneOptions {
-                flat_batch,
-                ..SceneOptions::default()
-            };
-            let row = bench_scene_refine(ctx, &asset, &options, pair, args.repeats)?;
-            println!(
-                "{:>8} {:>12} {:>10.3} {:>12.1}  {name}",
-                row.objects,
-                row.triangles,
-                row.seconds * 1e3,
-                row.seconds * 1e6 / row.objects.max(1) as f64
-            );
-            times.push(row.seconds);
-        }
+    let kinds: &[(ObjectKind, &str)] = match args.scene_kind.as_str() {
+        "flat" => &[(ObjectKind::Flat, "flat")],
+        "loop" => &[(ObjectKind::Multiresolution, "multiresolution (Loop)")],
+        _ => &[
+            (ObjectKind::Flat, "flat"),
+            (ObjectKind::Multiresolution, "multiresolution (Loop)"),
+        ],
+    };
+    for &(kind, name) in kinds {
         println!(
-            "{count} objects: per object / batched frame time {:.1}x",
-            times[0] / times[1].max(1e-12)
+            "input: generated scenes of small {name} objects (8-50 triangles, random trees), \
+             every object changing level between {} and {} each frame",
+            pair[0], pair[1]
         );
+        println!(
+            "{:>8} {:>12} {:>10} {:>12}  path",
+            "objects", "tris/frame", "ms/frame", "us/object"
+        );
+        for &count in &counts {
+            let asset = small_scene(count, 18, kind)?;
+            let mut times = Vec::new();
+            for (path, batch) in [("per object", false), ("batched", true)] {
+                let options = SceneOptions {
+                    batch,
+                    ..SceneOptions::default()
+                };
+                let row = bench_scene_refine(ctx, &asset, &options, pair, args.repeats)?;
+                println!(
+                    "{:>8} {:>12} {:>10.3} {:>12.1}  {path}",
+                    row.objects,
+                    row.triangles,
+                    row.seconds * 1e3,
+                    row.seconds * 1e6 / row.objects.max(1) as f64
+                );
+                times.push(row.seconds);
+            }
+            println!(
+                "{count} {name} objects: per object / batched frame time {:.1}x",
+                times[0] / times[1].max(1e-12)
+            );
+        }
     }
     Ok(())
 }

@@ -63,6 +63,7 @@ const EMBEDDED: &[Embedded] = embed! {
     "/runtime/src/gpu/decode.wgsl" => "runtime/src/gpu/decode.wgsl",
     "/runtime/src/gpu/fill.wgsl" => "runtime/src/gpu/fill.wgsl",
     "/runtime/src/gpu/flat.wgsl" => "runtime/src/gpu/flat.wgsl",
+    "/runtime/src/gpu/hce_batch.wgsl" => "runtime/src/gpu/hce_batch.wgsl",
     "/runtime/src/gpu/hce_bindings.wgsl" => "runtime/src/gpu/hce_bindings.wgsl",
     "/runtime/src/gpu/hce_constants.wgsl" => "runtime/src/gpu/hce_constants.wgsl",
     "/runtime/src/gpu/hce_gather.wgsl" => "runtime/src/gpu/hce_gather.wgsl",

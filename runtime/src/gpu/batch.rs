@@ -1,42 +1,99 @@
-//! Batched flat refinement: the flat objects of a scene that change level in a frame refined
-//! together, one dispatch per step of the kernel for all of them (the batched entry points of
-//! `flat.wgsl`), instead of three dispatches per object.
+//! Batched refinement: the small objects of a scene that change level in a frame refined
+//! together, one dispatch per step of their kernel for all of them (the batched entry points of
+//! `flat.wgsl` and `loop.wgsl`, `hce_batch.wgsl`), instead of three dispatches per object. A
+//! scene has a [`Pool`] per kernel: one for its flat objects, one for its multiresolution ones.
 //!
-//! A scene of many small flat objects (architecture, props) spends a frame's refinement on the
-//! fixed cost of its dispatches, not on their work: on lavapipe, 14 ms an object of a few
-//! hundred fine triangles (BENCHMARKS.md). So [`FlatPool`] copies the tables of every small flat
-//! object of a scene, once, into pooled buffers (each object's tables whole, one after another),
-//! and a batch writes its objects' outputs into pooled outputs (each object's range, one after
-//! another), copied out to each object's own buffers in the same submission: the objects keep
-//! their buffers, drawn and read back as before. Per batch, a table in the pooled `topo` gives
-//! each object's first output vertex and fine triangle (the search keys of the invocations),
-//! where its tables start in the pools and its kernel parameters.
+//! A scene of many small objects (architecture, props) spends a frame's refinement on the fixed
+//! cost of its dispatches, not on their work: on lavapipe, 1.3-1.5 ms an object of a few
+//! hundred fine triangles (BENCHMARKS.md). So a [`Pool`] copies the tables of every small
+//! object of its kind, once, into pooled buffers (each object's tables whole, one after
+//! another), and a batch writes its objects' outputs into pooled outputs (each object's range,
+//! one after another), copied out to each object's own buffers in the same submission: the
+//! objects keep their buffers, drawn and read back as before. Per batch, a table in the pooled
+//! `topo` gives each object's first output vertex, fine triangle and coarse triangle (the search
+//! keys of the invocations), where its tables start in the pools and its kernel parameters.
 //!
 //! The outputs are the bytes the object's own dispatches write (the same functions on the same
 //! values, `tests/gpu_scene_batch.rs` checks it), so whether an object was refined in a batch
-//! or alone is invisible to the caller. The pooled inputs duplicate the small objects' tables on
-//! the GPU, and the pooled outputs stay allocated at the size of the largest batch
-//! ([`BATCH_MAX_FINE`] fine triangles at most).
+//! or alone is invisible to the caller. A batched Loop refinement builds its patches with the
+//! scratch kernel (`patch_main`'s function, one slot per invocation striding over the batch's
+//! coarse triangles), which the workgroup kernel matches bit for bit. The pooled inputs
+//! duplicate the small objects' tables on the GPU, and the pooled outputs stay allocated at the
+//! size of the largest batch ([`BATCH_MAX_FINE`] fine triangles at most, and for Loop objects
+//! a scratch of at most the Loop kernel's budget).
 
-use super::flat::{FlatKernel, FlatObject, FlatOutput, Params};
-use super::util::{check_size, dispatch_size, PassTimer};
+use super::flat::{self, FlatKernel, FlatObject};
+use super::loop_kernel::{self, slot_floats, LoopKernel, LoopObject, SCRATCH_BUDGET};
+use super::outputs::RefinedOutput;
+use super::util::{check_size, dispatch_size, LightingBuffers, PassTimer};
 use super::{GpuContext, GpuError};
 
 /// Objects refined to at most this many fine triangles are batched; larger ones keep their own
 /// dispatches, whose fixed cost is small beside their work. Objects of more coarse triangles
 /// than this are not pooled at all.
 pub(super) const OBJECT_MAX_FINE: u64 = 1 << 14;
-/// The most fine triangles of one batch by default ([`SceneOptions::flat_batch_fine`]): the
-/// pooled outputs never grow past it, and a frame that refines more refines them in several
-/// batches.
+/// The most fine triangles of one batch by default ([`SceneOptions::batch_fine`]): the pooled
+/// outputs never grow past it, and a frame that refines more refines them in several batches.
 ///
-/// [`SceneOptions::flat_batch_fine`]: super::SceneOptions::flat_batch_fine
+/// [`SceneOptions::batch_fine`]: super::SceneOptions::batch_fine
 pub const BATCH_MAX_FINE: u64 = 1 << 20;
 
-/// Words of a table entry before the object's `Params` and in all (`FLAT_ENTRY_BASES` and
-/// `FLAT_ENTRY_WORDS` of `hce_constants.wgsl`, generated from these).
+/// Words of a table entry before the object's `Params` (`BATCH_ENTRY_BASES` of
+/// `hce_constants.wgsl`, generated from it), and in all for each kernel (`FLAT_ENTRY_WORDS`,
+/// `LOOP_ENTRY_WORDS`).
 pub(super) const ENTRY_BASES: usize = 6;
-pub(super) const ENTRY_WORDS: usize = ENTRY_BASES + std::mem::size_of::<Params>() / 4;
+pub(super) const FLAT_ENTRY_WORDS: usize = ENTRY_BASES + std::mem::size_of::<flat::Params>() / 4;
+pub(super) const LOOP_ENTRY_WORDS: usize =
+    ENTRY_BASES + std::mem::size_of::<loop_kernel::Params>() / 4;
+
+/// Bytes of the batched entry points' `Batch` uniform (`hce_batch.wgsl`): nine words, in a
+/// buffer of whole 16-byte rows.
+const BATCH_UNIFORM_BYTES: u64 = 48;
+
+/// The kernel whose objects a pool holds.
+pub(super) enum PoolKernel<'a> {
+    Flat(&'a FlatKernel),
+    Loop(&'a LoopKernel),
+}
+
+/// One scene object as a pool sees it: its tables on the GPU, `None` for objects of the other
+/// kernel.
+#[derive(Clone, Copy)]
+pub(super) struct PoolInput<'a> {
+    coarse_positions: &'a wgpu::Buffer,
+    topo: &'a wgpu::Buffer,
+    lighting: &'a LightingBuffers,
+    triangles: u32,
+}
+
+impl<'a> From<&'a FlatObject> for PoolInput<'a> {
+    fn from(o: &'a FlatObject) -> Self {
+        Self {
+            coarse_positions: &o.coarse_positions,
+            topo: &o.topo,
+            lighting: &o.lighting,
+            triangles: o.topology.triangle_count,
+        }
+    }
+}
+
+impl<'a> From<&'a LoopObject> for PoolInput<'a> {
+    fn from(o: &'a LoopObject) -> Self {
+        Self {
+            coarse_positions: &o.coarse_positions,
+            topo: &o.topo,
+            lighting: &o.lighting,
+            triangles: o.triangle_count,
+        }
+    }
+}
+
+/// Which kernel a pool batches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Flat,
+    Loop,
+}
 
 /// Where one object's tables start in the pools.
 #[derive(Clone, Copy, Debug)]
@@ -49,23 +106,26 @@ struct Bases {
 }
 
 /// The pooled outputs of a batch, grown as batches need, with the bind groups of the three
-/// steps over them.
+/// steps over them. A Loop pool's also have normals and the patches' scratch.
 struct Arena {
     vertices: u64,
     faces: u64,
+    scratch_bytes: u64,
     positions: wgpu::Buffer,
     colours: wgpu::Buffer,
     indices: wgpu::Buffer,
     face_colours: wgpu::Buffer,
+    normals: Option<wgpu::Buffer>,
     groups: [wgpu::BindGroup; 3],
 }
 
-/// The pooled tables of a scene's small flat objects and the batched pipelines. See the module
-/// documentation.
-pub(super) struct FlatPool {
+/// The pooled tables of a scene's small objects of one kernel and its batched pipelines. See
+/// the module documentation.
+pub(super) struct Pool {
+    kind: Kind,
     pipelines: [wgpu::ComputePipeline; 3],
     coarse_positions: wgpu::Buffer,
-    /// The objects' tables, then room for one batch's table ([`FlatPool::table_at`]).
+    /// The objects' tables, then room for one batch's table ([`Pool::table_at`]).
     topo: wgpu::Buffer,
     records: wgpu::Buffer,
     bits: wgpu::Buffer,
@@ -83,12 +143,12 @@ pub(super) struct FlatPool {
     arena: Option<Arena>,
 }
 
-/// One object of a batch: its index in the scene, its kernel parameters as [`FlatKernel::begin`]
-/// set them, and the output buffers it was begun into.
+/// One object of a batch: its index in the scene, its kernel parameters as the kernel's
+/// `begin` set them, and the output buffers it was begun into.
 pub(super) struct BatchObject<'a> {
     pub(super) object: usize,
     pub(super) params: &'a [u32],
-    pub(super) out: &'a FlatOutput,
+    pub(super) out: &'a RefinedOutput,
 }
 
 /// A pool being laid out: its words so far, each region's start.
@@ -118,23 +178,27 @@ fn word(what: &'static str, w: u64) -> Result<u32, GpuError> {
     u32::try_from(w).map_err(|_| too_large(what, w))
 }
 
-impl FlatPool {
-    /// Pools the tables of `objects` (one per scene object; `None` for those not flat) whose
-    /// coarse triangles do not exceed [`OBJECT_MAX_FINE`], with one submission of copies.
-    /// `None` when fewer than two objects qualify (nothing to batch).
-    pub(super) fn new(
+impl Pool {
+    /// Pools the tables of `objects` (one per scene object; `None` for those of the other
+    /// kernel) whose coarse triangles do not exceed [`OBJECT_MAX_FINE`], with one submission of
+    /// copies. `None` when fewer than two objects qualify (nothing to batch).
+    pub(super) fn new<'a>(
         ctx: &GpuContext,
-        kernel: &FlatKernel,
-        objects: &[Option<&FlatObject>],
+        kernel: PoolKernel<'_>,
+        objects: &[Option<PoolInput<'a>>],
         max_fine: u64,
     ) -> Result<Option<Self>, GpuError> {
-        fn pooled<'a>(o: &Option<&'a FlatObject>) -> Option<&'a FlatObject> {
-            o.filter(|o| u64::from(o.topology.triangle_count) <= OBJECT_MAX_FINE)
+        fn pooled<'a>(o: &Option<PoolInput<'a>>) -> Option<PoolInput<'a>> {
+            o.filter(|o| u64::from(o.triangles) <= OBJECT_MAX_FINE)
         }
         let count = objects.iter().filter_map(pooled).count();
         if count < 2 {
             return Ok(None);
         }
+        let (kind, entry_words, label) = match kernel {
+            PoolKernel::Flat(_) => (Kind::Flat, FLAT_ENTRY_WORDS, "hce flat batch"),
+            PoolKernel::Loop(_) => (Kind::Loop, LOOP_ENTRY_WORDS, "hce loop batch"),
+        };
         // Regions aligned to their elements: x y z per vertex and normal, 4 words per record.
         let (mut positions, mut topo, mut records) =
             (Layout::default(), Layout::default(), Layout::default());
@@ -150,7 +214,7 @@ impl FlatPool {
                 placed.push(None);
                 continue;
             };
-            let l = &o.lighting;
+            let l = o.lighting;
             let at = [
                 positions.place(o.coarse_positions.size(), 3),
                 topo.place(o.topo.size(), 1),
@@ -162,9 +226,9 @@ impl FlatPool {
             ];
             placed.push(Some(at));
         }
-        // The batch table: two keys and an entry per object at most.
+        // The batch table: three keys and an entry per object at most.
         let table_at = topo.words;
-        topo.words += (2 + ENTRY_WORDS as u64) * count as u64;
+        topo.words += (3 + entry_words as u64) * count as u64;
         let pool = |label: &'static str, l: &Layout| -> Result<wgpu::Buffer, GpuError> {
             let bytes = check_size(ctx, label, l.words.max(1) * 4)?;
             Ok(ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -186,7 +250,7 @@ impl FlatPool {
         let mut encoder = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("hce flat pool"),
+                label: Some("hce batch pool"),
             });
         let mut bases = Vec::with_capacity(objects.len());
         for (o, at) in objects.iter().zip(&placed) {
@@ -194,10 +258,10 @@ impl FlatPool {
                 bases.push(None);
                 continue;
             };
-            let l = &o.lighting;
+            let l = o.lighting;
             let sources = [
-                &o.coarse_positions,
-                &o.topo,
+                o.coarse_positions,
+                o.topo,
                 &l.records,
                 &l.bits,
                 &l.normals,
@@ -222,12 +286,19 @@ impl FlatPool {
         word("pooled topology", topo.words)?;
         ctx.queue.submit([encoder.finish()]);
         let [coarse_positions, topo, records, bits, normals, colours, light] = buffers;
+        let pipelines = match kernel {
+            PoolKernel::Flat(k) => [
+                "positions_batch_main",
+                "faces_batch_main",
+                "colours_batch_main",
+            ]
+            .map(|e| k.pipeline(ctx, e)),
+            PoolKernel::Loop(k) => ["patch_batch_main", "faces_batch_main", "colours_batch_main"]
+                .map(|e| k.pipeline(ctx, e)),
+        };
         Ok(Some(Self {
-            pipelines: [
-                kernel.pipeline(ctx, "positions_batch_main"),
-                kernel.pipeline(ctx, "faces_batch_main"),
-                kernel.pipeline(ctx, "colours_batch_main"),
-            ],
+            kind,
+            pipelines,
             coarse_positions,
             topo,
             records,
@@ -239,8 +310,8 @@ impl FlatPool {
             max_fine: max_fine.max(1),
             bases,
             uniform: ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("hce flat batch"),
-                size: 32,
+                label: Some(label),
+                size: BATCH_UNIFORM_BYTES,
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
@@ -253,16 +324,26 @@ impl FlatPool {
         self.bases.get(object).is_some_and(Option::is_some)
     }
 
-    /// Pooled outputs for `vertices` and `faces`, grown (to the next power of two) when too
-    /// small; a batch holds at most [`FlatPool::max_fine`] fine triangles.
-    fn arena(&mut self, ctx: &GpuContext, vertices: u64, faces: u64) -> Result<&Arena, GpuError> {
-        let fits = self
-            .arena
-            .as_ref()
-            .is_some_and(|a| a.vertices >= vertices && a.faces >= faces);
+    /// Pooled outputs for `vertices` and `faces` (and `scratch_bytes` of patches), grown (to
+    /// the next power of two) when too small; a batch holds at most [`Pool::max_fine`] fine
+    /// triangles.
+    fn arena(
+        &mut self,
+        ctx: &GpuContext,
+        vertices: u64,
+        faces: u64,
+        scratch_bytes: u64,
+    ) -> Result<&Arena, GpuError> {
+        let fits = self.arena.as_ref().is_some_and(|a| {
+            a.vertices >= vertices && a.faces >= faces && a.scratch_bytes >= scratch_bytes
+        });
         if !fits {
             let vertices = vertices.next_power_of_two().max(64);
             let faces = faces.next_power_of_two().max(64);
+            let scratch_bytes = match self.kind {
+                Kind::Flat => 0,
+                Kind::Loop => scratch_bytes.next_power_of_two().max(256),
+            };
             let make = |label: &'static str, bytes: u64| -> Result<wgpu::Buffer, GpuError> {
                 Ok(ctx.device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some(label),
@@ -275,39 +356,53 @@ impl FlatPool {
             let colours = make("pooled refined colours", vertices * 16)?;
             let indices = make("pooled refined indices", faces * 12)?;
             let face_colours = make("pooled refined faces", faces * 16)?;
+            let (normals, scratch) = match self.kind {
+                Kind::Flat => (None, None),
+                Kind::Loop => (
+                    Some(make("pooled refined normals", vertices * 12)?),
+                    Some(make("pooled subdivision scratch", scratch_bytes)?),
+                ),
+            };
             // The bindings (hce_bindings.wgsl, and `batch`: the kernel's own) each batched step
-            // reads or writes.
+            // reads or writes: those of the kernel's own steps (flat.rs, loop_kernel.rs,
+            // job.rs `Step`), over the pools.
             use super::bindings::*;
-            let bindings: [Vec<(u32, &wgpu::Buffer)>; 3] = [
-                vec![
-                    (COARSE_POSITIONS, &self.coarse_positions),
-                    (TOPO, &self.topo),
-                    (OUT_POSITIONS, &positions),
-                    (KERNEL_OWN, &self.uniform),
-                ],
-                vec![
-                    (TOPO, &self.topo),
-                    (HCE_RECORDS, &self.records),
-                    (HCE_BITS, &self.bits),
-                    (HCE_NORMALS, &self.normals),
-                    (HCE_COLOURS, &self.colours),
-                    (OUT_POSITIONS, &positions),
-                    (OUT_INDICES, &indices),
-                    (OUT_FACES, &face_colours),
-                    (KERNEL_OWN, &self.uniform),
-                ],
-                vec![
-                    (TOPO, &self.topo),
-                    (OUT_FACES, &face_colours),
-                    (OUT_COLOURS, &colours),
-                    (HCE_LIGHT, &self.light),
-                    (KERNEL_OWN, &self.uniform),
-                ],
+            let tree = [
+                (HCE_RECORDS, &self.records),
+                (HCE_BITS, &self.bits),
+                (HCE_NORMALS, &self.normals),
+                (HCE_COLOURS, &self.colours),
             ];
+            let mut first = vec![
+                (COARSE_POSITIONS, &self.coarse_positions),
+                (TOPO, &self.topo),
+                (OUT_POSITIONS, &positions),
+                (KERNEL_OWN, &self.uniform),
+            ];
+            let mut second = vec![
+                (TOPO, &self.topo),
+                (OUT_POSITIONS, &positions),
+                (OUT_INDICES, &indices),
+                (OUT_FACES, &face_colours),
+                (KERNEL_OWN, &self.uniform),
+            ];
+            second.extend(tree);
+            let mut third = vec![
+                (TOPO, &self.topo),
+                (OUT_FACES, &face_colours),
+                (OUT_COLOURS, &colours),
+                (HCE_LIGHT, &self.light),
+                (KERNEL_OWN, &self.uniform),
+            ];
+            if let (Some(normals), Some(scratch)) = (&normals, &scratch) {
+                first.extend([(OUT_NORMALS, normals), (SCRATCH, scratch)]);
+                third.extend([(OUT_POSITIONS, &positions), (OUT_NORMALS, normals)]);
+            }
+            let bindings = [first, second, third];
             let groups = std::array::from_fn(|k| {
                 super::util::bind_buffers_at(
                     ctx,
-                    "hce flat batch",
+                    "hce batch",
                     &self.pipelines[k].get_bind_group_layout(0),
                     &bindings[k],
                 )
@@ -315,10 +410,12 @@ impl FlatPool {
             self.arena = Some(Arena {
                 vertices,
                 faces,
+                scratch_bytes,
                 positions,
                 colours,
                 indices,
                 face_colours,
+                normals,
                 groups,
             });
         }
@@ -326,18 +423,60 @@ impl FlatPool {
     }
 
     /// How many of `objects` (in order) one batch takes: while their fine triangles stay
-    /// within [`FlatPool::max_fine`].
+    /// within [`Pool::max_fine`].
     pub(super) fn fitting(&self, outs: impl IntoIterator<Item = u32>) -> usize {
         fitting(outs, self.max_fine)
     }
 
-    /// Records the refinement of `objects` (pooled, begun, at most [`FlatPool::max_fine`] fine
+    /// An object's `Params` with its section offsets counted in the pooled `topo`, and for a
+    /// Loop object the scratch square of its level (the object's own refinement may have
+    /// planned the workgroup kernel, which has none); with a Loop object's floats per scratch
+    /// slot and coarse triangles (0 for a flat one, whose steps do not walk them).
+    fn entry_params(&self, params: &[u32], topo: u32) -> (Vec<u32>, u64, u64) {
+        match self.kind {
+            Kind::Flat => {
+                let mut p: flat::Params =
+                    bytemuck::pod_read_unaligned(bytemuck::cast_slice(params));
+                for off in [
+                    &mut p.tri_off,
+                    &mut p.edges_off,
+                    &mut p.edge_verts_off,
+                    &mut p.edge_side_offsets_off,
+                    &mut p.edge_sides_off,
+                    &mut p.vertex_corners_off,
+                    &mut p.vertex_corner_offsets_off,
+                    &mut p.corner_copy_off,
+                    &mut p.edge_copy_off,
+                    &mut p.sources_off,
+                    &mut p.faces_off,
+                    &mut p.indices_off,
+                    &mut p.use_offsets_off,
+                    &mut p.uses_off,
+                ] {
+                    *off += topo;
+                }
+                (bytemuck::cast_slice(&[p]).to_vec(), 0, 0)
+            }
+            Kind::Loop => {
+                let mut p: loop_kernel::Params =
+                    bytemuck::pod_read_unaligned(bytemuck::cast_slice(params));
+                for off in &mut p.offsets {
+                    *off += topo;
+                }
+                let (square, slot) = slot_floats(p.level, p.ring_cap);
+                p.square_floats = square as u32;
+                let triangles = u64::from(p.triangle_count);
+                (bytemuck::cast_slice(&[p]).to_vec(), slot, triangles)
+            }
+        }
+    }
+
+    /// Records the refinement of `objects` (pooled, begun, at most [`Pool::max_fine`] fine
     /// triangles together) into `encoder`, which must be submitted before the next batch is
     /// recorded (the table is written once per batch): the batch's table written to the
-    /// queue, one compute
-    /// pass of three dispatches (timestamped by `timer` when it has room), then the copies of
-    /// each object's range of the pooled outputs into its own buffers. Returns the timer pass
-    /// used, if any.
+    /// queue, one compute pass of three dispatches (timestamped by `timer` when it has room),
+    /// then the copies of each object's range of the pooled outputs into its own buffers.
+    /// Returns the timer pass used, if any.
     pub(super) fn encode(
         &mut self,
         ctx: &GpuContext,
@@ -348,51 +487,52 @@ impl FlatPool {
         let count = objects.len();
         let mut first_vertices = Vec::with_capacity(count);
         let mut first_faces = Vec::with_capacity(count);
-        let mut entries = Vec::with_capacity(count * ENTRY_WORDS);
-        let (mut vertices, mut faces) = (0u64, 0u64);
+        let mut first_triangles = Vec::with_capacity(count);
+        let mut entries = Vec::new();
+        let (mut vertices, mut faces, mut triangles) = (0u64, 0u64, 0u64);
+        let mut slot_floats = 0u64;
         for b in objects {
             let bases = self.bases.get(b.object).copied().flatten().ok_or_else(|| {
                 GpuError::InvalidParams(format!("object {} is not pooled", b.object))
             })?;
-            let mut p: Params = bytemuck::pod_read_unaligned(bytemuck::cast_slice(b.params));
-            for off in [
-                &mut p.tri_off,
-                &mut p.edges_off,
-                &mut p.edge_verts_off,
-                &mut p.edge_side_offsets_off,
-                &mut p.edge_sides_off,
-                &mut p.vertex_corner_offsets_off,
-                &mut p.vertex_corners_off,
-                &mut p.corner_copy_off,
-                &mut p.edge_copy_off,
-                &mut p.sources_off,
-                &mut p.faces_off,
-                &mut p.indices_off,
-                &mut p.use_offsets_off,
-                &mut p.uses_off,
-            ] {
-                *off += bases.topo;
-            }
+            let (params, floats, coarse) = self.entry_params(b.params, bases.topo);
             first_vertices.push(word("pooled refined vertices", vertices)?);
             first_faces.push(word("pooled refined faces", faces)?);
+            first_triangles.push(word("pooled coarse triangles", triangles)?);
             entries.extend_from_slice(&bases.entry);
-            entries.extend_from_slice(bytemuck::cast_slice::<Params, u32>(&[p]));
+            entries.extend_from_slice(&params);
             vertices += u64::from(b.out.vertex_count);
             faces += u64::from(b.out.triangle_count);
+            triangles += coarse;
+            slot_floats = slot_floats.max(floats);
         }
         if count == 0 {
             return Ok(None);
         }
         if faces > self.max_fine {
             return Err(GpuError::TooLarge {
-                what: "flat batch",
+                what: "refinement batch",
                 needed: faces,
                 limit: self.max_fine,
             });
         }
+        // The Loop kernel's scratch: one slot per coarse triangle, or as many as the budget
+        // holds, each striding over the rest.
+        let slots = match self.kind {
+            Kind::Flat => 0,
+            Kind::Loop => {
+                let limits = ctx.device.limits();
+                let budget = SCRATCH_BUDGET
+                    .min(limits.max_storage_buffer_binding_size)
+                    .min(limits.max_buffer_size);
+                let slot_bytes = 4 * slot_floats.max(1);
+                triangles.min(budget / slot_bytes).max(1)
+            }
+        };
         let keys = self.table_at;
         let mut table = first_vertices;
         table.extend_from_slice(&first_faces);
+        table.extend_from_slice(&first_triangles);
         table.extend_from_slice(&entries);
         ctx.queue.write_buffer(
             &self.topo,
@@ -404,21 +544,33 @@ impl FlatPool {
             n,
             keys,
             keys + n,
-            keys + 2 * n,
+            keys + 3 * n,
             word("pooled refined vertices", vertices)?,
             word("pooled refined faces", faces)?,
+            keys + 2 * n,
+            word("pooled coarse triangles", triangles)?,
+            word("batch slots", slots)?,
+            0,
             0,
             0,
         ];
         ctx.queue
             .write_buffer(&self.uniform, 0, bytemuck::cast_slice(&batch));
+        let first_items = match self.kind {
+            Kind::Flat => vertices,
+            Kind::Loop => slots,
+        };
         let sizes = [
-            dispatch_size(ctx, vertices)?,
+            dispatch_size(ctx, first_items)?,
             dispatch_size(ctx, faces)?,
             dispatch_size(ctx, vertices)?,
         ];
         let pipelines = self.pipelines.clone();
-        let arena = self.arena(ctx, vertices, faces)?;
+        let label = match self.kind {
+            Kind::Flat => "hce flat batch",
+            Kind::Loop => "hce loop batch",
+        };
+        let arena = self.arena(ctx, vertices, faces, 4 * slot_floats * slots)?;
         let mut timer = timer;
         let pass_index = timer.as_mut().and_then(|t| t.next_pass());
         {
@@ -427,7 +579,7 @@ impl FlatPool {
                 _ => None,
             };
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("hce flat batch"),
+                label: Some(label),
                 timestamp_writes: writes,
             });
             for k in 0..3 {
@@ -442,12 +594,16 @@ impl FlatPool {
                 u64::from(b.out.vertex_count),
                 u64::from(b.out.triangle_count),
             );
-            for (src, dst, at, len) in [
+            let mut copies = vec![
                 (&arena.positions, &b.out.positions, 12 * v, 12 * ov),
                 (&arena.colours, &b.out.colours, 16 * v, 16 * ov),
                 (&arena.indices, &b.out.indices, 12 * f, 12 * of),
                 (&arena.face_colours, &b.out.faces, 16 * f, 16 * of),
-            ] {
+            ];
+            if let (Some(src), Some(dst)) = (&arena.normals, &b.out.normals) {
+                copies.push((src, dst, 12 * v, 12 * ov));
+            }
+            for (src, dst, at, len) in copies {
                 if len > 0 {
                     encoder.copy_buffer_to_buffer(src, at, dst, 0, len);
                 }
