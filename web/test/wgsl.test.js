@@ -32,7 +32,7 @@ test('modules come once each, after the modules they import (wgsl.rs)', async ()
   assert.throws(() => importOrder('lone', badText), { message: 'lone.wgsl imports hce_nothing, which is not a module (no hce_nothing.wgsl)' });
   // The kernels' modules are found through their imports, in wgsl.rs's order.
   const s = await sources();
-  const shared = ['hce_constants', 'hce_bindings', 'hce_tree', 'hce_light', 'hce_lattice', 'hce_gather'];
+  const shared = ['hce_constants', 'hce_bindings', 'hce_tree', 'hce_light', 'hce_lattice', 'hce_gather', 'hce_batch'];
   const files2 = await loadWgsl(async (f) => fs.readFileSync(path.join(GPU, f), 'utf8'));
   const own = (/** @type {string} */ m) => files2[`${m}.wgsl`];
   assert.deepEqual(importOrder('flat', own), [...shared, 'flat']);
