@@ -926,6 +926,34 @@ fn push_error(p: &mut crate::validate::Problems, e: GltfError) {
     }
 }
 
+/// Whether the asset says anything of the extension: lists it in `extensionsUsed` or
+/// `extensionsRequired`, or has its root or a primitive object. A file that says nothing was
+/// never baked, or lost its baked lighting to a tool that drops unknown extensions whole; one
+/// that says something is held to [`root_problems`].
+pub fn mentions_extension(json: &Value) -> bool {
+    let listed = |key: &str| {
+        json.get(key)
+            .and_then(Value::as_array)
+            .is_some_and(|a| a.iter().any(|e| e == EXTENSION_NAME))
+    };
+    let primitives = json
+        .get("meshes")
+        .and_then(Value::as_array)
+        .into_iter()
+        .flatten()
+        .filter_map(|m| m.get("primitives").and_then(Value::as_array))
+        .flatten();
+    listed("extensionsUsed")
+        || listed("extensionsRequired")
+        || json
+            .pointer(&format!("/extensions/{EXTENSION_NAME}"))
+            .is_some()
+        || primitives.into_iter().any(|p| {
+            p.pointer(&format!("/extensions/{EXTENSION_NAME}"))
+                .is_some()
+        })
+}
+
 /// The rules of the root object that need no buffer (SPEC.md 3.2, 3.3): `extensionsUsed` and
 /// `extensionsRequired`, the root object and its version, the container's buffer view's keys and
 /// alignment, as [`validate_asset`] reports them. A loader that reads the container itself

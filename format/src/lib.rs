@@ -38,10 +38,10 @@ pub use colour0::{colour_exposure, ALBEDO_FLOOR};
 pub use error::{ReadError, WriteError};
 pub use gltf::{
     buffer_view_bytes, check_links, container_bytes, decode_base64, embed_container, hash_hex,
-    link_primitive, linked_geometries, primitive_geometry, primitive_links, root_link,
-    root_problems, scan_primitive_links, validate_asset, validate_asset_report, write_glb,
-    Asset as GltfAsset, AssetReport, CheckedLink, CheckedLinks, GltfError, LinkFault, LinkNext,
-    LinkSink, PrimitiveLink, RootLink, EXTENSION_NAME,
+    link_primitive, linked_geometries, mentions_extension, primitive_geometry, primitive_links,
+    root_link, root_problems, scan_primitive_links, validate_asset, validate_asset_report,
+    write_glb, Asset as GltfAsset, AssetReport, CheckedLink, CheckedLinks, GltfError, LinkFault,
+    LinkNext, LinkSink, PrimitiveLink, RootLink, EXTENSION_NAME,
 };
 pub use layout::{
     read_layout, Header, Layout, SectionEntry, DIRECTORY_ENTRY_LEN, FILE_LEVEL, HEADER_LEN,

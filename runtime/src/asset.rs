@@ -518,6 +518,75 @@ impl Asset {
         })
     }
 
+    /// What can be drawn of a glTF that does not use the extension ([`AssetError::NotBaked`]),
+    /// for a viewer that would rather show it than nothing: its scene as one flat object in
+    /// world space, one colour per triangle from its `COLOR_0` (the fallback `hce bake` writes,
+    /// SPEC.md F.9, which optimisers keep when they drop the extension) or, without `COLOR_0`,
+    /// a grey preview light ([`crate::plain::gltf_plain_mesh`],
+    /// [`crate::plain::to_flat_object`]). Its first warning says that the file has no baked
+    /// lighting and what is drawn instead.
+    pub fn plain_preview(path: &Path, source: &GltfSource) -> Result<Self, AssetError> {
+        let loader = Loader::new(path, &OpenOptions::default());
+        let walk = scene_graph::walk(&source.json).map_err(|e| AssetError::Scene {
+            path: loader.path.clone(),
+            location: e.location,
+            message: e.message,
+        })?;
+        let mut skipped = Vec::new();
+        let mesh =
+            crate::plain::gltf_plain_mesh(&source.json, &source.buffers, &walk, &mut skipped)
+                .map_err(|e| loader.gltf_err(e))?;
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let (object, _) = crate::plain::to_flat_object(&name, &mesh);
+        if object.triangles.is_empty() {
+            return Err(AssetError::NotBaked {
+                path: loader.path.clone(),
+            });
+        }
+        let drawn = if mesh.colours.is_some() {
+            "drawn with its COLOR_0 vertex colours (one colour per triangle), not baked light"
+        } else {
+            "drawn in a grey preview light: it has no COLOR_0 either"
+        };
+        let mut warnings = vec![format!(
+            "no baked lighting: the file does not use {} (it was never baked, or a tool that \
+             does not know the extension dropped it: see the README, \"Optimising baked \
+             files\"); {drawn}",
+            hce_format::EXTENSION_NAME
+        )];
+        warnings.extend(walk.repeated_warnings());
+        warnings.extend(skipped);
+        let instance = Instance {
+            node: None,
+            name: name.clone(),
+            transform: Mat4::IDENTITY,
+        };
+        let object = loader.finish_object(0, object, vec![instance])?;
+        Ok(Asset {
+            path: path.to_path_buf(),
+            format: if source.glb {
+                AssetFormat::Glb
+            } else {
+                AssetFormat::Gltf
+            },
+            metadata: Metadata {
+                generator: source
+                    .json
+                    .pointer("/asset/generator")
+                    .and_then(Value::as_str)
+                    .unwrap_or_default()
+                    .to_owned(),
+                ..Metadata::default()
+            },
+            objects: vec![object],
+            camera: None,
+            warnings,
+        })
+    }
+
     /// World bounds of every instance of every object; `None` when nothing is drawn.
     pub fn bounds(&self) -> Option<Bounds> {
         self.objects
@@ -1033,6 +1102,91 @@ mod tests {
             open_glb(&plain, &OpenOptions::default()),
             Err(AssetError::NotBaked { .. })
         ));
+    }
+
+    /// The example GLB without the extension, as an optimiser that does not know it writes it;
+    /// with `colours` (RGBA, normalized bytes) as its `COLOR_0` and its node moved by 5 in z.
+    fn stripped_glb(colours: Option<[[u8; 4]; 3]>) -> Vec<u8> {
+        let a = hce_format::GltfAsset::from_glb(&example::triangle_glb()).unwrap();
+        let mut json = a.json;
+        let mut bin = a.bin.unwrap();
+        let j = json.as_object_mut().unwrap();
+        j.remove("extensions");
+        j.remove("extensionsUsed");
+        json["meshes"][0]["primitives"][0]
+            .as_object_mut()
+            .unwrap()
+            .remove("extensions");
+        json["nodes"][0]["translation"] = serde_json::json!([0.0, 0.0, 5.0]);
+        if let Some(colours) = colours {
+            let at = bin.len();
+            bin.extend(colours.iter().flatten());
+            json["bufferViews"]
+                .as_array_mut()
+                .unwrap()
+                .push(serde_json::json!({ "buffer": 0, "byteOffset": at, "byteLength": 12 }));
+            let view = json["bufferViews"].as_array().unwrap().len() - 1;
+            json["accessors"]
+                .as_array_mut()
+                .unwrap()
+                .push(serde_json::json!({
+                    "bufferView": view, "componentType": 5121, "normalized": true, "count": 3,
+                    "type": "VEC4"
+                }));
+            let accessor = json["accessors"].as_array().unwrap().len() - 1;
+            json["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = accessor.into();
+            json["buffers"][0]["byteLength"] = bin.len().into();
+        }
+        hce_format::write_glb(&json, &bin).unwrap()
+    }
+
+    fn preview(glb: &[u8]) -> Asset {
+        let source = GltfSource::parse(glb, |_| Err("no external buffers".into())).unwrap();
+        assert!(matches!(
+            Asset::from_gltf(Path::new("plain.glb"), &source, &OpenOptions::default()),
+            Err(AssetError::NotBaked { .. })
+        ));
+        Asset::plain_preview(Path::new("plain.glb"), &source).unwrap()
+    }
+
+    #[test]
+    fn a_glb_without_the_extension_previews_its_colour_0_in_world_space() {
+        let red_green_blue = [[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 255, 128]];
+        let asset = preview(&stripped_glb(Some(red_green_blue)));
+        assert_eq!(asset.objects.len(), 1);
+        let o = &asset.objects[0];
+        assert_eq!(o.object.kind, ObjectKind::Flat);
+        assert_eq!(o.instances.len(), 1);
+        assert_eq!(o.instances[0].transform, Mat4::IDENTITY);
+        // The node's translation is in the positions.
+        assert_eq!(
+            o.object.mesh.positions,
+            [0.0, 0.0, 5.0, 1.0, 0.0, 5.0, 0.0, 1.0, 5.0]
+        );
+        // The corners' mean colour, the alpha dropped.
+        let c = hce_format::rgb9e5::decode(o.object.colours[0]);
+        for k in 0..3 {
+            assert!((c[k] - 1.0 / 3.0).abs() < 2e-3, "{c:?}");
+        }
+        assert!(asset.warnings[0].starts_with("no baked lighting"));
+        assert!(
+            asset.warnings[0].contains("COLOR_0 vertex colours"),
+            "{:?}",
+            asset.warnings
+        );
+        assert_eq!(asset.metadata.generator, "hce tests");
+    }
+
+    #[test]
+    fn a_glb_without_the_extension_or_colours_previews_in_grey() {
+        let asset = preview(&stripped_glb(None));
+        let c = hce_format::rgb9e5::decode(asset.objects[0].object.colours[0]);
+        assert!(c[0] == c[1] && c[1] == c[2] && c[0] > 0.0, "{c:?}");
+        assert!(
+            asset.warnings[0].contains("grey preview light"),
+            "{:?}",
+            asset.warnings
+        );
     }
 
     #[test]

@@ -1,13 +1,131 @@
 //! A plain (not yet baked) mesh as a flat object, so `hce render` can preview any OBJ or glTF
-//! read by `hce_meshio::plain::load_plain_mesh`: welded on exactly equal positions, one
-//! single-node tree and one colour per triangle, which the flat kernel draws.
+//! read by `hce_meshio::plain::load_plain_mesh`, and the browser a glTF whose baked lighting
+//! is gone ([`gltf_plain_mesh`], read by hce-format's own accessor reader, which `hce.wasm`
+//! carries): welded on exactly equal positions, one single-node tree and one colour per
+//! triangle, which the flat kernel draws.
 
-use hce_format::{rgb9e5, ControlMesh, Object, ObjectKind, TriangleRecord};
+use glam::DVec3;
+use hce_format::{rgb9e5, ControlMesh, GltfError, Object, ObjectKind, TriangleRecord};
 use hce_geometry::flat::{edge_ids, normal_and_area};
 use hce_meshio::plain::PlainMesh;
+use hce_meshio::scene_graph::SceneWalk;
+use serde_json::Value;
+
+/// The colour of the vertices of a primitive without `COLOR_0` in a file where others have it.
+const NO_COLOUR: [f32; 3] = [0.5; 3];
+
+/// The triangle primitives of the meshes `walk` visits, as one plain mesh in world space: each
+/// primitive's positions decoded and dequantized ([`hce_format::read_primitive`]) and moved
+/// by its node's world transform, its indices, and, when any primitive has `COLOR_0`, the
+/// colour a glTF viewer draws without lighting: `COLOR_0` (`VEC3` or `VEC4`, any component type
+/// glTF allows, normalized values as fractions; the alpha dropped) times the material's
+/// `baseColorFactor`, plus its emissive colour (`emissiveFactor` times
+/// `KHR_materials_emissive_strength`). A baked file's `COLOR_0` is the light arriving at each
+/// vertex (SPEC.md F.9), so that product is the baked look that survives an optimiser. A
+/// primitive that cannot be read (Draco-compressed, not triangles) is skipped with a warning in
+/// `warnings`.
+pub fn gltf_plain_mesh(
+    json: &Value,
+    buffers: &[Vec<u8>],
+    walk: &SceneWalk,
+    warnings: &mut Vec<String>,
+) -> Result<PlainMesh, GltfError> {
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    let mut colours: Vec<Option<[f32; 3]>> = Vec::new();
+    for visit in &walk.visits {
+        let Some(m) = visit.mesh else { continue };
+        let count = json["meshes"][m]["primitives"]
+            .as_array()
+            .map_or(0, Vec::len);
+        let world = visit.world.as_dmat4();
+        for p in 0..count {
+            let prim = match hce_format::read_primitive(json, buffers, m, p) {
+                Ok(prim) => prim,
+                Err(e) => {
+                    warnings.push(format!("{e}; not drawn"));
+                    continue;
+                }
+            };
+            let base = u32::try_from(positions.len() / 3)
+                .ok()
+                .filter(|b| b.checked_add(prim.positions.len() as u32).is_some())
+                .ok_or_else(|| GltfError::Json("the meshes have too many vertices".into()))?;
+            for q in &prim.positions {
+                let w = world.transform_point3(DVec3::from_array(*q));
+                positions.extend(w.to_array().map(|x| x as f32));
+            }
+            indices.extend(prim.triangles.iter().flatten().map(|&v| base + v));
+            let colour = json["meshes"][m]["primitives"][p]["attributes"]["COLOR_0"].as_u64();
+            let read = match colour {
+                Some(a) => {
+                    let c = hce_format::read_accessor(json, buffers, a as usize)?;
+                    if !(3..=4).contains(&c.components) || c.count() != prim.positions.len() {
+                        return Err(GltfError::Json(format!(
+                            "meshes[{m}].primitives[{p}]: COLOR_0 is not a VEC3 or VEC4 per vertex"
+                        )));
+                    }
+                    let (base, emitted) = material_colours(json, m, p);
+                    c.values
+                        .chunks_exact(c.components)
+                        .map(|v| {
+                            Some(std::array::from_fn(|k| {
+                                (v[k] * base[k] + emitted[k]) as f32
+                            }))
+                        })
+                        .collect()
+                }
+                None => vec![None; prim.positions.len()],
+            };
+            colours.extend(read);
+        }
+    }
+    let any = colours.iter().any(Option::is_some);
+    Ok(PlainMesh {
+        positions,
+        indices,
+        colours: any.then(|| {
+            colours
+                .iter()
+                .flat_map(|c| c.unwrap_or(NO_COLOUR))
+                .collect()
+        }),
+    })
+}
 
 /// Direction of the preview light used for meshes without colours.
 const PREVIEW_LIGHT: [f32; 3] = [0.408_248_3, 0.816_496_6, 0.408_248_3];
+
+/// The `baseColorFactor` (RGB; white by default) and emissive colour (black by default) of
+/// primitive `p` of mesh `m`'s material, as glTF viewers read them (textures aside).
+fn material_colours(json: &Value, m: usize, p: usize) -> ([f64; 3], [f64; 3]) {
+    let material = json["meshes"][m]["primitives"][p]["material"]
+        .as_u64()
+        .and_then(|i| json.get("materials")?.get(i as usize));
+    let rgb = |v: Option<&Value>, default: f64| -> [f64; 3] {
+        let a = v.and_then(Value::as_array);
+        std::array::from_fn(|k| {
+            a.and_then(|a| a.get(k))
+                .and_then(Value::as_f64)
+                .filter(|x| x.is_finite())
+                .unwrap_or(default)
+        })
+    };
+    let Some(material) = material else {
+        return ([1.0; 3], [0.0; 3]);
+    };
+    let base = rgb(
+        material.pointer("/pbrMetallicRoughness/baseColorFactor"),
+        1.0,
+    );
+    let strength = material
+        .pointer("/extensions/KHR_materials_emissive_strength/emissiveStrength")
+        .and_then(Value::as_f64)
+        .filter(|x| x.is_finite())
+        .unwrap_or(1.0);
+    let emissive = rgb(material.get("emissiveFactor"), 0.0).map(|e| e * strength);
+    (base, emissive)
+}
 
 /// A flat object for the flat-refinement kernel: vertices welded on exactly equal positions,
 /// degenerate triangles dropped, one single-node tree and one colour per triangle: the mean of

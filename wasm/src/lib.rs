@@ -13,7 +13,8 @@
 //!   caller fills with a request frame and frees again.
 //! * `hce_load(ptr, bytes) -> result`: a `.glb`, `.gltf` or `.hce` file, read and checked as
 //!   `hce_runtime::Asset::from_bytes` does (the same checks and messages as the CLI), and a
-//!   glTF's root rules as `hce validate` words them.
+//!   glTF's root rules as `hce validate` words them; a glTF without baked lighting as
+//!   `hce_runtime::Asset::plain_preview` draws it, with a warning that says so.
 //! * `hce_tables(ptr, bytes) -> result`: one object's kernel tables and lighting table, as
 //!   the native runtime's kernels' `upload` builds them.
 //! * `hce_refine(ptr, bytes) -> result`: one object refined on the CPU with its baked light, as
@@ -113,12 +114,19 @@ pub fn load(request: &[u32]) -> Result<Vec<u32>, String> {
                     error,
                 })
             })?;
-            // The root rules the native loader leaves to `hce validate` (SPEC.md 3.2, 3.3):
-            // a page has no validator beside it, so it refuses such a file with its first one.
-            if let Some(problem) = root_problems(&source.json).first() {
+            // A file that says nothing of the extension lost its baked lighting to an optimiser
+            // that drops unknown extensions (or was never baked): drawn from its COLOR_0,
+            // saying so (the first warning).
+            if !hce_format::mentions_extension(&source.json) {
+                Asset::plain_preview(path, &source)
+            } else if let Some(problem) = root_problems(&source.json).first() {
+                // The root rules the native loader leaves to `hce validate` (SPEC.md 3.2,
+                // 3.3): a page has no validator beside it, so it refuses such a file with its
+                // first one.
                 return Err(problem.to_string());
+            } else {
+                Asset::from_gltf(path, &source, &options)
             }
-            Asset::from_gltf(path, &source, &options)
         }
     }
     .map_err(|e| shown(&e))?;

@@ -1,7 +1,8 @@
 // The viewer page's controls: zooming out lowers the automatic levels (the rule of
 // choose_level), orbiting keeps the distance, a level forced in the object table is drawn, the reconstruction switch
 // re-colours the image, the reset button restores the file's camera, the file picker opens a
-// .gltf with its .bin; nothing escapes.
+// .gltf with its .bin; a file whose baked lighting an optimiser dropped is drawn from its
+// COLOR_0, saying so; nothing escapes.
 import test from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
@@ -108,5 +109,73 @@ test('the viewer orbits, zooms, forces levels and switches the reconstruction', 
     assert.deepEqual(b.pageErrors, []);
   } finally {
     await b.close();
+  }
+});
+
+/**
+ * `glb` without EXT_hce_baked_lighting, as an optimiser that does not know the extension writes
+ * it (gltf-transform without hce's config, gltfpack): the root and primitive objects and the
+ * extensionsUsed entry gone, everything else (COLOR_0 included) kept.
+ * @param {string} glb @param {string} out
+ */
+function stripBakedLighting(glb, out) {
+  const bytes = fs.readFileSync(glb);
+  const jsonLength = bytes.readUInt32LE(12);
+  const json = JSON.parse(bytes.subarray(20, 20 + jsonLength).toString('utf8'));
+  const rest = bytes.subarray(20 + jsonLength);
+  delete json.extensions.EXT_hce_baked_lighting;
+  json.extensionsUsed = json.extensionsUsed.filter((/** @type {string} */ e) => e !== 'EXT_hce_baked_lighting');
+  for (const m of json.meshes) for (const p of m.primitives) delete p.extensions?.EXT_hce_baked_lighting;
+  let text = JSON.stringify(json);
+  while (text.length % 4 !== 0) text += ' ';
+  const head = Buffer.alloc(20);
+  head.write('glTF', 0);
+  head.writeUInt32LE(2, 4);
+  head.writeUInt32LE(20 + text.length + rest.length, 8);
+  head.writeUInt32LE(text.length, 12);
+  head.write('JSON', 16);
+  fs.writeFileSync(out, Buffer.concat([head, Buffer.from(text), rest]));
+}
+
+test('a file whose baked lighting is gone is drawn from its COLOR_0, saying so', { timeout: 300_000 }, async (t) => {
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'hce-viewer-plain-'));
+  try {
+    stripBakedLighting(path.join(REPO, 'conformance/valid/cornell-box.glb'), path.join(dir, 'box.glb'));
+    for (const webgpu of [true, false]) {
+      const b = await openBrowser(t, { '/plain/': dir }, { webgpu });
+      if (!b) return;
+      try {
+        await b.page.goto(`${b.url}/web/viewer.html?url=/plain/box.glb&size=200x150`);
+        await b.page.waitForFunction(() => /** @type {any} */ (window).hceViewer.frames > 0, null, { timeout: 120_000 });
+        const state = await b.page.evaluate(() => JSON.parse(JSON.stringify(/** @type {any} */ (window).hceViewer)));
+        assert.equal(state.error, null);
+        assert.equal(state.levels.length, 1, 'the scene as one object');
+        assert.match(await b.page.textContent('#warnings') ?? '', /^no baked lighting: the file does not use EXT_hce_baked_lighting.*COLOR_0 vertex colours/);
+        // The Cornell box's red and green walls: COLOR_0 (the light arriving) times the base colours.
+        const rgba = await b.page.evaluate(() => {
+          const c = /** @type {HTMLCanvasElement} */ (document.getElementById('canvas'));
+          const copy = document.createElement('canvas');
+          copy.width = c.width;
+          copy.height = c.height;
+          const cx = /** @type {CanvasRenderingContext2D} */ (copy.getContext('2d'));
+          cx.drawImage(c, 0, 0);
+          return Array.from(cx.getImageData(0, 0, c.width, c.height).data);
+        });
+        let red = 0;
+        let green = 0;
+        for (let i = 0; i < rgba.length; i += 4) {
+          const [r, g, bl] = [rgba[i], rgba[i + 1], rgba[i + 2]];
+          if (r > 60 && r > 1.5 * Math.max(g, bl)) red += 1;
+          if (g > 60 && g > 1.2 * r && g > 1.5 * bl) green += 1;
+        }
+        t.diagnostic(`${webgpu ? 'WebGPU' : 'WebGL2'}: ${red} red and ${green} green pixels of ${rgba.length / 4}`);
+        assert.ok(red > 100 && green > 100, `${red} red, ${green} green pixels`);
+        assert.deepEqual(b.pageErrors, []);
+      } finally {
+        await b.close();
+      }
+    }
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
   }
 });

@@ -381,20 +381,40 @@ fn run_baked(
 }
 
 /// A plain mesh (OBJ, or glTF without baked lighting) as the flat object its preview draws:
-/// one colour per coarse triangle, equal positions welded.
+/// one colour per coarse triangle, equal positions welded. A glTF is read as the browser reads
+/// it (`Asset::plain_preview`: its `COLOR_0` as a glTF viewer draws it), its warnings printed.
 #[cfg(feature = "gpu")]
 pub fn plain_object(file: &Path) -> Result<hce_format::Object> {
     use hce_meshio::plain as plain_mesh;
+    use hce_runtime::asset::{buffer_files, Asset, GltfSource};
 
-    let mesh = plain_mesh::load_plain_mesh(file)?;
-    let name = file
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let (object, dropped) = hce_runtime::plain::to_flat_object(&name, &mesh);
-    if dropped > 0 {
-        eprintln!("note: {dropped} degenerate triangles dropped after welding equal positions");
-    }
+    let gltf = file
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb") || e.eq_ignore_ascii_case("gltf"));
+    let object = if gltf {
+        let bytes =
+            std::fs::read(file).with_context(|| format!("{}: cannot read", file.display()))?;
+        let dir = file.parent().unwrap_or(Path::new("."));
+        let source = GltfSource::parse(&bytes, buffer_files(dir))
+            .with_context(|| format!("{}: cannot read", file.display()))?;
+        let mut asset = Asset::plain_preview(file, &source)?;
+        for w in &asset.warnings {
+            eprintln!("warning: {w}");
+        }
+        asset.objects.swap_remove(0).object
+    } else {
+        let mesh = plain_mesh::load_plain_mesh(file)?;
+        let name = file
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let (object, dropped) = hce_runtime::plain::to_flat_object(&name, &mesh);
+        if dropped > 0 {
+            eprintln!("note: {dropped} degenerate triangles dropped after welding equal positions");
+        }
+        object
+    };
     if object.triangles.is_empty() {
         bail!("{}: no non-degenerate triangles to render", file.display());
     }
