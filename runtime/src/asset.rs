@@ -1259,4 +1259,29 @@ mod tests {
         // string, padding); most are not, but none may panic.
         assert!(accepted_outside < glb.len() * 3, "{accepted_outside}");
     }
+
+    /// The preview of a file without the extension reads accessors, materials and the scene
+    /// graph from the file: a damaged one is an error or a preview, never a panic.
+    #[test]
+    fn a_damaged_file_without_the_extension_previews_or_errs_without_panicking() {
+        let glb = stripped_glb(Some([[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 255, 255]]));
+        let try_preview = |bytes: &[u8]| {
+            GltfSource::parse(bytes, |_| Err("no external buffers".into()))
+                .ok()
+                .map(|s| Asset::plain_preview(Path::new("damaged.glb"), &s).is_ok())
+        };
+        assert_eq!(try_preview(&glb), Some(true));
+        for len in 0..glb.len() {
+            let _ = try_preview(&glb[..len]);
+        }
+        let mut previewed = 0;
+        for i in 0..glb.len() {
+            for bit in [0, 3, 7] {
+                let mut b = glb.clone();
+                b[i] ^= 1 << bit;
+                previewed += usize::from(try_preview(&b) == Some(true));
+            }
+        }
+        assert!(previewed > 0 && previewed < 3 * glb.len(), "{previewed}");
+    }
 }
