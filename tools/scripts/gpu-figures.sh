@@ -2,7 +2,7 @@
 # The real-GPU figures of BENCHMARKS.md in one run of a few minutes: the kernels' throughput
 # (`hce bench-gpu`, flat and Loop, levels 1-5) as a fraction of the store-only kernel and of the
 # device's memory bandwidth, the Teatime and Chesstime flights of `hce view --offscreen`, and
-# the batched scene of many small flat objects.
+# the batched scenes of many small flat and multiresolution objects.
 #
 # A lent GPU machine is bare and cannot reach the registries, so the work is split in two:
 #
@@ -85,7 +85,7 @@ run() {
       --repeats 3 --reconstruction smooth | tee "$out/kernels-mesh.txt"
   fi
 
-  echo "== bench-gpu: many small flat objects"
+  echo "== bench-gpu: many small flat and multiresolution objects"
   "$hce" bench-gpu "${sw[@]}" --kernel scene --levels 2,3 --objects "${OBJECTS:-200,1000,5000}" \
     --repeats "${SCENE_REPEATS:-7}" | tee "$out/scene.txt"
 
