@@ -188,7 +188,20 @@ pub fn open(bytes: &[u8], base: Option<&Path>) -> Result<GuardedGltf, OpenError>
     if let Some(json) = &json {
         precheck(json).map_err(OpenError::Invalid)?;
     }
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(bytes).map_err(OpenError::Gltf)?;
+    let gltf::Gltf { document, blob } = if requires_quantization(json.as_ref()) {
+        // The `gltf` crate refuses a file that requires an extension it does not know;
+        // KHR_mesh_quantization only widens the component types of POSITION, NORMAL and
+        // TEXCOORD, which `AccessorUse::accepts` lets through and hce-format's reader decodes
+        // (`read_dequantized`). So the document is validated without that one entry.
+        let gltf::Gltf { document, blob } =
+            gltf::Gltf::from_slice_without_validation(bytes).map_err(OpenError::Gltf)?;
+        let mut root = document.into_json();
+        root.extensions_required.retain(|e| e != QUANTIZATION);
+        let document = gltf::Document::from_json(root).map_err(OpenError::Gltf)?;
+        gltf::Gltf { document, blob }
+    } else {
+        gltf::Gltf::from_slice(bytes).map_err(OpenError::Gltf)?
+    };
     let json = json.ok_or_else(|| OpenError::Invalid("the JSON cannot be read".into()))?;
     let mut buffer_problems = Vec::new();
     let buffers = load_buffers(&document, base, blob, &mut buffer_problems);
@@ -198,6 +211,68 @@ pub fn open(bytes: &[u8], base: Option<&Path>) -> Result<GuardedGltf, OpenError>
         buffers,
         buffer_problems,
     })
+}
+
+/// The extension that lets POSITION, NORMAL and TEXCOORD be integers (normalized or not).
+#[cfg(feature = "import")]
+pub const QUANTIZATION: &str = "KHR_mesh_quantization";
+
+/// Whether the file lists [`QUANTIZATION`] in `extensionsRequired`.
+#[cfg(feature = "import")]
+fn requires_quantization(json: Option<&Value>) -> bool {
+    json.and_then(|j| j.get("extensionsRequired"))
+        .and_then(Value::as_array)
+        .is_some_and(|a| a.iter().any(|e| e == QUANTIZATION))
+}
+
+/// The values of accessor `a` as `f32`, integers dequantized as glTF 3.11 says (a normalized
+/// signed `b`-bit value `c` is `max(c / (2^(b−1) − 1), −1)`, unsigned `c / (2^b − 1)`), by
+/// hce-format's reader ([`hce_format::read_accessor`], the one the runtime and `hce validate`
+/// read primitives with): for the component types KHR_mesh_quantization allows, which the
+/// `gltf` crate's reader does not decode. `N` components per element.
+#[cfg(feature = "import")]
+pub fn read_dequantized<const N: usize>(
+    json: &Value,
+    buffers: &[Option<Vec<u8>>],
+    a: &gltf::Accessor,
+) -> Result<Vec<[f32; N]>, String> {
+    // hce-format reads whole buffers; an accessor checked by `check_accessor` reads only loaded
+    // ones, and the others are never touched.
+    let loaded: Vec<Vec<u8>> = buffers
+        .iter()
+        .map(|b| b.clone().unwrap_or_default())
+        .collect();
+    let values = hce_format::read_accessor(json, &loaded, a.index()).map_err(|e| e.to_string())?;
+    if values.components != N {
+        return Err(format!(
+            "accessors[{}] has {} components, not {N}",
+            a.index(),
+            values.components
+        ));
+    }
+    Ok(values
+        .values
+        .chunks_exact(N)
+        .map(|c| std::array::from_fn(|k| c[k] as f32))
+        .collect())
+}
+
+/// The `VEC3` values of a POSITION or NORMAL accessor that [`check_accessor`] accepted:
+/// through the `gltf` crate's reader (`read`) when they are `FLOAT`, through
+/// [`read_dequantized`] when KHR_mesh_quantization made them integers. `None` when neither
+/// can read them.
+#[cfg(feature = "import")]
+pub fn read_vec3<I: Iterator<Item = [f32; 3]>>(
+    json: &Value,
+    buffers: &[Option<Vec<u8>>],
+    a: &gltf::Accessor,
+    read: impl FnOnce() -> Option<I>,
+) -> Option<Vec<[f32; 3]>> {
+    if a.data_type() == gltf::accessor::DataType::F32 {
+        read().map(Iterator::collect)
+    } else {
+        read_dequantized::<3>(json, buffers, a).ok()
+    }
 }
 
 /// Runs a read and turns a panic into an error message. The checks of this module cover
@@ -285,8 +360,14 @@ impl AccessorUse {
     pub fn accepts(self, a: &gltf::Accessor) -> bool {
         use gltf::accessor::{DataType as D, Dimensions as Dim};
         match self {
-            AccessorUse::Position | AccessorUse::Normal => {
-                a.data_type() == D::F32 && a.dimensions() == Dim::Vec3
+            // FLOAT, or the integers of KHR_mesh_quantization (read by `read_dequantized`).
+            AccessorUse::Position => {
+                a.dimensions() == Dim::Vec3 && !matches!(a.data_type(), D::U32)
+            }
+            AccessorUse::Normal => {
+                a.dimensions() == Dim::Vec3
+                    && (a.data_type() == D::F32
+                        || (a.normalized() && matches!(a.data_type(), D::I8 | D::I16)))
             }
             AccessorUse::TexCoord => {
                 matches!(a.data_type(), D::F32 | D::U8 | D::U16) && a.dimensions() == Dim::Vec2

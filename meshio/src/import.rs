@@ -333,17 +333,26 @@ fn read_gltf_checked(
                 return Err(invalid(what));
             }
             let reader = prim.reader(|b| buffers.get(b.index()).and_then(|d| d.as_deref()));
-            let Some(pos) = reader.read_positions() else {
+            let position = prim.get(&gltf::Semantic::Positions);
+            let Some(pos) = position.and_then(|a| {
+                crate::gltf_guard::read_vec3(&gltf.json, buffers, &a, || reader.read_positions())
+            }) else {
                 continue;
             };
-            let pos: Vec<[f32; 3]> = pos.map(place).collect();
+            let pos: Vec<[f32; 3]> = pos.into_iter().map(place).collect();
             let nv = pos.len();
             let base_v = u32::try_from(out.positions.len())
                 .ok()
                 .filter(|b| b.checked_add(nv as u32).is_some() && nv <= u32::MAX as usize)
                 .ok_or_else(|| too_many(path))?;
             let prim_normals: Option<Vec<[f32; 3]>> = if wanted.normals {
-                reader.read_normals().map(|n| n.map(turn).collect())
+                prim.get(&gltf::Semantic::Normals)
+                    .and_then(|a| {
+                        crate::gltf_guard::read_vec3(&gltf.json, buffers, &a, || {
+                            reader.read_normals()
+                        })
+                    })
+                    .map(|n| n.into_iter().map(turn).collect())
             } else {
                 None
             };

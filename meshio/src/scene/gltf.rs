@@ -18,7 +18,9 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
-use crate::gltf_guard::{check_accessor, panic_free, read_uri_from, AccessorUse as Use, OpenError};
+use crate::gltf_guard::{
+    check_accessor, panic_free, read_uri_from, read_vec3, AccessorUse as Use, OpenError,
+};
 use crate::scene_graph::walk;
 
 /// Extensions whose content this reader uses (the rest are reported as ignored).
@@ -80,7 +82,9 @@ fn import_checked(
     let mut warnings = Vec::new();
 
     for ext in document.extensions_used() {
-        if ext == hce_format::EXTENSION_NAME {
+        if ext == crate::gltf_guard::QUANTIZATION {
+            // Read: its integer positions and normals are dequantized.
+        } else if ext == hce_format::EXTENSION_NAME {
             warnings.push(format!(
                 "{ext}: the input already carries baked lighting; it is ignored and replaced"
             ));
@@ -113,6 +117,7 @@ fn import_checked(
                 node,
                 &mesh,
                 world,
+                &gltf.json,
                 buffers,
                 options,
                 &mut scene,
@@ -157,10 +162,12 @@ fn multires_extra(node: &::gltf::Node) -> bool {
         .unwrap_or(false)
 }
 
+#[allow(clippy::too_many_arguments)]
 fn read_mesh_instance(
     node: &::gltf::Node,
     mesh: &::gltf::Mesh,
     world: Mat4,
+    json: &serde_json::Value,
     buffers: &[Option<Vec<u8>>],
     options: &ImportOptions,
     scene: &mut ImportedScene,
@@ -197,7 +204,7 @@ fn read_mesh_instance(
             continue;
         }
         let reader = prim.reader(|b| buffers.get(b.index()).and_then(|d| d.as_deref()));
-        let Some(positions) = reader.read_positions().map(|p| p.collect::<Vec<_>>()) else {
+        let Some(positions) = read_vec3(json, buffers, &pos_acc, || reader.read_positions()) else {
             warnings.push(format!("{loc}: POSITION cannot be read; skipped"));
             continue;
         };
@@ -248,8 +255,7 @@ fn read_mesh_instance(
                     false
                 }
             })
-            .and_then(|_| reader.read_normals())
-            .map(|r| r.collect::<Vec<_>>());
+            .and_then(|a| read_vec3(json, buffers, &a, || reader.read_normals()));
         let uv0 = prim
             .get(&::gltf::Semantic::TexCoords(0))
             .filter(|a| match check_accessor(a, Use::TexCoord, buffers) {
