@@ -1,4 +1,5 @@
-// Runs gltf-transform's CLI with hce.config.mjs on the three baked samples and checks that the
+// Runs gltf-transform's CLI with hce.config.mjs on the three baked samples and a scene with
+// instances (the Cornell box with its short block's mesh drawn twice) and checks that the
 // baked lighting survives: the root object, the container bytes (byte for byte, 256-aligned in
 // the buffer), `hce validate`'s verdict, the Khronos glTF-Validator's (no error, no warning),
 // and `hce render` of the output against `hce render` of the original: relative RMS over the
@@ -9,7 +10,7 @@
 // are baked here with cheap settings (the extension's structure does not depend on them).
 import assert from 'node:assert/strict';
 import { execFileSync, spawnSync } from 'node:child_process';
-import { mkdtempSync, readFileSync, existsSync } from 'node:fs';
+import { mkdtempSync, readFileSync, existsSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
 import { test } from 'node:test';
@@ -26,7 +27,7 @@ const cli = join(pkg, 'node_modules/@gltf-transform/cli/bin/cli.js');
 const config = join(pkg, 'hce.config.mjs');
 const work = mkdtempSync(join(tmpdir(), 'hce-gltf-transform-'));
 
-const SAMPLES = { teatime: ['--creases', 'auto'], chesstime: ['--creases', 'auto'], 'cornell-box': [] };
+const SAMPLES = { teatime: ['--creases', 'auto'], chesstime: ['--creases', 'auto'], 'cornell-box': [], 'instanced-box': [] };
 
 // Outputs `hce validate` accepts: the same geometry (SPEC.md 2.6) holds through a changed
 // triangle or vertex order, quantized positions and meshopt compression.
@@ -56,11 +57,39 @@ function container(path) {
   return { offset, bytes: bin.subarray(offset, offset + view.byteLength), links: links.length, buffer: view.buffer };
 }
 
+/**
+ * The Cornell box with instances: its short block's mesh drawn by a second node too, moved
+ * and turned (a scene whose meshes are shared by several nodes, as instanced props are).
+ */
+function instancedBox() {
+  const { json, bin } = readGlb(join(repo, 'samples', 'cornell-box.glb'));
+  const block = json.nodes.findIndex((/** @type {any} */ n) => n.name === 'short_block');
+  json.nodes.push({ name: 'short_block_copy', mesh: json.nodes[block].mesh, translation: [-0.25, 0.0, 0.2], rotation: [0, 0.3826834, 0, 0.9238795], scale: [0.5, 0.5, 0.5] });
+  json.scenes[json.scene ?? 0].nodes.push(json.nodes.length - 1);
+  let text = JSON.stringify(json);
+  while (text.length % 4 !== 0) text += ' ';
+  const out = join(work, 'instanced-box.glb');
+  const chunk = (/** @type {Buffer} */ data, /** @type {string} */ type) => {
+    const head = Buffer.alloc(8);
+    head.writeUInt32LE(data.length, 0);
+    head.write(type, 4);
+    return Buffer.concat([head, data]);
+  };
+  const body = Buffer.concat([chunk(Buffer.from(text), 'JSON'), chunk(Buffer.from(bin), 'BIN\0')]);
+  const header = Buffer.alloc(12);
+  header.write('glTF', 0);
+  header.writeUInt32LE(2, 4);
+  header.writeUInt32LE(12 + body.length, 8);
+  writeFileSync(out, Buffer.concat([header, body]));
+  return out;
+}
+
 function baked(name) {
   const dir = process.env.HCE_BAKED_DIR;
   if (dir && existsSync(join(dir, `${name}-baked.glb`))) return join(dir, `${name}-baked.glb`);
   const out = join(work, `${name}-baked.glb`);
-  execFileSync(hce, ['bake', join(repo, 'samples', `${name}.glb`), '-o', out, '-q', '--detail-level', '4', '--visibility-rays', '2', ...SAMPLES[name]]);
+  const input = name === 'instanced-box' ? instancedBox() : join(repo, 'samples', `${name}.glb`);
+  execFileSync(hce, ['bake', input, '-o', out, '-q', '--detail-level', '4', '--visibility-rays', '2', ...SAMPLES[name]]);
   return out;
 }
 
