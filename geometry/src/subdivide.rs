@@ -666,135 +666,130 @@ pub struct OutputShape {
 /// arithmetic of [`subdivide`], so the bounds are those of its output bit for bit. (A writer
 /// should still compare them with the output's, as a check that costs one pass.)
 pub fn output_shape(mesh: &ControlMesh, level: u32) -> Result<OutputShape, SubdivError> {
-    if level > MAX_LOOP_LEVEL {
-        return Err(SubdivError::Level(level));
-    }
-    let prep = prepare(mesh)?;
-    let nf = mesh.triangle_count();
-    // The size checks of `subdivide`, with its error.
-    let too_large = || SubdivError::TooLarge {
-        level,
-        triangles: nf,
-        what: "more than 2^32 vertices or indices",
-    };
-    let count = |x: usize| u32::try_from(x).map_err(|_| too_large());
-    let numbering = Numbering {
-        level,
-        vertices: count(mesh.vertex_count())?,
-        edges: count(prep.edge_count)?,
-        triangles: count(nf)?,
-    };
-    if numbering.vertex_count() > u64::from(u32::MAX)
-        || numbering.triangle_count() > u64::from(u32::MAX / 3)
-    {
-        return Err(too_large());
-    }
-    let mut shape = OutputShape {
-        vertices: numbering.vertex_count() as usize,
-        triangles: numbering.triangle_count() as usize,
-        bounds: None,
-    };
-    if nf == 0 || !mesh.positions.iter().all(|p| p.is_finite()) {
-        return Ok(shape);
-    }
-    // Control box of each triangle's patch, and its margin.
-    let boxes: Vec<(P, P, f32)> = (0..nf)
-        .into_par_iter()
-        .map(|t| {
+    Ok(plan(mesh, level)?.shape())
+}
+
+impl Plan<'_> {
+    /// [`output_shape`] of the planned mesh and level.
+    pub fn shape(&self) -> OutputShape {
+        let Plan {
+            mesh,
+            level,
+            ref prep,
+            numbering,
+        } = *self;
+        let nf = mesh.triangle_count();
+        let mut shape = OutputShape {
+            vertices: numbering.vertex_count() as usize,
+            triangles: numbering.triangle_count() as usize,
+            bounds: None,
+        };
+        if nf == 0 || !mesh.positions.iter().all(|p| p.is_finite()) {
+            return shape;
+        }
+        // Control box of each triangle's patch, and its margin.
+        let boxes: Vec<(P, P, f32)> = (0..nf)
+            .into_par_iter()
+            .map(|t| {
+                let tv = mesh.triangle(t);
+                let (mut lo, mut hi) = (P::splat(f32::INFINITY), P::splat(f32::NEG_INFINITY));
+                for &v in &tv {
+                    let off = mesh.ring_offsets[v as usize] as usize;
+                    let end = mesh.ring_offsets[v as usize + 1] as usize;
+                    for &q in std::iter::once(&v).chain(&mesh.ring[off..end]) {
+                        let p = P::from(mesh.position(q));
+                        lo = lo.min(p);
+                        hi = hi.max(p);
+                    }
+                }
+                let scale = lo.abs().max(hi.abs()).max_element();
+                (lo, hi, scale * 1e-4 + f32::MIN_POSITIVE)
+            })
+            .collect();
+        let m = 1usize << level;
+        let mut patch = Patch::default();
+        // The points triangle `t` writes (`all`: every point of its grid, owned or not).
+        let mut points = |t: usize, all: bool, f: &mut dyn FnMut(P)| {
+            let tri = make_tri(mesh, &prep, t);
             let tv = mesh.triangle(t);
-            let (mut lo, mut hi) = (P::splat(f32::INFINITY), P::splat(f32::NEG_INFINITY));
-            for &v in &tv {
-                let off = mesh.ring_offsets[v as usize] as usize;
-                let end = mesh.ring_offsets[v as usize + 1] as usize;
-                for &q in std::iter::once(&v).chain(&mesh.ring[off..end]) {
-                    let p = P::from(mesh.position(q));
-                    lo = lo.min(p);
-                    hi = hi.max(p);
+            patch.load(&tri, tv);
+            let mut n = 1;
+            while n < m {
+                patch.step(&tri, n, [true; 3], [true; 3]);
+                n *= 2;
+            }
+            for j in 0..=m {
+                for i in 0..=m - j {
+                    let owned = if (i, j) == (0, 0) || (i, j) == (m, 0) || (i, j) == (0, m) {
+                        let c = if j == m { 2 } else { usize::from(i == m) };
+                        prep.vertex_owner[tv[c] as usize] == (3 * t + c) as u32
+                    } else if j == 0 {
+                        prep.owns_edge[3 * t]
+                    } else if i + j == m {
+                        prep.owns_edge[3 * t + 1]
+                    } else if i == 0 {
+                        prep.owns_edge[3 * t + 2]
+                    } else {
+                        true
+                    };
+                    if all || owned {
+                        f(patch.sq[sq(m, i as isize, j as isize)]);
+                    }
                 }
             }
-            let scale = lo.abs().max(hi.abs()).max_element();
-            (lo, hi, scale * 1e-4 + f32::MIN_POSITIVE)
-        })
-        .collect();
-    let m = 1usize << level;
-    let mut patch = Patch::default();
-    // The points triangle `t` writes (`all`: every point of its grid, owned or not).
-    let mut points = |t: usize, all: bool, f: &mut dyn FnMut(P)| {
-        let tri = make_tri(mesh, &prep, t);
-        let tv = mesh.triangle(t);
-        patch.load(&tri, tv);
-        let mut n = 1;
-        while n < m {
-            patch.step(&tri, n, [true; 3], [true; 3]);
-            n *= 2;
-        }
-        for j in 0..=m {
-            for i in 0..=m - j {
-                let owned = if (i, j) == (0, 0) || (i, j) == (m, 0) || (i, j) == (0, m) {
-                    let c = if j == m { 2 } else { usize::from(i == m) };
-                    prep.vertex_owner[tv[c] as usize] == (3 * t + c) as u32
-                } else if j == 0 {
-                    prep.owns_edge[3 * t]
-                } else if i + j == m {
-                    prep.owns_edge[3 * t + 1]
-                } else if i == 0 {
-                    prep.owns_edge[3 * t + 2]
+        };
+        let mut candidates = Vec::new();
+        for axis in 0..3 {
+            for top in [false, true] {
+                // A refined point near the extreme: from the triangle reaching furthest.
+                let key = |b: &(P, P, f32)| if top { -b.1[axis] } else { b.0[axis] };
+                let first = (0..nf)
+                    .min_by(|&a, &b| key(&boxes[a]).total_cmp(&key(&boxes[b])))
+                    .unwrap_or(0);
+                let mut found = if top {
+                    f32::NEG_INFINITY
                 } else {
-                    true
+                    f32::INFINITY
                 };
-                if all || owned {
-                    f(patch.sq[sq(m, i as isize, j as isize)]);
-                }
+                points(first, true, &mut |p| {
+                    found = if top {
+                        found.max(p[axis])
+                    } else {
+                        found.min(p[axis])
+                    };
+                });
+                candidates.extend((0..nf).filter(|&t| {
+                    let (lo, hi, margin) = boxes[t];
+                    if top {
+                        hi[axis] + margin >= found
+                    } else {
+                        lo[axis] - margin <= found
+                    }
+                }));
             }
         }
-    };
-    let mut candidates = Vec::new();
-    for axis in 0..3 {
-        for top in [false, true] {
-            // A refined point near the extreme: from the triangle reaching furthest.
-            let key = |b: &(P, P, f32)| if top { -b.1[axis] } else { b.0[axis] };
-            let first = (0..nf)
-                .min_by(|&a, &b| key(&boxes[a]).total_cmp(&key(&boxes[b])))
-                .unwrap_or(0);
-            let mut found = if top {
-                f32::NEG_INFINITY
-            } else {
-                f32::INFINITY
-            };
-            points(first, true, &mut |p| {
-                found = if top {
-                    found.max(p[axis])
-                } else {
-                    found.min(p[axis])
-                };
+        candidates.sort_unstable();
+        candidates.dedup();
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        for t in candidates {
+            points(t, false, &mut |p| {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
             });
-            candidates.extend((0..nf).filter(|&t| {
-                let (lo, hi, margin) = boxes[t];
-                if top {
-                    hi[axis] + margin >= found
-                } else {
-                    lo[axis] - margin <= found
-                }
-            }));
         }
+        shape.bounds = Some((lo, hi));
+        shape
     }
-    candidates.sort_unstable();
-    candidates.dedup();
-    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    for t in candidates {
-        points(t, false, &mut |p| {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        });
-    }
-    shape.bounds = Some((lo, hi));
-    Ok(shape)
 }
 
 /// Triangles per parallel task.
 const CHUNK: usize = 64;
+/// Triangles per parallel task of [`subdivide_streamed`] with a sink: each task's output is
+/// written with a handful of system calls, and fewer, larger writes cost less (about 270 tasks
+/// for the Stanford bunny, still plenty to balance two to a few tens of threads).
+const STREAM_CHUNK: usize = 256;
 
 /// A range of coarse triangles `t0..t1` with its disjoint slices of the output.
 struct Job<'a> {
@@ -923,19 +918,23 @@ pub fn subdivide_streamed(
     result
 }
 
-fn subdivide_checked(
-    mesh: &ControlMesh,
+/// A subdivision of one mesh to one level, checked and prepared once ([`plan`]): its
+/// [`OutputShape`] and the subdivision itself then share the table checks.
+pub struct Plan<'a> {
+    mesh: &'a ControlMesh,
     level: u32,
-    out: &mut Refined,
-    sink: Option<&(dyn Fn(Written<'_>) + Sync)>,
-) -> Result<(), SubdivError> {
+    prep: Prepared,
+    numbering: Numbering,
+}
+
+/// Checks `level` and every table [`subdivide`] reads, and the output's size, with
+/// [`subdivide`]'s errors.
+pub fn plan(mesh: &ControlMesh, level: u32) -> Result<Plan<'_>, SubdivError> {
     if level > MAX_LOOP_LEVEL {
         return Err(SubdivError::Level(level));
     }
     let prep = prepare(mesh)?;
-    let nv = mesh.vertex_count();
     let nf = mesh.triangle_count();
-    let ne = prep.edge_count;
     let too_large = || SubdivError::TooLarge {
         level,
         triangles: nf,
@@ -944,8 +943,8 @@ fn subdivide_checked(
     let count = |x: usize| u32::try_from(x).map_err(|_| too_large());
     let numbering = Numbering {
         level,
-        vertices: count(nv)?,
-        edges: count(ne)?,
+        vertices: count(mesh.vertex_count())?,
+        edges: count(prep.edge_count)?,
         triangles: count(nf)?,
     };
     if numbering.vertex_count() > u64::from(u32::MAX)
@@ -953,6 +952,49 @@ fn subdivide_checked(
     {
         return Err(too_large());
     }
+    Ok(Plan {
+        mesh,
+        level,
+        prep,
+        numbering,
+    })
+}
+
+impl Plan<'_> {
+    /// [`subdivide_streamed`] of the planned mesh and level.
+    pub fn subdivide_streamed(
+        &self,
+        out: &mut Refined,
+        sink: Option<&(dyn Fn(Written<'_>) + Sync)>,
+    ) {
+        subdivide_planned(self, out, sink);
+    }
+}
+
+fn subdivide_checked(
+    mesh: &ControlMesh,
+    level: u32,
+    out: &mut Refined,
+    sink: Option<&(dyn Fn(Written<'_>) + Sync)>,
+) -> Result<(), SubdivError> {
+    subdivide_planned(&plan(mesh, level)?, out, sink);
+    Ok(())
+}
+
+fn subdivide_planned(
+    plan: &Plan<'_>,
+    out: &mut Refined,
+    sink: Option<&(dyn Fn(Written<'_>) + Sync)>,
+) {
+    let Plan {
+        mesh,
+        level,
+        ref prep,
+        numbering,
+    } = *plan;
+    let nv = mesh.vertex_count();
+    let nf = mesh.triangle_count();
+    let ne = prep.edge_count;
     let m = 1usize << level;
     let per_edge = numbering.per_edge() as usize;
     let per_tri = numbering.per_triangle() as usize;
@@ -1066,7 +1108,8 @@ fn subdivide_checked(
         }
         owned
     };
-    let jobs = split(whole, CHUNK, &sizes);
+    let chunk = if sink.is_some() { STREAM_CHUNK } else { CHUNK };
+    let jobs = split(whole, chunk, &sizes);
     let corner_out: Vec<Vec<(u32, Out, Out)>> = match sink {
         None => jobs
             .into_par_iter()
@@ -1119,5 +1162,4 @@ fn subdivide_checked(
         coarse_edges: ne,
         coarse_triangles: nf,
     };
-    Ok(())
 }

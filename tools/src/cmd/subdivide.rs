@@ -152,7 +152,7 @@ pub fn run(mut args: SubdivideArgs) -> Result<()> {
 
 /// Subdivides `mesh` and writes the result, returning it and when the subdivision ended. A
 /// GLB is streamed ([`hce_meshio::export::GlbStream`]): its header is written from the output's
-/// size and position bounds, known in advance ([`hce_geometry::subdivide::output_shape`]), and
+/// size and position bounds, known in advance ([`hce_geometry::subdivide::Plan::shape`]), and
 /// each batch of output is written while the next is computed, so the disk writes overlap the
 /// subdivision; the file is the one [`hce_meshio::export::write_mesh`] writes, byte for byte.
 /// How much of a streamed GLB is written between flushes to disk.
@@ -162,7 +162,7 @@ fn subdivide_and_write(
     args: &SubdivideArgs,
     mesh: &hce_format::ControlMesh,
 ) -> Result<(hce_geometry::Refined, Instant)> {
-    use hce_geometry::subdivide::{output_shape, subdivide_streamed, Written};
+    use hce_geometry::subdivide::{plan, Written};
     let cannot = || format!("{}: cannot subdivide", args.input.display());
     let glb = args
         .output
@@ -170,7 +170,8 @@ fn subdivide_and_write(
         .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
     #[cfg(unix)]
     if glb {
-        let shape = output_shape(mesh, args.level).with_context(cannot)?;
+        let plan = plan(mesh, args.level).with_context(cannot)?;
+        let shape = plan.shape();
         let stream = match shape.bounds {
             Some(bounds) => hce_meshio::export::GlbStream::create(
                 &args.output,
@@ -199,7 +200,7 @@ fn subdivide_and_write(
                 }
             };
             let mut refined = hce_geometry::Refined::default();
-            subdivide_streamed(mesh, args.level, &mut refined, Some(&sink)).with_context(cannot)?;
+            plan.subdivide_streamed(&mut refined, Some(&sink));
             let t4 = Instant::now();
             stream.finish(
                 &args.output,
