@@ -687,21 +687,26 @@ impl Plan<'_> {
         if nf == 0 || !mesh.positions.iter().all(|p| p.is_finite()) {
             return shape;
         }
-        // Control box of each triangle's patch, and its margin.
-        let boxes: Vec<(P, P, f32)> = (0..nf)
+        // Control box of each vertex and its ring, then of each triangle's patch (its corners'
+        // boxes), with its margin.
+        let vertex_boxes: Vec<(P, P)> = (0..mesh.vertex_count())
             .into_par_iter()
-            .map(|t| {
-                let tv = mesh.triangle(t);
-                let (mut lo, mut hi) = (P::splat(f32::INFINITY), P::splat(f32::NEG_INFINITY));
-                for &v in &tv {
-                    let off = mesh.ring_offsets[v as usize] as usize;
-                    let end = mesh.ring_offsets[v as usize + 1] as usize;
-                    for &q in std::iter::once(&v).chain(&mesh.ring[off..end]) {
-                        let p = P::from(mesh.position(q));
-                        lo = lo.min(p);
-                        hi = hi.max(p);
-                    }
-                }
+            .map(|v| {
+                let off = mesh.ring_offsets[v] as usize;
+                let end = mesh.ring_offsets[v + 1] as usize;
+                let p = P::from(mesh.position(v as u32));
+                mesh.ring[off..end].iter().fold((p, p), |(lo, hi), &q| {
+                    let q = P::from(mesh.position(q));
+                    (lo.min(q), hi.max(q))
+                })
+            })
+            .collect();
+        let boxes: Vec<(P, P, f32)> = mesh
+            .triangles
+            .par_chunks_exact(3)
+            .map(|tv| {
+                let b = tv.iter().map(|&v| vertex_boxes[v as usize]);
+                let (lo, hi) = b.reduce(|a, b| (a.0.min(b.0), a.1.max(b.1))).unwrap();
                 let scale = lo.abs().max(hi.abs()).max_element();
                 (lo, hi, scale * 1e-4 + f32::MIN_POSITIVE)
             })
