@@ -715,7 +715,7 @@ impl Plan<'_> {
         let mut patch = Patch::default();
         // The points triangle `t` writes (`all`: every point of its grid, owned or not).
         let mut points = |t: usize, all: bool, f: &mut dyn FnMut(P)| {
-            let tri = make_tri(mesh, &prep, t);
+            let tri = make_tri(mesh, prep, t);
             let tv = mesh.triangle(t);
             patch.load(&tri, tv);
             let mut n = 1;
@@ -1044,7 +1044,7 @@ fn subdivide_planned(
         let mut gmap = vec![0u32; (m + 3) * (m + 3)];
         let mut owned = Vec::new();
         for t in job.t0..job.t1 {
-            let tri = make_tri(mesh, &prep, t);
+            let tri = make_tri(mesh, prep, t);
             let tv = mesh.triangle(t);
             let own_corner: [bool; 3] =
                 std::array::from_fn(|c| prep.vertex_owner[tv[c] as usize] == (3 * t + c) as u32);
