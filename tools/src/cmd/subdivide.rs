@@ -150,14 +150,16 @@ pub fn run(mut args: SubdivideArgs) -> Result<()> {
     Ok(())
 }
 
-/// Subdivides `mesh` and writes the result, returning it and when the subdivision ended. A
-/// GLB is streamed ([`hce_meshio::export::GlbStream`]): its header is written from the output's
-/// size and position bounds, known in advance ([`hce_geometry::subdivide::Plan::shape`]), and
-/// each batch of output is written while the next is computed, so the disk writes overlap the
-/// subdivision; the file is the one [`hce_meshio::export::write_mesh`] writes, byte for byte.
 /// How much of a streamed GLB is written between flushes to disk.
 const FLUSH_BYTES: usize = 8 << 20;
 
+/// Subdivides `mesh` and writes the result, returning it and when the subdivision ended. A
+/// GLB is streamed ([`hce_meshio::export::GlbStream`]): its header is written from the output's
+/// size and position bounds, known in advance ([`hce_geometry::subdivide::Plan::shape`]), and
+/// each finished range of output is written while the rest is computed, so the disk writes
+/// overlap the subdivision (the `--stats` time of the subdivision then includes them, and that
+/// of the write is what is left); the file is the one [`hce_meshio::export::write_mesh`]
+/// writes, byte for byte.
 fn subdivide_and_write(
     args: &SubdivideArgs,
     mesh: &hce_format::ControlMesh,
@@ -212,6 +214,7 @@ fn subdivide_and_write(
             return Ok((refined, t4));
         }
     }
+    // Only Unix streams a GLB.
     let _ = glb;
     let refined = hce_geometry::subdivide::subdivide(mesh, args.level).with_context(cannot)?;
     let t4 = Instant::now();
