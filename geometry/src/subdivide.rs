@@ -644,8 +644,215 @@ fn make_tri<'a>(mesh: &'a ControlMesh, prep: &'a Prepared, t: usize) -> Tri<'a> 
     }
 }
 
+/// The size of [`subdivide`]'s output and, found without subdividing the whole mesh, the
+/// per-axis minimum and maximum of its positions: what a glTF writer puts in its header before
+/// the buffers, so that it can write them as they are computed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OutputShape {
+    pub vertices: usize,
+    pub triangles: usize,
+    /// `None` where a control position is not finite.
+    pub bounds: Option<([f32; 3], [f32; 3])>,
+}
+
+/// [`OutputShape`] of `subdivide(mesh, level)`.
+///
+/// Every refined point of a coarse triangle's patch is a convex combination of the control
+/// points its patch loads (its corners and their rings): the Loop edge and vertex weights (with
+/// the valence correction, `1 - 3 cf(n) / 8` and `3 cf(n) / 8n`), the crease, sharp-edge and
+/// corner rules are all non-negative and sum to one. So only triangles whose control box
+/// reaches, with a margin far above `f32` rounding, past a refined point already found can hold
+/// an extreme; those few are subdivided here, each writing only the points it owns, with the
+/// arithmetic of [`subdivide`], so the bounds are those of its output bit for bit. (A writer
+/// should still compare them with the output's, as a check that costs one pass.)
+pub fn output_shape(mesh: &ControlMesh, level: u32) -> Result<OutputShape, SubdivError> {
+    Ok(plan(mesh, level)?.shape())
+}
+
+impl Plan<'_> {
+    /// [`output_shape`] of the planned mesh and level.
+    pub fn shape(&self) -> OutputShape {
+        let Plan {
+            mesh,
+            level,
+            ref prep,
+            numbering,
+        } = *self;
+        let nf = mesh.triangle_count();
+        let mut shape = OutputShape {
+            vertices: numbering.vertex_count() as usize,
+            triangles: numbering.triangle_count() as usize,
+            bounds: None,
+        };
+        if nf == 0 || !mesh.positions.iter().all(|p| p.is_finite()) {
+            return shape;
+        }
+        // Control box of each vertex and its ring, then of each triangle's patch (its corners'
+        // boxes), with its margin.
+        let vertex_boxes: Vec<(P, P)> = (0..mesh.vertex_count())
+            .into_par_iter()
+            .map(|v| {
+                let off = mesh.ring_offsets[v] as usize;
+                let end = mesh.ring_offsets[v + 1] as usize;
+                let p = P::from(mesh.position(v as u32));
+                mesh.ring[off..end].iter().fold((p, p), |(lo, hi), &q| {
+                    let q = P::from(mesh.position(q));
+                    (lo.min(q), hi.max(q))
+                })
+            })
+            .collect();
+        let boxes: Vec<(P, P, f32)> = mesh
+            .triangles
+            .par_chunks_exact(3)
+            .map(|tv| {
+                let b = tv.iter().map(|&v| vertex_boxes[v as usize]);
+                let (lo, hi) = b.reduce(|a, b| (a.0.min(b.0), a.1.max(b.1))).unwrap();
+                let scale = lo.abs().max(hi.abs()).max_element();
+                (lo, hi, scale * 1e-4 + f32::MIN_POSITIVE)
+            })
+            .collect();
+        let m = 1usize << level;
+        let mut patch = Patch::default();
+        // The points triangle `t` writes (`all`: every point of its grid, owned or not).
+        let mut points = |t: usize, all: bool, f: &mut dyn FnMut(P)| {
+            let tri = make_tri(mesh, prep, t);
+            let tv = mesh.triangle(t);
+            patch.load(&tri, tv);
+            let mut n = 1;
+            while n < m {
+                patch.step(&tri, n, [true; 3], [true; 3]);
+                n *= 2;
+            }
+            for j in 0..=m {
+                for i in 0..=m - j {
+                    let owned = if (i, j) == (0, 0) || (i, j) == (m, 0) || (i, j) == (0, m) {
+                        let c = if j == m { 2 } else { usize::from(i == m) };
+                        prep.vertex_owner[tv[c] as usize] == (3 * t + c) as u32
+                    } else if j == 0 {
+                        prep.owns_edge[3 * t]
+                    } else if i + j == m {
+                        prep.owns_edge[3 * t + 1]
+                    } else if i == 0 {
+                        prep.owns_edge[3 * t + 2]
+                    } else {
+                        true
+                    };
+                    if all || owned {
+                        f(patch.sq[sq(m, i as isize, j as isize)]);
+                    }
+                }
+            }
+        };
+        let mut candidates = Vec::new();
+        for axis in 0..3 {
+            for top in [false, true] {
+                // A refined point near the extreme: from the triangle reaching furthest.
+                let key = |b: &(P, P, f32)| if top { -b.1[axis] } else { b.0[axis] };
+                let first = (0..nf)
+                    .min_by(|&a, &b| key(&boxes[a]).total_cmp(&key(&boxes[b])))
+                    .unwrap_or(0);
+                let mut found = if top {
+                    f32::NEG_INFINITY
+                } else {
+                    f32::INFINITY
+                };
+                points(first, true, &mut |p| {
+                    found = if top {
+                        found.max(p[axis])
+                    } else {
+                        found.min(p[axis])
+                    };
+                });
+                candidates.extend((0..nf).filter(|&t| {
+                    let (lo, hi, margin) = boxes[t];
+                    if top {
+                        hi[axis] + margin >= found
+                    } else {
+                        lo[axis] - margin <= found
+                    }
+                }));
+            }
+        }
+        candidates.sort_unstable();
+        candidates.dedup();
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        for t in candidates {
+            points(t, false, &mut |p| {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            });
+        }
+        shape.bounds = Some((lo, hi));
+        shape
+    }
+}
+
 /// Triangles per parallel task.
 const CHUNK: usize = 64;
+/// Triangles per parallel task of [`subdivide_streamed`] with a sink: each task's output is
+/// written with a handful of system calls, and fewer, larger writes cost less (about 270 tasks
+/// for the Stanford bunny, still plenty to balance two to a few tens of threads).
+const STREAM_CHUNK: usize = 256;
+
+/// A range of coarse triangles `t0..t1` with its disjoint slices of the output.
+struct Job<'a> {
+    t0: usize,
+    t1: usize,
+    edge_pos: &'a mut [Out],
+    edge_nrm: &'a mut [Out],
+    int_pos: &'a mut [Out],
+    int_nrm: &'a mut [Out],
+    idx: &'a mut [[u32; 3]],
+}
+
+/// How much output each coarse triangle has, for [`split`].
+struct Sizes<'a> {
+    edge_start: &'a [u32],
+    per_edge: usize,
+    per_tri: usize,
+    fine_per_tri: usize,
+}
+
+/// `job` as consecutive jobs of `chunk` triangles.
+fn split<'a>(job: Job<'a>, chunk: usize, z: &Sizes) -> Vec<Job<'a>> {
+    let Job {
+        t0: first,
+        t1: last,
+        edge_pos: mut ep,
+        edge_nrm: mut en,
+        int_pos: mut ip,
+        int_nrm: mut inn,
+        idx: mut idx_rest,
+    } = job;
+    let mut jobs = Vec::with_capacity((last - first).div_ceil(chunk));
+    for t0 in (first..last).step_by(chunk) {
+        let t1 = (t0 + chunk).min(last);
+        let ecount = (z.edge_start[t1] - z.edge_start[t0]) as usize * z.per_edge;
+        let icount = (t1 - t0) * z.per_tri;
+        let (a, b) = std::mem::take(&mut ep).split_at_mut(ecount);
+        ep = b;
+        let (c, d) = std::mem::take(&mut en).split_at_mut(ecount);
+        en = d;
+        let (e, f) = std::mem::take(&mut ip).split_at_mut(icount);
+        ip = f;
+        let (g, h) = std::mem::take(&mut inn).split_at_mut(icount);
+        inn = h;
+        let (i, j) = std::mem::take(&mut idx_rest).split_at_mut((t1 - t0) * z.fine_per_tri);
+        idx_rest = j;
+        jobs.push(Job {
+            t0,
+            t1,
+            edge_pos: a,
+            edge_nrm: c,
+            int_pos: e,
+            int_nrm: g,
+            idx: i,
+        });
+    }
+    jobs
+}
 
 /// Subdivides `mesh` to `level` (0..=6) with positions, normals and indices. Level 0 gives
 /// the control mesh itself (with normals), numbered as the tables number it.
@@ -677,7 +884,37 @@ pub fn subdivide_into(
     level: u32,
     out: &mut Refined,
 ) -> Result<(), SubdivError> {
-    let result = subdivide_checked(mesh, level, out);
+    subdivide_streamed(mesh, level, out, None)
+}
+
+/// Output finished by [`subdivide_streamed`]: the edge points, interior points and fine
+/// triangles of a range of coarse triangles, final (the coarse vertices come last, in the
+/// returned [`Refined`] only). Each range is contiguous in the output arrays.
+pub struct Written<'a> {
+    /// Output vertex number of `edge_positions[0]` (and `edge_normals[0]`).
+    pub first_edge_point: usize,
+    pub edge_positions: &'a [Out],
+    pub edge_normals: &'a [Out],
+    /// Output vertex number of `interior_positions[0]`.
+    pub first_interior_point: usize,
+    pub interior_positions: &'a [Out],
+    pub interior_normals: &'a [Out],
+    /// Output triangle number of `indices[0]`.
+    pub first_triangle: usize,
+    pub indices: &'a [[u32; 3]],
+}
+
+/// [`subdivide_into`], handing each finished range of coarse triangles' output to `sink` on
+/// another thread while the rest is computed, so that a caller can write the output
+/// as it comes (`hce subdivide` overlaps the GLB's disk writes with the subdivision). The
+/// result is the same, bit for bit, with or without a sink.
+pub fn subdivide_streamed(
+    mesh: &ControlMesh,
+    level: u32,
+    out: &mut Refined,
+    sink: Option<&(dyn Fn(Written<'_>) + Sync)>,
+) -> Result<(), SubdivError> {
+    let result = subdivide_checked(mesh, level, out, sink);
     if result.is_err() {
         out.positions.clear();
         out.normals.clear();
@@ -686,14 +923,23 @@ pub fn subdivide_into(
     result
 }
 
-fn subdivide_checked(mesh: &ControlMesh, level: u32, out: &mut Refined) -> Result<(), SubdivError> {
+/// A subdivision of one mesh to one level, checked and prepared once ([`plan`]): its
+/// [`OutputShape`] and the subdivision itself then share the table checks.
+pub struct Plan<'a> {
+    mesh: &'a ControlMesh,
+    level: u32,
+    prep: Prepared,
+    numbering: Numbering,
+}
+
+/// Checks `level` and every table [`subdivide`] reads, and the output's size, with
+/// [`subdivide`]'s errors.
+pub fn plan(mesh: &ControlMesh, level: u32) -> Result<Plan<'_>, SubdivError> {
     if level > MAX_LOOP_LEVEL {
         return Err(SubdivError::Level(level));
     }
     let prep = prepare(mesh)?;
-    let nv = mesh.vertex_count();
     let nf = mesh.triangle_count();
-    let ne = prep.edge_count;
     let too_large = || SubdivError::TooLarge {
         level,
         triangles: nf,
@@ -702,8 +948,8 @@ fn subdivide_checked(mesh: &ControlMesh, level: u32, out: &mut Refined) -> Resul
     let count = |x: usize| u32::try_from(x).map_err(|_| too_large());
     let numbering = Numbering {
         level,
-        vertices: count(nv)?,
-        edges: count(ne)?,
+        vertices: count(mesh.vertex_count())?,
+        edges: count(prep.edge_count)?,
         triangles: count(nf)?,
     };
     if numbering.vertex_count() > u64::from(u32::MAX)
@@ -711,6 +957,49 @@ fn subdivide_checked(mesh: &ControlMesh, level: u32, out: &mut Refined) -> Resul
     {
         return Err(too_large());
     }
+    Ok(Plan {
+        mesh,
+        level,
+        prep,
+        numbering,
+    })
+}
+
+impl Plan<'_> {
+    /// [`subdivide_streamed`] of the planned mesh and level.
+    pub fn subdivide_streamed(
+        &self,
+        out: &mut Refined,
+        sink: Option<&(dyn Fn(Written<'_>) + Sync)>,
+    ) {
+        subdivide_planned(self, out, sink);
+    }
+}
+
+fn subdivide_checked(
+    mesh: &ControlMesh,
+    level: u32,
+    out: &mut Refined,
+    sink: Option<&(dyn Fn(Written<'_>) + Sync)>,
+) -> Result<(), SubdivError> {
+    subdivide_planned(&plan(mesh, level)?, out, sink);
+    Ok(())
+}
+
+fn subdivide_planned(
+    plan: &Plan<'_>,
+    out: &mut Refined,
+    sink: Option<&(dyn Fn(Written<'_>) + Sync)>,
+) {
+    let Plan {
+        mesh,
+        level,
+        ref prep,
+        numbering,
+    } = *plan;
+    let nv = mesh.vertex_count();
+    let nf = mesh.triangle_count();
+    let ne = prep.edge_count;
     let m = 1usize << level;
     let per_edge = numbering.per_edge() as usize;
     let per_tri = numbering.per_triangle() as usize;
@@ -731,125 +1020,138 @@ fn subdivide_checked(mesh: &ControlMesh, level: u32, out: &mut Refined) -> Resul
 
     // Split the outputs into per-chunk disjoint slices: a chunk of triangles owns a contiguous
     // range of edge ids (first-appearance order) and of interior points and fine triangles.
-    struct Job<'a> {
-        t0: usize,
-        t1: usize,
-        edge_pos: &'a mut [Out],
-        edge_nrm: &'a mut [Out],
-        int_pos: &'a mut [Out],
-        int_nrm: &'a mut [Out],
-        idx: &'a mut [[u32; 3]],
-    }
+    let sizes = Sizes {
+        edge_start: &prep.edge_start,
+        per_edge,
+        per_tri,
+        fine_per_tri,
+    };
     let (_, rest_p) = positions.split_at_mut(nv);
     let (_, rest_n) = normals.split_at_mut(nv);
-    let (mut ep, mut ip) = rest_p.split_at_mut(ne * per_edge);
-    let (mut en, mut inn) = rest_n.split_at_mut(ne * per_edge);
-    let mut idx_rest: &mut [[u32; 3]] = &mut indices;
-    let mut jobs = Vec::with_capacity(nf.div_ceil(CHUNK));
-    for t0 in (0..nf).step_by(CHUNK) {
-        let t1 = (t0 + CHUNK).min(nf);
-        let ecount = (prep.edge_start[t1] - prep.edge_start[t0]) as usize * per_edge;
-        let icount = (t1 - t0) * per_tri;
-        let (a, b) = std::mem::take(&mut ep).split_at_mut(ecount);
-        ep = b;
-        let (c, d) = std::mem::take(&mut en).split_at_mut(ecount);
-        en = d;
-        let (e, f) = std::mem::take(&mut ip).split_at_mut(icount);
-        ip = f;
-        let (g, h) = std::mem::take(&mut inn).split_at_mut(icount);
-        inn = h;
-        let (i, j) = std::mem::take(&mut idx_rest).split_at_mut((t1 - t0) * fine_per_tri);
-        idx_rest = j;
-        jobs.push(Job {
-            t0,
-            t1,
-            edge_pos: a,
-            edge_nrm: c,
-            int_pos: e,
-            int_nrm: g,
-            idx: i,
-        });
-    }
-    let corner_out: Vec<Vec<(u32, Out, Out)>> = jobs
-        .into_par_iter()
-        .map_init(Patch::default, |patch, job| {
-            // Global vertex number of each square entry of the output level.
-            let mut gmap = vec![0u32; (m + 3) * (m + 3)];
-            let mut owned = Vec::new();
-            for t in job.t0..job.t1 {
-                let tri = make_tri(mesh, &prep, t);
-                let tv = mesh.triangle(t);
-                let own_corner: [bool; 3] = std::array::from_fn(|c| {
-                    prep.vertex_owner[tv[c] as usize] == (3 * t + c) as u32
-                });
-                let own_edge: [bool; 3] = std::array::from_fn(|e| prep.owns_edge[3 * t + e]);
-                patch.load(&tri, tv);
-                let mut n = 1;
-                while n < m {
-                    if 2 * n < m {
-                        patch.step(&tri, n, [true; 3], [true; 3]);
-                    } else {
-                        // The output level: bands only where this patch writes the edge's
-                        // normals, rings only for those bands and for owned corners.
-                        let rings = std::array::from_fn(|c| {
-                            own_corner[c] || own_edge[c] || own_edge[(c + 2) % 3]
-                        });
-                        patch.step(&tri, n, own_edge, rings);
-                    }
-                    n *= 2;
+    let (ep, ip) = rest_p.split_at_mut(ne * per_edge);
+    let (en, inn) = rest_n.split_at_mut(ne * per_edge);
+    let whole = Job {
+        t0: 0,
+        t1: nf,
+        edge_pos: ep,
+        edge_nrm: en,
+        int_pos: ip,
+        int_nrm: inn,
+        idx: &mut indices,
+    };
+    let work = |patch: &mut Patch, job: &mut Job<'_>| {
+        // Global vertex number of each square entry of the output level.
+        let mut gmap = vec![0u32; (m + 3) * (m + 3)];
+        let mut owned = Vec::new();
+        for t in job.t0..job.t1 {
+            let tri = make_tri(mesh, prep, t);
+            let tv = mesh.triangle(t);
+            let own_corner: [bool; 3] =
+                std::array::from_fn(|c| prep.vertex_owner[tv[c] as usize] == (3 * t + c) as u32);
+            let own_edge: [bool; 3] = std::array::from_fn(|e| prep.owns_edge[3 * t + e]);
+            patch.load(&tri, tv);
+            let mut n = 1;
+            while n < m {
+                if 2 * n < m {
+                    patch.step(&tri, n, [true; 3], [true; 3]);
+                } else {
+                    // The output level: bands only where this patch writes the edge's
+                    // normals, rings only for those bands and for owned corners.
+                    let rings = std::array::from_fn(|c| {
+                        own_corner[c] || own_edge[c] || own_edge[(c + 2) % 3]
+                    });
+                    patch.step(&tri, n, own_edge, rings);
                 }
-                if m >= 2 {
-                    patch.face_normals(&tri, m, own_edge);
-                }
-                for c in 0..3 {
-                    let x = sq_corner(m, c);
-                    gmap[x] = tv[c];
-                    if own_corner[c] {
-                        let nrm = normalize(patch.corner_normal(&tri, m, c));
-                        owned.push((tv[c], patch.sq[x].to_array(), nrm));
-                    }
-                }
-                for e in 0..3 {
-                    let id = mesh.edges[3 * t + e];
-                    if own_edge[e] {
-                        // Only an owned edge lies in this job's contiguous slice of edge
-                        // points; an edge owned by an earlier triangle may have a smaller id.
-                        let local = (id - prep.edge_start[job.t0]) as usize * per_edge;
-                        for k in 1..m {
-                            let x = sq_edge(m, e, k);
-                            gmap[x] = numbering.edge_point(id, k as u64) as u32;
-                            job.edge_pos[local + k - 1] = patch.sq[x].to_array();
-                            job.edge_nrm[local + k - 1] = normalize(patch.vertex_normal(m, x));
-                        }
-                    } else {
-                        // Counted from the owner's end, the other way round.
-                        for k in 1..m {
-                            gmap[sq_edge(m, e, k)] =
-                                numbering.edge_point(id, (m - k) as u64) as u32;
-                        }
-                    }
-                }
-                let ibase = numbering.interior_point(t as u32, 0) as usize;
-                let local = (t - job.t0) * per_tri;
-                let mut q = 0;
-                for j in 1..m {
-                    let x0 = sq(m, 1, j as isize);
-                    for x in x0..x0 + (m - j).saturating_sub(1) {
-                        gmap[x] = (ibase + q) as u32;
-                        job.int_pos[local + q] = patch.sq[x].to_array();
-                        job.int_nrm[local + q] = normalize(patch.vertex_normal(m, x));
-                        q += 1;
-                    }
-                }
-                let out =
-                    &mut job.idx[(t - job.t0) * fine_per_tri..(t - job.t0 + 1) * fine_per_tri];
-                for (o, c) in out.iter_mut().zip(&local_cells) {
-                    *o = c.map(|l| gmap[l as usize]);
+                n *= 2;
+            }
+            if m >= 2 {
+                patch.face_normals(&tri, m, own_edge);
+            }
+            for c in 0..3 {
+                let x = sq_corner(m, c);
+                gmap[x] = tv[c];
+                if own_corner[c] {
+                    let nrm = normalize(patch.corner_normal(&tri, m, c));
+                    owned.push((tv[c], patch.sq[x].to_array(), nrm));
                 }
             }
-            owned
-        })
-        .collect();
+            for e in 0..3 {
+                let id = mesh.edges[3 * t + e];
+                if own_edge[e] {
+                    // Only an owned edge lies in this job's contiguous slice of edge
+                    // points; an edge owned by an earlier triangle may have a smaller id.
+                    let local = (id - prep.edge_start[job.t0]) as usize * per_edge;
+                    for k in 1..m {
+                        let x = sq_edge(m, e, k);
+                        gmap[x] = numbering.edge_point(id, k as u64) as u32;
+                        job.edge_pos[local + k - 1] = patch.sq[x].to_array();
+                        job.edge_nrm[local + k - 1] = normalize(patch.vertex_normal(m, x));
+                    }
+                } else {
+                    // Counted from the owner's end, the other way round.
+                    for k in 1..m {
+                        gmap[sq_edge(m, e, k)] = numbering.edge_point(id, (m - k) as u64) as u32;
+                    }
+                }
+            }
+            let ibase = numbering.interior_point(t as u32, 0) as usize;
+            let local = (t - job.t0) * per_tri;
+            let mut q = 0;
+            for j in 1..m {
+                let x0 = sq(m, 1, j as isize);
+                for x in x0..x0 + (m - j).saturating_sub(1) {
+                    gmap[x] = (ibase + q) as u32;
+                    job.int_pos[local + q] = patch.sq[x].to_array();
+                    job.int_nrm[local + q] = normalize(patch.vertex_normal(m, x));
+                    q += 1;
+                }
+            }
+            let out = &mut job.idx[(t - job.t0) * fine_per_tri..(t - job.t0 + 1) * fine_per_tri];
+            for (o, c) in out.iter_mut().zip(&local_cells) {
+                *o = c.map(|l| gmap[l as usize]);
+            }
+        }
+        owned
+    };
+    let chunk = if sink.is_some() { STREAM_CHUNK } else { CHUNK };
+    let jobs = split(whole, chunk, &sizes);
+    let corner_out: Vec<Vec<(u32, Out, Out)>> = match sink {
+        None => jobs
+            .into_par_iter()
+            .map_init(Patch::default, |patch, mut job| work(patch, &mut job))
+            .collect(),
+        Some(sink) => std::thread::scope(|scope| {
+            // Finished jobs go to the sink's thread, which only reads them.
+            let (tx, rx) = std::sync::mpsc::channel::<Job<'_>>();
+            let edge_start = &prep.edge_start;
+            scope.spawn(move || {
+                for b in rx {
+                    sink(Written {
+                        first_edge_point: nv + edge_start[b.t0] as usize * per_edge,
+                        edge_positions: b.edge_pos,
+                        edge_normals: b.edge_nrm,
+                        first_interior_point: nv + ne * per_edge + b.t0 * per_tri,
+                        interior_positions: b.int_pos,
+                        interior_normals: b.int_nrm,
+                        first_triangle: b.t0 * fine_per_tri,
+                        indices: b.idx,
+                    });
+                }
+            });
+            let out = jobs
+                .into_par_iter()
+                .map_init(Patch::default, |patch, mut job| {
+                    let owned = work(patch, &mut job);
+                    // A send fails only if the sink's thread has gone, which only a panic in
+                    // `sink` does (and the scope then passes it on).
+                    let _ = tx.send(job);
+                    owned
+                })
+                .collect();
+            drop(tx);
+            out
+        }),
+    };
     for list in corner_out {
         for (v, p, n) in list {
             positions[v as usize] = p;
@@ -865,5 +1167,4 @@ fn subdivide_checked(mesh: &ControlMesh, level: u32, out: &mut Refined) -> Resul
         coarse_edges: ne,
         coarse_triangles: nf,
     };
-    Ok(())
 }

@@ -27,36 +27,96 @@ pub fn write_atomic_with(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), FileWriteError> {
-    let io = |source| FileWriteError {
-        path: path.to_owned(),
-        source,
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
-        _ => PathBuf::from("."),
-    };
-    let name = path.file_name().ok_or_else(|| {
-        io(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            "the path names no file",
-        ))
-    })?;
-    let mut tmp_name = std::ffi::OsString::from(".");
-    tmp_name.push(name);
-    tmp_name.push(format!(".{}.tmp", std::process::id()));
-    let tmp = dir.join(tmp_name);
-    let result = (|| {
-        let mut f = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(&tmp)?);
+    let tmp = AtomicFile::create(path)?;
+    let filled = (|| {
+        let mut f = std::io::BufWriter::with_capacity(1 << 20, tmp.file());
         fill(&mut f)?;
-        let f = f.into_inner().map_err(|e| e.into_error())?;
-        f.sync_all()?;
-        drop(f);
-        std::fs::rename(&tmp, path)
+        f.flush()
     })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+    match filled {
+        Ok(()) => tmp.commit(),
+        Err(source) => Err(tmp.error(source)),
     }
-    result.map_err(io)
+}
+
+/// A file being written atomically, for writers that need the file itself (positioned writes
+/// from another thread, as the streamed GLB of [`crate::export`]): a temporary file in the
+/// destination's directory, renamed over it by [`AtomicFile::commit`] once flushed to disk,
+/// and removed if it is dropped before.
+pub struct AtomicFile {
+    path: PathBuf,
+    tmp: PathBuf,
+    file: Option<std::fs::File>,
+}
+
+impl AtomicFile {
+    /// Creates the temporary file for `path`.
+    pub fn create(path: &Path) -> Result<Self, FileWriteError> {
+        let io = |source| FileWriteError {
+            path: path.to_owned(),
+            source,
+        };
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
+            _ => PathBuf::from("."),
+        };
+        let name = path.file_name().ok_or_else(|| {
+            io(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "the path names no file",
+            ))
+        })?;
+        let mut tmp_name = std::ffi::OsString::from(".");
+        tmp_name.push(name);
+        tmp_name.push(format!(".{}.tmp", std::process::id()));
+        let tmp = dir.join(tmp_name);
+        let file = std::fs::File::create(&tmp).map_err(io)?;
+        Ok(Self {
+            path: path.to_owned(),
+            tmp,
+            file: Some(file),
+        })
+    }
+
+    /// The temporary file (unbuffered).
+    pub fn file(&self) -> &std::fs::File {
+        self.file.as_ref().expect("the file is open until commit")
+    }
+
+    /// `source` as the error of writing the destination.
+    pub fn error(&self, source: std::io::Error) -> FileWriteError {
+        FileWriteError {
+            path: self.path.clone(),
+            source,
+        }
+    }
+
+    /// Flushes the file to disk and renames it over the destination; on error the temporary
+    /// file is removed and the destination left as it was.
+    pub fn commit(mut self) -> Result<(), FileWriteError> {
+        let file = self.file.take().expect("the file is open until commit");
+        let result = file.sync_all().and_then(|()| {
+            drop(file);
+            std::fs::rename(&self.tmp, &self.path)
+        });
+        match result {
+            Ok(()) => {
+                // Renamed: nothing left to remove.
+                self.tmp = PathBuf::new();
+                Ok(())
+            }
+            Err(source) => Err(self.error(source)),
+        }
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        self.file = None;
+        if !self.tmp.as_os_str().is_empty() {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
 }
 
 #[cfg(test)]

@@ -134,7 +134,18 @@ pub(crate) fn read_triangles(path: &Path, wanted: Wanted) -> Result<Triangles, I
 /// `tobj` keeps only the positions that faces reference, so unused OBJ vertices are already
 /// gone here (and the topology report counts none for OBJ input). `mtllib` is not followed:
 /// materials are not needed here, and `tobj` panics on some malformed MTL files.
+///
+/// A plain file is read by [`crate::obj_fast`], which gives the same result several times
+/// faster; everything else, errors included, goes through `tobj`.
 fn read_obj(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
+    match crate::obj_fast::read(bytes) {
+        Some(read) => Ok(read),
+        None => read_obj_tobj(path, bytes),
+    }
+}
+
+/// [`read_obj`] through `tobj`.
+fn read_obj_tobj(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
@@ -408,6 +419,133 @@ fn read_gltf_checked(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The fast OBJ reader on `text`, checked against `tobj`: where it reads the file it must
+    /// give exactly what `tobj` gives (bit for bit); `None` means `tobj` reads it.
+    fn fast_obj_agrees(text: &str) -> Option<Triangles> {
+        let path = Path::new("t.obj");
+        let fast = crate::obj_fast::read(text.as_bytes());
+        if let Some(fast) = &fast {
+            let slow = read_obj_tobj(path, text.as_bytes())
+                .unwrap_or_else(|e| panic!("tobj refuses what the fast reader read: {e}\n{text}"));
+            let bits = |t: &Triangles| {
+                let p: Vec<[u32; 3]> = t.positions.iter().map(|p| p.map(f32::to_bits)).collect();
+                let n: Option<Vec<[u32; 3]>> = t
+                    .corner_normals
+                    .as_ref()
+                    .map(|n| n.iter().map(|n| n.map(f32::to_bits)).collect());
+                (p, t.triangles.clone(), n, t.colours.is_some())
+            };
+            assert_eq!(bits(fast), bits(&slow), "{text}");
+        }
+        fast
+    }
+
+    #[test]
+    fn fast_obj_reader_matches_tobj_on_plain_files() {
+        let plain = [
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            // Unused and forward-referenced vertices, first-reference order, a quad and a
+            // pentagon (fans), comments, blank lines, CRLF, tabs, statements tobj ignores.
+            "# c\r\nmtllib m.mtl\no bunny\ns off\n\nv 9 9 9\nf 4 3 2 5\r\nv 0 0 0\nv 1 0 0\n\
+             v\t0 1 0 \nv 1e-3 -2.5E2 .5\nv 1 1 1\n f 2 3 4 5 6\n#x\nvp 1 2\n",
+            // Normals and texture coordinates (three values, one ignored); extra vn values.
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0 0\nvt 1 0\nvn 0 0 1 7\nvn 0 0.6 0.8\n\
+             f 1/1/1 2/2/2 3//1\nf 2//2 4//1 3//2\n",
+            // Normals referenced out of order, vt indices ignored without vt lines.
+            "vn 1 0 0\nvn 0 1 0\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 3/9/2 1/5/1 2//2\n",
+            "v inf 0 NaN\nv 0 1 0\nv 0 0 1\nf 1/ 2/ 3/\n",
+            "g first\nv -0 0 0\nv 1 0 0\nv 0 1 0\nf 001 2 3",
+        ];
+        for text in plain {
+            assert!(fast_obj_agrees(text).is_some(), "{text}");
+        }
+        // Left to tobj (errors among them, which keep tobj's messages).
+        let others = [
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\ng two\nf 1 2 3\n",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\nf 1 2 3\n",
+            "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n",
+            "v 0 0 0 2\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            "v 0 0 0 # origin\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\nf 1 2 3\n",
+            "# caf\u{e9}\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            "v 0 0 x\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            "v 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3\n",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//2\n",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1/1/1 2 3\n",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf +1 2 3\n",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99999999999\n",
+            "v 0 0 0\nv 1 0 0\n",
+            "",
+        ];
+        for text in others {
+            assert!(fast_obj_agrees(text).is_none(), "{text}");
+        }
+    }
+
+    #[test]
+    fn fast_obj_reader_matches_tobj_on_generated_files() {
+        // Files from a small grammar of the statements above, valid and not (a fixed LCG:
+        // deterministic); every one the fast reader takes must match tobj.
+        let mut state = 0x9e37_79b9_u32;
+        let mut rand = |n: u32| {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (state >> 8) % n
+        };
+        let mut taken = 0;
+        for _ in 0..3000 {
+            let mut text = String::new();
+            let (nv, nn, nt) = (3 + rand(6), rand(3), rand(3));
+            for _ in 0..nv {
+                let c: Vec<String> = (0..3)
+                    .map(|_| format!("{}", rand(2000) as f32 / 7.0 - 100.0))
+                    .collect();
+                text.push_str(&format!("v {}\n", c.join(" ")));
+            }
+            for _ in 0..nn {
+                text.push_str("vn 0 0.6 0.8\n");
+            }
+            for _ in 0..nt {
+                text.push_str("vt 0.5 0.25\n");
+            }
+            let style = rand(4);
+            for _ in 0..1 + rand(4) {
+                let corners = 3 + rand(3);
+                let mut face = String::from("f");
+                for _ in 0..corners {
+                    // Mostly in range; now and then one past the end (or 0 for vt, vn).
+                    let pick = |r: u32, n: u32| {
+                        if r % 16 == 0 {
+                            n + 1 - r % 2 * (n + 1)
+                        } else {
+                            1 + r % n.max(1)
+                        }
+                    };
+                    let v = pick(rand(1 << 16), nv);
+                    let vt = pick(rand(1 << 16), nt);
+                    let vn = pick(rand(1 << 16), nn);
+                    face.push(' ');
+                    face.push_str(&v.to_string());
+                    match (style + u32::from(rand(24) == 0)) % 4 {
+                        0 => {}
+                        1 => face.push_str(&format!("/{vt}")),
+                        2 => face.push_str(&format!("//{vn}")),
+                        _ => face.push_str(&format!("/{vt}/{vn}")),
+                    }
+                }
+                text.push_str(&face);
+                text.push_str(["\n", "\r\n", " \n", "\n\n# c\n"][rand(4) as usize]);
+            }
+            taken += usize::from(fast_obj_agrees(&text).is_some());
+        }
+        assert!(taken > 500, "{taken}");
+    }
 
     /// A one-triangle mesh (corner normals `(0.6, 0, 0.8)`) in a `.gltf` with an external
     /// buffer, used by the nodes given as JSON.

@@ -32,6 +32,8 @@ pub mod solver_scene;
 pub mod export;
 #[cfg(feature = "import")]
 pub mod import;
+#[cfg(feature = "import")]
+mod obj_fast;
 pub mod plain;
 #[cfg(feature = "import")]
 pub mod scene;

@@ -127,15 +127,7 @@ pub fn run(mut args: SubdivideArgs) -> Result<()> {
     )
     .with_context(|| format!("{}: cannot build the control mesh", args.input.display()))?;
     let t3 = Instant::now();
-    let refined = hce_geometry::subdivide::subdivide(&topo.mesh, args.level)
-        .with_context(|| format!("{}: cannot subdivide", args.input.display()))?;
-    let t4 = Instant::now();
-    hce_meshio::export::write_mesh(
-        &args.output,
-        &refined.positions,
-        &refined.normals,
-        &refined.indices,
-    )?;
+    let (refined, t4) = subdivide_and_write(&args, &topo.mesh)?;
     let t5 = Instant::now();
     if args.stats {
         println!(
@@ -156,6 +148,83 @@ pub fn run(mut args: SubdivideArgs) -> Result<()> {
             ms(t0, t1), ms(t1, t2), ms(t2, t3), ms(t3, t4), ms(t4, t5));
     }
     Ok(())
+}
+
+/// How much of a streamed GLB is written between flushes to disk.
+const FLUSH_BYTES: usize = 8 << 20;
+
+/// Subdivides `mesh` and writes the result, returning it and when the subdivision ended. A
+/// GLB is streamed ([`hce_meshio::export::GlbStream`]): its header is written from the output's
+/// size and position bounds, known in advance ([`hce_geometry::subdivide::Plan::shape`]), and
+/// each finished range of output is written while the rest is computed, so the disk writes
+/// overlap the subdivision (the `--stats` time of the subdivision then includes them, and that
+/// of the write is what is left); the file is the one [`hce_meshio::export::write_mesh`]
+/// writes, byte for byte.
+fn subdivide_and_write(
+    args: &SubdivideArgs,
+    mesh: &hce_format::ControlMesh,
+) -> Result<(hce_geometry::Refined, Instant)> {
+    use hce_geometry::subdivide::{plan, Written};
+    let cannot = || format!("{}: cannot subdivide", args.input.display());
+    let glb = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    #[cfg(unix)]
+    if glb {
+        let plan = plan(mesh, args.level).with_context(cannot)?;
+        let shape = plan.shape();
+        let stream = match shape.bounds {
+            Some(bounds) => hce_meshio::export::GlbStream::create(
+                &args.output,
+                shape.vertices,
+                shape.triangles,
+                bounds,
+            )?,
+            None => None,
+        };
+        if let Some(stream) = stream {
+            // Bytes written since the last flush to disk, by the sink's one thread: flushing
+            // every few megabytes keeps the disk busy during the subdivision.
+            let pending = std::sync::atomic::AtomicUsize::new(0);
+            let sink = |w: Written<'_>| {
+                use std::sync::atomic::Ordering::Relaxed;
+                stream.positions(w.first_edge_point, w.edge_positions);
+                stream.normals(w.first_edge_point, w.edge_normals);
+                stream.positions(w.first_interior_point, w.interior_positions);
+                stream.normals(w.first_interior_point, w.interior_normals);
+                stream.indices(w.first_triangle, w.indices);
+                let bytes = 24 * (w.edge_positions.len() + w.interior_positions.len())
+                    + 12 * w.indices.len();
+                if pending.fetch_add(bytes, Relaxed) + bytes >= FLUSH_BYTES {
+                    pending.store(0, Relaxed);
+                    stream.flush_written();
+                }
+            };
+            let mut refined = hce_geometry::Refined::default();
+            plan.subdivide_streamed(&mut refined, Some(&sink));
+            let t4 = Instant::now();
+            stream.finish(
+                &args.output,
+                &refined.positions,
+                &refined.normals,
+                &refined.indices,
+                refined.coarse_vertices,
+            )?;
+            return Ok((refined, t4));
+        }
+    }
+    // Only Unix streams a GLB.
+    let _ = glb;
+    let refined = hce_geometry::subdivide::subdivide(mesh, args.level).with_context(cannot)?;
+    let t4 = Instant::now();
+    hce_meshio::export::write_mesh(
+        &args.output,
+        &refined.positions,
+        &refined.normals,
+        &refined.indices,
+    )?;
+    Ok((refined, t4))
 }
 
 /// A baked input: a `.hce` container, or a glTF/GLB that uses the extension, read with its
