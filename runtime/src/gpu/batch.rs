@@ -1,6 +1,6 @@
 //! Batched refinement: the small objects of a scene that change level in a frame refined
 //! together, one dispatch per step of their kernel for all of them (the batched entry points of
-//! `flat.wgsl` and `loop.wgsl`, `hce_batch.wgsl`), instead of three dispatches per object. A
+//! `flat.wgsl` and `loop_batch.wgsl`, `hce_batch.wgsl`), instead of three dispatches per object. A
 //! scene has a [`Pool`] per kernel: one for its flat objects, one for its multiresolution ones.
 //!
 //! A scene of many small objects (architecture, props) spends a frame's refinement on the fixed
@@ -293,8 +293,7 @@ impl Pool {
                 "colours_batch_main",
             ]
             .map(|e| k.pipeline(ctx, e)),
-            PoolKernel::Loop(k) => ["patch_batch_main", "faces_batch_main", "colours_batch_main"]
-                .map(|e| k.pipeline(ctx, e)),
+            PoolKernel::Loop(k) => k.batch_pipelines(ctx),
         };
         Ok(Some(Self {
             kind,

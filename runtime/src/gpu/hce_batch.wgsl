@@ -2,7 +2,7 @@
 // dispatch, over buffers that pool the objects' tables (bindings 1 to 6 and 11: each object's
 // tables copied whole, one after another) and their outputs (bindings 7 to 10 and 12: each
 // object's range, one after another, copied out to its own buffers afterwards). flat.wgsl and
-// loop.wgsl import it. Per object k of the batch, `topo` holds, from the offsets in `batch`:
+// loop_batch.wgsl import it. Per object k of the batch, `topo` holds, from the offsets in `batch`:
 //   first_vertices[k], first_faces[k],  its first output vertex, first fine triangle and first
 //   first_triangles[k]                  coarse triangle in the batch (ascending: the objects'
 //                                       ranges in order)

@@ -28,8 +28,8 @@ fn linear_id(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
 }
 
 // Step 2: the buffers every refinement kernel reads. Where buffers pool many objects (the
-// batched entry points of flat.wgsl), the object's first coarse and first output vertex in
-// them; zero (a private variable's initial value) in every other kernel.
+// batched entry points of flat.wgsl and loop_batch.wgsl), the object's first coarse and first
+// output vertex in them; zero (a private variable's initial value) in every other kernel.
 var<private> lattice_coarse_base: u32;
 var<private> lattice_out_base: u32;
 

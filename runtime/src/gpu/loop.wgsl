@@ -34,7 +34,6 @@
 // #import hce_light
 // #import hce_lattice
 // #import hce_gather
-// #import hce_batch
 
 struct Params {
     level: u32,
@@ -92,11 +91,13 @@ struct Params {
 // file's flags (RULE_CREASE, RULE_CORNER, SPOKE_SHARP, VERTEX_BOUNDARY) come from
 // hce_constants.wgsl, generated from the Rust constants.
 
-// The parameters every function reads: the kernel's uniform, copied at the start of the
-// per-object entry points (patch_wg_main too); the object's entry of the batch table in the
-// batched ones (below, hce_batch.wgsl). The other bindings are hce_bindings.wgsl's.
-@group(0) @binding(0) var<uniform> params_in: Params;
-var<private> params: Params;
+// The parameters every function reads: the kernel's uniform. The batched kernel
+// (loop_batch.wgsl) is assembled with this declaration made a private variable, which each of
+// its invocations sets from its object's entry of the batch table: read from private memory,
+// the per-object kernels' steps ran up to 17 times slower on lavapipe (the colours step of a
+// 2,048-triangle grid at level 1: 3.5 against 61 ms), so they keep the uniform. The other
+// bindings are hce_bindings.wgsl's.
+@group(0) @binding(0) var<uniform> params: Params;
 
 // ---------------------------------------------------------------------------------------------
 // The Loop rules, in the CPU's order of arithmetic.
@@ -163,7 +164,7 @@ fn normalize_or_z(s: vec3<f32>) -> vec3<f32> {
 // invocations, which work on the same point of different triangles, touch neighbouring words
 // (coalesced on a GPU, one cache line per eight lanes on lavapipe).
 
-// This invocation's slot (set once by patch_main).
+// This invocation's slot (set once by patch_main, or patch_batch_main in loop_batch.wgsl).
 var<private> slot_id: u32;
 
 fn scratch_at(k: u32) -> vec3<f32> {
@@ -395,7 +396,6 @@ fn write_vertex(i: u32, p: vec3<f32>, nrm: vec3<f32>) {
 @compute @workgroup_size(64)
 fn patch_main(@builtin(global_invocation_id) gid: vec3<u32>,
               @builtin(num_workgroups) groups: vec3<u32>) {
-    params = params_in;
     let slot = linear_id(gid, groups);
     if (slot >= params.slots) {
         return;
@@ -517,7 +517,6 @@ fn lattice_split_copies() -> u32 {
 @compute @workgroup_size(64)
 fn faces_main(@builtin(global_invocation_id) gid: vec3<u32>,
               @builtin(num_workgroups) groups: vec3<u32>) {
-    params = params_in;
     let g = params.range_first + linear_id(gid, groups);
     if (g >= min(params.fine_total, params.range_end)) {
         return;
@@ -557,7 +556,6 @@ fn loop_face(g: u32) {
 @compute @workgroup_size(64)
 fn colours_main(@builtin(global_invocation_id) gid: vec3<u32>,
                 @builtin(num_workgroups) groups: vec3<u32>) {
-    params = params_in;
     let v = params.range_first + linear_id(gid, groups);
     if (v >= min(params.vertex_total, params.range_end)) {
         return;
@@ -593,60 +591,4 @@ fn loop_colour(v: u32) {
         normal = vec3<f32>(0.0);
     }
     out_colours[lattice_out_base + v] = vec4<f32>(slot_colour(slot, normal), 1.0);
-}
-
-// ---------------------------------------------------------------------------------------------
-// Batched refinement (hce_batch.wgsl, runtime/src/gpu/batch.rs): the three steps of many small
-// Loop objects in one dispatch each. Step 1 runs the scratch patch kernel, whose output the
-// workgroup kernel matches bit for bit, with one slot per invocation over all the batch's
-// coarse triangles: float k of slot s is scratch[k * batch.slots + s], whatever the object's
-// level.
-
-fn batch_enter(k: u32) {
-    let p = batch_bases(k, batch.entries + LOOP_ENTRY_WORDS * k);
-    params = Params(topo[p], topo[p + 1u], topo[p + 2u], topo[p + 3u], topo[p + 4u], topo[p + 5u],
-                    topo[p + 6u], topo[p + 7u], topo[p + 8u], topo[p + 9u], topo[p + 10u],
-                    topo[p + 11u], topo[p + 12u], topo[p + 13u], topo[p + 14u], topo[p + 15u],
-                    topo[p + 16u], topo[p + 17u], topo[p + 18u], topo[p + 19u], topo[p + 20u],
-                    topo[p + 21u], topo[p + 22u], topo[p + 23u], topo[p + 24u], topo[p + 25u],
-                    topo[p + 26u], topo[p + 27u], topo[p + 28u], topo[p + 29u], topo[p + 30u],
-                    topo[p + 31u], topo[p + 32u], topo[p + 33u], topo[p + 34u]);
-}
-
-@compute @workgroup_size(64)
-fn patch_batch_main(@builtin(global_invocation_id) gid: vec3<u32>,
-                    @builtin(num_workgroups) groups: vec3<u32>) {
-    let slot = linear_id(gid, groups);
-    if (slot >= batch.slots) {
-        return;
-    }
-    slot_id = slot;
-    for (var g = slot; g < batch.triangle_total; g += batch.slots) {
-        let k = batch_object(batch.first_triangles, g);
-        batch_enter(k);
-        params.slots = batch.slots;
-        loop_patch(g - topo[batch.first_triangles + k]);
-    }
-}
-
-@compute @workgroup_size(64)
-fn faces_batch_main(@builtin(global_invocation_id) gid: vec3<u32>,
-                    @builtin(num_workgroups) groups: vec3<u32>) {
-    let g = linear_id(gid, groups);
-    if (g >= batch.fine_total) {
-        return;
-    }
-    batch_enter(batch_object(batch.first_faces, g));
-    loop_face(g - gather_face_base);
-}
-
-@compute @workgroup_size(64)
-fn colours_batch_main(@builtin(global_invocation_id) gid: vec3<u32>,
-                      @builtin(num_workgroups) groups: vec3<u32>) {
-    let g = linear_id(gid, groups);
-    if (g >= batch.vertex_total) {
-        return;
-    }
-    batch_enter(batch_object(batch.first_vertices, g));
-    loop_colour(g - lattice_out_base);
 }

@@ -48,7 +48,7 @@ use super::util::{
     check_size, compute_pipeline, compute_pipeline_with, pack_sections, shader_module,
     storage_init, storage_output, LightingBuffers, WORKGROUP,
 };
-use super::wgsl::{loop_source, loop_workgroup_source};
+use super::wgsl::{loop_batch_source, loop_source, loop_workgroup_source};
 use super::{AdapterKind, GpuContext, GpuError};
 use hce_geometry::flat::FlatTopology;
 use hce_geometry::lighting::Reconstruction;
@@ -208,9 +208,6 @@ enum PatchPlan {
 /// first use, one per level and triangle shape.
 pub struct LoopKernel {
     scheme: PatchScheme,
-    /// The module, whose batched entry points [`Pool`](super::batch::Pool) compiles when a
-    /// scene has objects to batch.
-    module: wgpu::ShaderModule,
     patch: wgpu::ComputePipeline,
     faces: wgpu::ComputePipeline,
     colours: wgpu::ComputePipeline,
@@ -264,14 +261,16 @@ impl LoopKernel {
             patch: compute_pipeline(ctx, &module, "patch_main"),
             faces: compute_pipeline(ctx, &module, "faces_main"),
             colours: compute_pipeline(ctx, &module, "colours_main"),
-            module,
             workgroup: Default::default(),
         }
     }
 
-    /// The pipeline of one of the module's entry points (the batched ones included).
-    pub(super) fn pipeline(&self, ctx: &GpuContext, entry: &str) -> wgpu::ComputePipeline {
-        compute_pipeline(ctx, &self.module, entry)
+    /// The pipelines of the batched kernel's three steps (`loop_batch.wgsl`), compiled when a
+    /// scene has objects to batch ([`Pool`](super::batch::Pool)).
+    pub(super) fn batch_pipelines(&self, ctx: &GpuContext) -> [wgpu::ComputePipeline; 3] {
+        let module = shader_module(ctx, "hce loop batch", loop_batch_source());
+        ["patch_batch_main", "faces_batch_main", "colours_batch_main"]
+            .map(|entry| compute_pipeline(ctx, &module, entry))
     }
 
     /// The scheme step 1 uses for `object` at `level` on this device ([`PatchScheme::Workgroup`]

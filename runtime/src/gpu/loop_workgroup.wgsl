@@ -313,7 +313,6 @@ fn wg_step(sq: u32, nsq: u32, rg: u32, nrg: u32, tri: WgTri, n: i32, lane: u32) 
 fn patch_wg_main(@builtin(local_invocation_index) lid: u32,
                  @builtin(workgroup_id) wid: vec3<u32>,
                  @builtin(num_workgroups) groups: vec3<u32>) {
-    params = params_in;
     let slot = lid / WG_LANES;
     let lane = lid % WG_LANES;
     let slot_base = slot * WG_SLOT;

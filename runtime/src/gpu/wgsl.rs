@@ -21,6 +21,8 @@
 //! * `hce_gather.wgsl`: the area-weighted vertex colours of the refinement kernels;
 //! * `hce_batch.wgsl`: the table through which the batched entry points of the refinement
 //!   kernels find each invocation's object;
+//! * `loop_batch.wgsl`: the batched Loop kernel, assembled after `loop.wgsl` with its `params`
+//!   uniform made a private variable ([`loop_batch_source`]);
 //! * `loop_normals.wgsl`: the vertex normals of a Loop patch, a template over the patch memory
 //!   (WGSL has no pointer that reaches both storage and workgroup memory), instantiated for the
 //!   scratch kernel of `loop.wgsl` and for the workgroup kernel of `loop_workgroup.wgsl`.
@@ -37,6 +39,7 @@ const MODULES: &[(&str, &str)] = &[
     ("flat", include_str!("flat.wgsl")),
     ("loop", include_str!("loop.wgsl")),
     ("loop_workgroup", include_str!("loop_workgroup.wgsl")),
+    ("loop_batch", include_str!("loop_batch.wgsl")),
     #[cfg(any(test, feature = "testing"))]
     ("decode", include_str!("decode.wgsl")),
 ];
@@ -45,6 +48,11 @@ const LOOP_NORMALS_TEMPLATE: &str = include_str!("loop_normals.wgsl");
 
 /// The placeholder of `loop_normals.wgsl`: the prefix of a patch memory's accessors.
 const PATCH: &str = "{patch}";
+
+/// `loop.wgsl`'s uniform, and what the batched kernel makes of it: a variable each invocation
+/// sets from its object's entry of the batch table (`loop_batch.wgsl`).
+const LOOP_PARAMS_UNIFORM: &str = "@group(0) @binding(0) var<uniform> params: Params;";
+const LOOP_PARAMS_PRIVATE: &str = "var<private> params: Params;";
 
 /// The line that starts an import declaration.
 const IMPORT: &str = "// #import ";
@@ -254,6 +262,20 @@ pub(crate) fn loop_source() -> String {
     assemble("loop", |name, text| loop_module(name, text, ""))
 }
 
+/// The batched Loop kernel (`patch_batch_main`, `faces_batch_main`, `colours_batch_main`): the
+/// Loop kernel's module with its uniform made private, then `hce_batch.wgsl` and
+/// `loop_batch.wgsl`.
+pub(crate) fn loop_batch_source() -> String {
+    assemble("loop_batch", |name, text| {
+        let text = loop_module(name, text, "");
+        if name == "loop" {
+            text.replacen(LOOP_PARAMS_UNIFORM, LOOP_PARAMS_PRIVATE, 1)
+        } else {
+            text
+        }
+    })
+}
+
 /// A variant of the workgroup patch kernel (`patch_wg_main`): the Loop kernel's module, then
 /// `header` (the variant's constants) and `loop_workgroup.wgsl` with its normals.
 pub(crate) fn loop_workgroup_source(header: &str) -> String {
@@ -342,14 +364,15 @@ mod tests {
             "hce_light",
             "hce_lattice",
             "hce_gather",
-            "hce_batch",
         ];
         let flat = import_order("flat", &module_text).unwrap();
         assert_eq!(flat[..shared.len()], shared);
-        assert_eq!(flat[shared.len()..], ["flat"]);
+        assert_eq!(flat[shared.len()..], ["hce_batch", "flat"]);
         let workgroup = import_order("loop_workgroup", &module_text).unwrap();
         assert_eq!(workgroup[..shared.len()], shared);
         assert_eq!(workgroup[shared.len()..], ["loop", "loop_workgroup"]);
+        let batch = import_order("loop_batch", &module_text).unwrap();
+        assert_eq!(batch[shared.len()..], ["loop", "hce_batch", "loop_batch"]);
         let files: Vec<(String, String)> = every_file()
             .into_iter()
             .map(|(name, text)| (name.trim_end_matches(".wgsl").to_string(), text))
@@ -592,6 +615,20 @@ mod tests {
         let (size, members) = wgsl_struct(&decode, "Query");
         assert_eq!(size as usize, size_of::<Query>());
         assert_eq!(at(&members, "normal"), offset_of!(Query, normal));
+    }
+
+    /// The per-object Loop kernels read their uniform; the batched one, the same functions,
+    /// a private copy its invocations set.
+    #[test]
+    fn only_the_batched_loop_kernel_makes_its_params_private() {
+        let (one, batched) = (loop_source(), loop_batch_source());
+        assert_eq!(one.matches(LOOP_PARAMS_UNIFORM).count(), 1);
+        assert_eq!(one.matches(LOOP_PARAMS_PRIVATE).count(), 0);
+        assert!(!one.contains("fn patch_batch_main("));
+        assert_eq!(batched.matches(LOOP_PARAMS_UNIFORM).count(), 0);
+        assert_eq!(batched.matches(LOOP_PARAMS_PRIVATE).count(), 1);
+        assert!(batched.contains("fn patch_batch_main("));
+        parse("loop batch", &batched);
     }
 
     #[test]

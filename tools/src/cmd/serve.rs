@@ -71,6 +71,7 @@ const EMBEDDED: &[Embedded] = embed! {
     "/runtime/src/gpu/hce_light.wgsl" => "runtime/src/gpu/hce_light.wgsl",
     "/runtime/src/gpu/hce_tree.wgsl" => "runtime/src/gpu/hce_tree.wgsl",
     "/runtime/src/gpu/loop.wgsl" => "runtime/src/gpu/loop.wgsl",
+    "/runtime/src/gpu/loop_batch.wgsl" => "runtime/src/gpu/loop_batch.wgsl",
     "/runtime/src/gpu/loop_normals.wgsl" => "runtime/src/gpu/loop_normals.wgsl",
     "/runtime/src/gpu/loop_workgroup.wgsl" => "runtime/src/gpu/loop_workgroup.wgsl",
     "/runtime/src/gpu/render.wgsl" => "runtime/src/gpu/render.wgsl",
