@@ -347,6 +347,15 @@ pub struct GltfSource {
 }
 
 impl GltfSource {
+    /// The format it was read from.
+    pub fn format(&self) -> AssetFormat {
+        if self.glb {
+            AssetFormat::Glb
+        } else {
+            AssetFormat::Gltf
+        }
+    }
+
     /// Parses a `.gltf` or `.glb` and loads its buffers: the GLB's BIN chunk, `data:` URIs, and
     /// other URIs through `resolve` ([`buffer_files`] for files beside it).
     pub fn parse(
@@ -506,11 +515,7 @@ impl Asset {
         let (metadata, objects, camera) = loader.gltf(source)?;
         Ok(Asset {
             path: path.to_path_buf(),
-            format: if source.glb {
-                AssetFormat::Glb
-            } else {
-                AssetFormat::Gltf
-            },
+            format: source.format(),
             metadata,
             objects,
             camera,
@@ -567,11 +572,7 @@ impl Asset {
         let object = loader.finish_object(0, object, vec![instance])?;
         Ok(Asset {
             path: path.to_path_buf(),
-            format: if source.glb {
-                AssetFormat::Glb
-            } else {
-                AssetFormat::Gltf
-            },
+            format: source.format(),
             metadata: Metadata {
                 generator: source
                     .json

@@ -27,15 +27,13 @@ function splitGlb(glb, dir, stem) {
   return [path.join(dir, `${stem}.gltf`), path.join(dir, `${stem}.bin`)];
 }
 
-test('the viewer orbits, zooms, forces levels and switches the reconstruction', { timeout: 300_000 }, async (t) => {
-  const b = await openBrowser(t, { '/conformance/': path.join(REPO, 'conformance') });
-  if (!b) return;
-  const page = b.page;
-  /** @returns {Promise<any>} */
-  const state = () => page.evaluate(() => JSON.parse(JSON.stringify(/** @type {any} */ (window).hceViewer)));
-  /** @param {number} n */
-  const frameAfter = (n) => page.waitForFunction((k) => /** @type {any} */ (window).hceViewer.frames > k, n, { timeout: 120_000 });
-  const pixels = () => page.evaluate(() => {
+/**
+ * The viewer canvas's RGBA bytes, through a 2D copy (WebGPU and WebGL2 canvases alike).
+ * @param {import('playwright-core').Page} page
+ * @returns {Promise<number[]>}
+ */
+function canvasPixels(page) {
+  return page.evaluate(() => {
     const c = /** @type {HTMLCanvasElement} */ (document.getElementById('canvas'));
     const copy = document.createElement('canvas');
     copy.width = c.width;
@@ -44,6 +42,17 @@ test('the viewer orbits, zooms, forces levels and switches the reconstruction', 
     cx.drawImage(c, 0, 0);
     return Array.from(cx.getImageData(0, 0, c.width, c.height).data);
   });
+}
+
+test('the viewer orbits, zooms, forces levels and switches the reconstruction', { timeout: 300_000 }, async (t) => {
+  const b = await openBrowser(t, { '/conformance/': path.join(REPO, 'conformance') });
+  if (!b) return;
+  const page = b.page;
+  /** @returns {Promise<any>} */
+  const state = () => page.evaluate(() => JSON.parse(JSON.stringify(/** @type {any} */ (window).hceViewer)));
+  /** @param {number} n */
+  const frameAfter = (n) => page.waitForFunction((k) => /** @type {any} */ (window).hceViewer.frames > k, n, { timeout: 120_000 });
+  const pixels = () => canvasPixels(page);
   try {
     await page.goto(`${b.url}/web/viewer.html?url=/conformance/valid/triangle.glb&size=200x150`);
     await frameAfter(0);
@@ -152,15 +161,7 @@ test('a file whose baked lighting is gone is drawn from its COLOR_0, saying so',
         assert.equal(state.levels.length, 1, 'the scene as one object');
         assert.match(await b.page.textContent('#warnings') ?? '', /^no baked lighting: the file does not use EXT_hce_baked_lighting.*COLOR_0 vertex colours/);
         // The Cornell box's red and green walls: COLOR_0 (the light arriving) times the base colours.
-        const rgba = await b.page.evaluate(() => {
-          const c = /** @type {HTMLCanvasElement} */ (document.getElementById('canvas'));
-          const copy = document.createElement('canvas');
-          copy.width = c.width;
-          copy.height = c.height;
-          const cx = /** @type {CanvasRenderingContext2D} */ (copy.getContext('2d'));
-          cx.drawImage(c, 0, 0);
-          return Array.from(cx.getImageData(0, 0, c.width, c.height).data);
-        });
+        const rgba = await canvasPixels(b.page);
         let red = 0;
         let green = 0;
         for (let i = 0; i < rgba.length; i += 4) {
