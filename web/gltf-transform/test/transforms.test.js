@@ -179,3 +179,32 @@ test('hce bake reads quantized input (KHR_mesh_quantization) and bakes the same 
   const rms = relativeRms(render(bakedQuantized), render(bakedPlain));
   assert.ok(rms <= 0.015, `the quantized input's bake renders ${(100 * rms).toFixed(2)}% away from the original's`);
 });
+
+// The browser viewer (web/viewer.html, through hce.wasm) opens every output of the Cornell box
+// that the first tests wrote: the baked lighting where links are kept, no error on the page.
+test('the browser viewer draws every output of the Cornell box', { timeout: 600_000 }, async (t) => {
+  const { openBrowser } = await import('../../test/browser.js');
+  const b = await openBrowser(t, { '/out/': work });
+  if (!b) return;
+  try {
+    const drawn = [];
+    for (const command of VALID) {
+      const file = `cornell-box-${command}.glb`;
+      if (!existsSync(join(work, file))) {
+        t.skip('the Cornell box outputs were not written (run the whole file)');
+        return;
+      }
+      await b.page.goto(`${b.url}/web/viewer.html?url=/out/${file}&size=160x120`);
+      await b.page.waitForFunction(() => /** @type {any} */ (window).hceViewer?.frames > 0 || /** @type {any} */ (window).hceViewer?.error, null, { timeout: 120_000 });
+      const state = await b.page.evaluate(() => JSON.parse(JSON.stringify(/** @type {any} */ (window).hceViewer)));
+      assert.equal(state.error, null, `${command}: ${state.error}`);
+      const warnings = (await b.page.textContent('#warnings')) ?? '';
+      assert.doesNotMatch(warnings, /no baked lighting/, `${command}: ${warnings}`);
+      drawn.push(`${command} ${state.levels.length} objects`);
+    }
+    assert.deepEqual(b.pageErrors, []);
+    t.diagnostic(`drawn: ${drawn.join(', ')}`);
+  } finally {
+    await b.close();
+  }
+});
