@@ -14,7 +14,9 @@
 //! Feature `import` (default): the readers, on the `gltf` crate, `tobj` and `image`:
 //! * `scene`: the baker's scene importer (objects per node instance and primitive,
 //!   materials and textures, lights, camera), and `ToSolver`, its result as a [`Scene`];
-//! * `import`: `load_mesh`, one triangle mesh in world space from OBJ/glTF (`hce subdivide`);
+//! * `import`: `load_mesh`, one triangle mesh in world space from OBJ/glTF (`hce subdivide`),
+//!   plain OBJ files read by `obj_fast` (tobj's result, bit for bit, in one scan) and the rest
+//!   by tobj, into `triangles`' type;
 //! * `plain`: `load_plain_mesh`, `hce render`'s preview of a plain mesh, by the same reader as
 //!   `load_mesh` (the `PlainMesh` type is there without features).
 //!
@@ -37,6 +39,8 @@ mod obj_fast;
 pub mod plain;
 #[cfg(feature = "import")]
 pub mod scene;
+#[cfg(feature = "import")]
+mod triangles;
 
 pub use atomic::{write_atomic, write_atomic_with, FileWriteError};
 #[cfg(feature = "export")]

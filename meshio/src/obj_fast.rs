@@ -1,6 +1,6 @@
 //! A fast reader for the plain OBJ files most meshes come as (`v`, `vn`, `vt`, triangles and
 //! polygons with positive indices, comments), giving exactly what `tobj` gives for them
-//! through [`crate::import`]'s reader: positions in order of first reference, faces
+//! through the mesh reader (`import.rs`): positions in order of first reference, faces
 //! fan-triangulated, corner normals from `vn` indices.
 //!
 //! `tobj` reads the Stanford bunny (2.4 MB) in about 40 ms, mostly allocating: a `String` per
@@ -12,7 +12,7 @@
 //! with normals, non-ASCII text, a malformed number) makes it answer `None`, and `tobj` reads
 //! the file instead: its results and its error messages stay the reference.
 
-use crate::import::Triangles;
+use crate::triangles::Triangles;
 
 /// `char::is_whitespace` on ASCII (what `str::split_whitespace`, and so `tobj`, splits on).
 #[inline(always)]
