@@ -136,7 +136,27 @@ fn check_baked(
     container: &Container,
     colours: &[Vec<[f32; 3]>],
 ) {
+    check_baked_links(scene, glb, container, colours);
     let parsed = ::gltf::Gltf::from_slice(glb).expect("the gltf crate parses the output");
+    // Nothing of the input is lost.
+    let src = ::gltf::Gltf::open(&scene.path).unwrap();
+    assert_eq!(parsed.nodes().len(), src.nodes().len());
+    assert_eq!(parsed.materials().len(), src.materials().len());
+    assert_eq!(parsed.cameras().len(), src.cameras().len());
+    assert_eq!(
+        parsed.lights().map_or(0, |l| l.len()),
+        src.lights().map_or(0, |l| l.len())
+    );
+}
+
+/// The output's extension, container, links and `COLOR_0`, against what was baked.
+fn check_baked_links(
+    scene: &ImportedScene,
+    glb: &[u8],
+    container: &Container,
+    colours: &[Vec<[f32; 3]>],
+) {
+    ::gltf::Gltf::from_slice(glb).expect("the gltf crate parses the output");
     let asset = Asset::parse(glb).unwrap();
     let json = &asset.json;
     let used: Vec<&str> = json["extensionsUsed"]
@@ -184,15 +204,6 @@ fn check_baked(
         assert_eq!(values, want);
         assert!(values.iter().all(|&v| (0.0..=1.0).contains(&v)));
     }
-    // Nothing of the input is lost.
-    let src = ::gltf::Gltf::open(&scene.path).unwrap();
-    assert_eq!(parsed.nodes().len(), src.nodes().len());
-    assert_eq!(parsed.materials().len(), src.materials().len());
-    assert_eq!(parsed.cameras().len(), src.cameras().len());
-    assert_eq!(
-        parsed.lights().map_or(0, |l| l.len()),
-        src.lights().map_or(0, |l| l.len())
-    );
 }
 
 fn keep(name: &str, bytes: &[u8]) {
@@ -330,6 +341,66 @@ fn shared_meshes_are_deinstanced_with_their_own_colours() {
     assert!(asset.json["buffers"][0].get("uri").is_none());
     check_baked(&scene, &glb, &c, &colours);
     keep("instanced.baked.glb", &glb);
+}
+
+/// The scene above as gltf-transform's `instance` writes it: one node, its mesh drawn twice by
+/// EXT_mesh_gpu_instancing (here required, which the extension allows).
+const GPU_INSTANCED: &str = r#"{
+ "asset": {"version": "2.0"},
+ "extensionsUsed": ["EXT_mesh_gpu_instancing"],
+ "extensionsRequired": ["EXT_mesh_gpu_instancing"],
+ "scenes": [{"nodes": [0]}],
+ "nodes": [{"name": "tris", "mesh": 0,
+            "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 1}}}}],
+ "materials": [{"emissiveFactor": [1, 1, 1]}],
+ "meshes": [{"name": "tri", "primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}],
+ "buffers": [{"byteLength": 60, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAAAAAAAAQAAAAAAAAAAA"}],
+ "bufferViews": [{"buffer": 0, "byteLength": 36, "target": 34962},
+                 {"buffer": 0, "byteOffset": 36, "byteLength": 24}],
+ "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]},
+               {"bufferView": 1, "componentType": 5126, "count": 2, "type": "VEC3"}]
+}"#;
+
+#[test]
+fn gpu_instances_are_baked_one_object_each_in_nodes_of_their_own() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("gpu-instanced.gltf");
+    std::fs::write(&path, GPU_INSTANCED).unwrap();
+    let scene = import_scene(&path, &ImportOptions::default()).unwrap();
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .all(|w| !w.contains("EXT_mesh_gpu_instancing")),
+        "{:?}",
+        scene.warnings
+    );
+    let names: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(names, ["tris#0", "tris#1"]);
+    assert_eq!(scene.objects[0].world_positions[1], [1.0, 0.0, 0.0]);
+    assert_eq!(scene.objects[1].world_positions[1], [3.0, 0.0, 0.0]);
+    let (c, links) = container_for(&scene);
+    let colours = constant_colours(&scene);
+    let glb = write_baked_gltf(&scene, &colours, &write(&c).unwrap(), &links).unwrap();
+    let asset = Asset::parse(&glb).unwrap();
+    let j = &asset.json;
+    assert!(!j.to_string().contains("EXT_mesh_gpu_instancing"), "{j}");
+    assert_eq!(j["nodes"][0]["children"], serde_json::json!([1, 2]));
+    assert_eq!(
+        (&j["nodes"][1]["mesh"], &j["nodes"][2]["mesh"]),
+        (&0.into(), &1.into())
+    );
+    assert_eq!(
+        j["nodes"][2]["translation"],
+        serde_json::json!([2.0, 0.0, 0.0])
+    );
+    let links = primitive_links(j).unwrap();
+    assert_eq!((links[0].mesh, links[0].object), (0, 0));
+    assert_eq!((links[1].mesh, links[1].object), (1, 1));
+    // The node the instances were (the `gltf` crate cannot read the source, which requires
+    // the extension) and each instance a node.
+    assert_eq!(j["nodes"].as_array().unwrap().len(), 3);
+    check_baked_links(&scene, &glb, &c, &colours);
 }
 
 #[test]

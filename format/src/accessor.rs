@@ -123,7 +123,7 @@ fn index(v: &Value, key: &str, loc: &str) -> Result<usize, GltfError> {
 
 /// The bytes of buffer view `view`, decoded first when it is compressed with
 /// `EXT_meshopt_compression`, and its byte stride (`None` when it has none).
-fn view_bytes<'a>(
+pub fn view_bytes<'a>(
     json: &Value,
     buffers: &'a [Vec<u8>],
     view: usize,

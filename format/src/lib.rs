@@ -33,7 +33,9 @@ mod tree;
 mod validate;
 mod write;
 
-pub use accessor::{read_accessor, read_primitive, AccessorValues, PrimitiveMesh, DRACO, MESHOPT};
+pub use accessor::{
+    read_accessor, read_primitive, view_bytes, AccessorValues, PrimitiveMesh, DRACO, MESHOPT,
+};
 pub use colour0::{colour_exposure, ALBEDO_FLOOR};
 pub use error::{ReadError, WriteError};
 pub use gltf::{

@@ -188,23 +188,39 @@ pub fn open(bytes: &[u8], base: Option<&Path>) -> Result<GuardedGltf, OpenError>
     if let Some(json) = &json {
         precheck(json).map_err(OpenError::Invalid)?;
     }
-    let gltf::Gltf { document, blob } = if requires_quantization(json.as_ref()) {
-        // The `gltf` crate refuses a file that requires an extension it does not know;
+    let gltf::Gltf { document, blob } = if requires_handled(json.as_ref()) {
+        // The `gltf` crate refuses a file that requires an extension it does not know.
         // KHR_mesh_quantization only widens the component types of POSITION, NORMAL and
         // TEXCOORD, which `AccessorUse::accepts` lets through and hce-format's reader decodes
-        // (`read_dequantized`). So the document is validated without that one entry.
+        // (`read_dequantized`); EXT_mesh_gpu_instancing is expanded into nodes below. So the
+        // document is validated without those entries.
         let gltf::Gltf { document, blob } =
             gltf::Gltf::from_slice_without_validation(bytes).map_err(OpenError::Gltf)?;
         let mut root = document.into_json();
-        root.extensions_required.retain(|e| e != QUANTIZATION);
+        root.extensions_required
+            .retain(|e| !HANDLED.contains(&e.as_str()));
         let document = gltf::Document::from_json(root).map_err(OpenError::Gltf)?;
         gltf::Gltf { document, blob }
     } else {
         gltf::Gltf::from_slice(bytes).map_err(OpenError::Gltf)?
     };
-    let json = json.ok_or_else(|| OpenError::Invalid("the JSON cannot be read".into()))?;
+    let mut json = json.ok_or_else(|| OpenError::Invalid("the JSON cannot be read".into()))?;
     let mut buffer_problems = Vec::new();
     let buffers = load_buffers(&document, base, blob, &mut buffer_problems);
+    let document = if crate::gpu_instancing::used(&json) {
+        let loaded: Vec<Vec<u8>> = buffers
+            .iter()
+            .map(|b| b.clone().unwrap_or_default())
+            .collect();
+        crate::gpu_instancing::expand(&mut json, &loaded).map_err(OpenError::Invalid)?;
+        let mut root: gltf::json::Root = serde_json::from_value(json.clone())
+            .map_err(|e| OpenError::Invalid(format!("the expanded instances: {e}")))?;
+        root.extensions_required
+            .retain(|e| !HANDLED.contains(&e.as_str()));
+        gltf::Document::from_json(root).map_err(OpenError::Gltf)?
+    } else {
+        document
+    };
     Ok(GuardedGltf {
         json,
         document,
@@ -217,12 +233,17 @@ pub fn open(bytes: &[u8], base: Option<&Path>) -> Result<GuardedGltf, OpenError>
 #[cfg(feature = "import")]
 pub const QUANTIZATION: &str = "KHR_mesh_quantization";
 
-/// Whether the file lists [`QUANTIZATION`] in `extensionsRequired`.
+/// Required extensions whose content the readers handle themselves: [`QUANTIZATION`], and
+/// `EXT_mesh_gpu_instancing`, which [`open`] expands into one node per instance.
 #[cfg(feature = "import")]
-fn requires_quantization(json: Option<&Value>) -> bool {
+const HANDLED: [&str; 2] = [QUANTIZATION, crate::gpu_instancing::EXTENSION];
+
+/// Whether the file lists one of [`HANDLED`] in `extensionsRequired`.
+#[cfg(feature = "import")]
+fn requires_handled(json: Option<&Value>) -> bool {
     json.and_then(|j| j.get("extensionsRequired"))
         .and_then(Value::as_array)
-        .is_some_and(|a| a.iter().any(|e| e == QUANTIZATION))
+        .is_some_and(|a| a.iter().any(|e| HANDLED.iter().any(|h| e == h)))
 }
 
 /// The values of accessor `a` as `f32`, integers dequantized as glTF 3.11 says (a normalized

@@ -7,6 +7,8 @@
 //!   trees only), over the JSON, used by every reader that places glTF meshes.
 //! * [`gltf_guard`]: the guards every glTF reader goes through (URI rules here; with `import`
 //!   also the guarded open, accessor checks and panic catching around the `gltf` crate).
+//! * [`gpu_instancing`]: `EXT_mesh_gpu_instancing` input expanded into one node per instance,
+//!   so that each copy is baked as an object of its own.
 //! * [`atomic`]: [`write_atomic`], the one way every tool output is written.
 //! * [`solver_scene`]: the world-space scene the radiosity solver and the reference path tracer
 //!   read ([`Scene`], [`SolverObject`], [`PunctualLight`]), checked by [`Scene::validate`].
@@ -27,6 +29,7 @@
 
 pub mod atomic;
 pub mod gltf_guard;
+pub mod gpu_instancing;
 pub mod scene_graph;
 pub mod solver_scene;
 

@@ -116,6 +116,8 @@ struct Writer<'a> {
     views: Vec<Value>,
     accessors: Vec<Value>,
     copied: HashMap<usize, usize>,
+    /// Whether a copied primitive keeps `KHR_draco_mesh_compression` data.
+    draco: bool,
 }
 
 impl Writer<'_> {
@@ -163,17 +165,20 @@ impl Writer<'_> {
         self.accessors.len() - 1
     }
 
-    /// Copies a buffer view of the input (its bytes, stride and target) into the output.
+    /// Copies a buffer view of the input (its bytes, stride and target) into the output,
+    /// decoded when it is `EXT_meshopt_compression`ed (the output compresses nothing, so it
+    /// never needs that extension).
     fn copy_view(&mut self, index: usize) -> Result<usize, SceneExportError> {
-        let bytes = hce_format::buffer_view_bytes(self.input, self.buffers, index)
-            .map_err(|e| SceneExportError::Gltf {
-                location: format!("bufferViews[{index}]"),
-                message: e.to_string(),
-            })?
-            .to_vec();
+        let (bytes, stride) =
+            hce_format::view_bytes(self.input, self.buffers, index).map_err(|e| {
+                SceneExportError::Gltf {
+                    location: format!("bufferViews[{index}]"),
+                    message: e.to_string(),
+                }
+            })?;
+        let bytes = bytes.into_owned();
         let v = &self.input["bufferViews"][index];
         let target = v.get("target").and_then(Value::as_u64).map(|t| t as u32);
-        let stride = v.get("byteStride").and_then(Value::as_u64);
         let out = self.view(&bytes, target, stride);
         for key in ["name", "extras"] {
             if let Some(x) = v.get(key) {
@@ -228,6 +233,16 @@ impl Writer<'_> {
         }
         if let Some(i) = prim.get("indices").and_then(Value::as_u64) {
             p["indices"] = json!(self.copy_accessor(i as usize)?);
+        }
+        // A Draco primitive keeps its compressed data (its attributes' accessors have no view).
+        let draco = &["extensions", hce_format::DRACO, "bufferView"];
+        if let Some(v) = draco
+            .iter()
+            .try_fold(prim, |v, k| v.get(k))
+            .and_then(Value::as_u64)
+        {
+            p["extensions"][hce_format::DRACO]["bufferView"] = json!(self.copy_view(v as usize)?);
+            self.draco = true;
         }
         if let Some(targets) = prim.get("targets").and_then(Value::as_array) {
             for (t, target) in targets.iter().enumerate() {
@@ -423,6 +438,7 @@ pub fn write_refined_scene(
         views: Vec::new(),
         accessors: Vec::new(),
         copied: HashMap::new(),
+        draco: false,
     };
     // Positions and normals once per object, shared by its primitives and instances.
     let mut object_accessors: HashMap<usize, (usize, usize)> = HashMap::new();
@@ -586,7 +602,12 @@ pub fn write_refined_scene(
     }
     // The refined primitives are written in FLOAT: KHR_mesh_quantization stays only for
     // primitives copied as they are.
-    let dropped = |e: &Value| *e == ours || (!copied_primitive && *e == "KHR_mesh_quantization");
+    let dropped = |e: &Value| {
+        *e == ours
+            || *e == hce_format::MESHOPT
+            || (!copied_primitive && *e == "KHR_mesh_quantization")
+            || (!w.draco && *e == hce_format::DRACO)
+    };
     for key in ["extensionsUsed", "extensionsRequired"] {
         if let Some(list) = input.get(key).and_then(Value::as_array) {
             let list: Vec<Value> = list.iter().filter(|e| !dropped(e)).cloned().collect();

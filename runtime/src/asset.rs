@@ -372,11 +372,11 @@ impl GltfSource {
         resolve: impl FnMut(&str) -> Result<Vec<u8>, String>,
     ) -> Result<Self, GltfError> {
         let buffers = asset.buffers(resolve)?;
-        Ok(Self {
-            glb,
-            json: asset.json,
-            buffers,
-        })
+        let mut json = asset.json;
+        // Every instance of an EXT_mesh_gpu_instancing node drawn as a node of its own, with
+        // the node's object (the bake placed the one primitive; its instances share its light).
+        hce_meshio::gpu_instancing::expand(&mut json, &buffers).map_err(GltfError::Json)?;
+        Ok(Self { glb, json, buffers })
     }
 
     /// Reads a `.gltf` or `.glb` file that uses the extension, with its buffers (external ones

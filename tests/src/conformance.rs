@@ -13,7 +13,7 @@ use hce_format::{
     example, rgb9e5, validate_bytes, write, Container, Problem, RULE_CORNER, RULE_CREASE,
     RULE_SMOOTH, SPOKE_SHARP, VERTEX_BOUNDARY, VERTEX_RULE_SHIFT,
 };
-use hce_format::{validate_asset, GltfAsset as Asset, EXTENSION_NAME};
+use hce_format::{validate_asset_report, GltfAsset as Asset, EXTENSION_NAME};
 use hce_geometry::colour::{apply_baked_colours_with, Reconstruction};
 use hce_geometry::refine::{refine_object, RefinedObject};
 use serde_json::{json, Value};
@@ -28,9 +28,10 @@ pub struct Case {
     pub bytes: Vec<u8>,
     /// What the file shows, for people.
     pub description: String,
-    /// Whether the bytes come from `hce bake` (their exact bytes follow the baker; the
-    /// regeneration check compares only their expectations).
-    pub baked: bool,
+    /// The program whose output the bytes are, when it is not this generator: `hce bake`, or a
+    /// glTF tool's command (their exact bytes follow that program; the regeneration check
+    /// compares only their expectations).
+    pub generated_by: Option<String>,
 }
 
 /// What a probe field reads: one object refined to one level, with its colours under both
@@ -270,7 +271,7 @@ pub fn cases(cornell_baked: Vec<u8>) -> Vec<Case> {
         file: file.into(),
         bytes,
         description: description.into(),
-        baked: false,
+        generated_by: None,
     };
     let hce = |c: &Container| write(c).expect("example containers are consistent");
     let mut out = vec![
@@ -318,7 +319,7 @@ pub fn cases(cornell_baked: Vec<u8>) -> Vec<Case> {
             file: "valid/cornell-box.glb".into(),
             bytes: cornell_baked,
             description: "samples/cornell-box.glb baked by hce bake (flat objects)".into(),
-            baked: true,
+            generated_by: Some("hce bake".into()),
         },
     ];
 
@@ -522,7 +523,7 @@ fn moved_vertex_glb(file: &str, description: &str) -> Case {
         file: file.into(),
         bytes: hce_format::write_glb(&j, &bin).expect("a small GLB"),
         description: description.into(),
-        baked: false,
+        generated_by: None,
     }
 }
 
@@ -675,7 +676,7 @@ fn optimised_cases() -> Vec<Case> {
         file: file.into(),
         bytes: grid_glb(&c, prim),
         description: description.into(),
-        baked: false,
+        generated_by: None,
     };
     let base = Rewritten::unwelded(&c);
     // Triangles in reverse order, each one's corners rotated by its index, vertices renumbered
@@ -712,6 +713,21 @@ fn optimised_cases() -> Vec<Case> {
         .collect();
     let mut flipped = Rewritten::welded(&c);
     flipped.triangles[4].swap(1, 2);
+    // The first quad's two triangles re-triangulated across its other diagonal: every corner
+    // where it was, the (non-planar) surface changed.
+    let mut retriangulated = Rewritten::welded(&c);
+    let [t0, t1] = [retriangulated.triangles[0], retriangulated.triangles[1]];
+    let o0 = t0
+        .iter()
+        .position(|v| !t1.contains(v))
+        .expect("quad triangles share an edge");
+    let [o0, p, q] = [t0[o0], t0[(o0 + 1) % 3], t0[(o0 + 2) % 3]];
+    let o1 = *t1
+        .iter()
+        .find(|v| !t0.contains(v))
+        .expect("quad triangles share an edge");
+    retriangulated.triangles[0] = [o0, p, o1];
+    retriangulated.triangles[1] = [o0, o1, q];
     vec![
         case(
             "valid/grid.glb",
@@ -750,6 +766,22 @@ fn optimised_cases() -> Vec<Case> {
             "2.6: the welded grid with vertex (1, 1) collapsed into (2, 1): 16 triangles for \
              the object's 18 (gltf-transform simplify)",
         ),
+        Case {
+            file: "valid/optimised-instanced.glb".into(),
+            bytes: gpu_instanced(grid_glb(&c, &base)),
+            description: "2.6: valid/grid.glb with its node's mesh drawn three times by \
+                          EXT_mesh_gpu_instancing (translations 0, 4 and 8 along x), which leaves \
+                          the primitive alone: the fast path holds, and every instance is drawn \
+                          with the object's light"
+                .into(),
+            generated_by: None,
+        },
+        case(
+            "invalid/edited-retriangulated.glb",
+            &retriangulated,
+            "2.6: the welded grid with its first quad split across the other diagonal: every \
+             corner where it was, two triangles that match none of the object's",
+        ),
         case(
             "invalid/edited-flipped.glb",
             &flipped,
@@ -757,6 +789,82 @@ fn optimised_cases() -> Vec<Case> {
              a reflection, not a rotation",
         ),
     ]
+}
+
+/// Cases that glTF Transform wrote from `valid/grid.glb`, kept as it wrote them (the
+/// compressors are theirs, not ours): file, command (from the repository root, with
+/// `@gltf-transform/cli` 4.5.1 of `web/gltf-transform`'s lockfile), description. The gltf-transform
+/// tests run each command again and compare the bytes; the conformance test checks that each
+/// still carries `valid/grid.glb`'s container.
+pub const TOOL_CASES: [(&str, &str, &str); 2] = [
+    (
+        "valid/optimised-meshopt.glb",
+        "gltf-transform meshopt conformance/valid/grid.glb conformance/valid/optimised-meshopt.glb \
+         --config web/gltf-transform/hce.config.mjs",
+        "2.6: valid/grid.glb through gltf-transform meshopt: positions quantized to normalized \
+         SHORTs (the dequantization in the node), indices and positions EXT_meshopt_compression \
+         streams (TRIANGLES and ATTRIBUTES), read from buffer 0 in place of buffer 1, a fallback \
+         buffer without data; geometryHash stale, the surface the same",
+    ),
+    (
+        "valid/optimised-draco.glb",
+        "gltf-transform draco conformance/valid/grid.glb conformance/valid/optimised-draco.glb \
+         --config web/gltf-transform/hce.config.mjs",
+        "2.6: valid/grid.glb through gltf-transform draco: its primitive KHR_draco_mesh_compression, \
+         which hce's readers cannot decode: valid, the primitive not checked (a warning), drawn \
+         without the baked lighting",
+    ),
+];
+
+/// The [`TOOL_CASES`], their bytes read by `read` (a path inside `conformance/`).
+pub fn tool_cases(read: impl Fn(&str) -> std::io::Result<Vec<u8>>) -> std::io::Result<Vec<Case>> {
+    TOOL_CASES
+        .iter()
+        .map(|(file, command, description)| {
+            Ok(Case {
+                file: (*file).into(),
+                bytes: read(file)?,
+                description: (*description).into(),
+                generated_by: Some(format!("@gltf-transform/cli 4.5.1: {command}")),
+            })
+        })
+        .collect()
+}
+
+/// `glb` with its one node's mesh drawn at x = 0, 4 and 8 by `EXT_mesh_gpu_instancing`.
+fn gpu_instanced(glb: Vec<u8>) -> Vec<u8> {
+    let a = Asset::parse(&glb).expect("a suite GLB");
+    let (mut j, mut bin) = (a.json, a.bin.expect("a GLB has its BIN chunk"));
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    let at = bin.len();
+    for x in [0.0f32, 4.0, 8.0] {
+        for v in [x, 0.0, 0.0] {
+            bin.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    let push = |list: &mut Value, item: Value| {
+        let a = list
+            .as_array_mut()
+            .expect("the grid GLB has views and accessors");
+        a.push(item);
+        a.len() - 1
+    };
+    let view = push(
+        &mut j["bufferViews"],
+        json!({ "buffer": 0, "byteOffset": at, "byteLength": 36 }),
+    );
+    let accessor = push(
+        &mut j["accessors"],
+        json!({ "bufferView": view, "componentType": 5126, "count": 3, "type": "VEC3",
+                "min": [0.0, 0.0, 0.0], "max": [8.0, 0.0, 0.0] }),
+    );
+    j["buffers"][0]["byteLength"] = json!(bin.len());
+    j["nodes"][0]["extensions"] = json!({ "EXT_mesh_gpu_instancing": {
+        "attributes": { "TRANSLATION": accessor } } });
+    if let Some(used) = j["extensionsUsed"].as_array_mut() {
+        used.push(json!("EXT_mesh_gpu_instancing"));
+    }
+    hce_format::write_glb(&j, &bin).expect("a small GLB")
 }
 
 /// Gives the primitive extension object at JSON pointer `link` a geometryHash that matches
@@ -805,16 +913,18 @@ fn reseal_header(b: &mut [u8]) {
     b[28..32].copy_from_slice(&crc.to_le_bytes());
 }
 
-/// What `hce validate` reports for a file, from the library it calls.
-pub fn expected_problems(file: &str, bytes: &[u8]) -> Vec<Problem> {
+/// What `hce validate` reports for a file, from the library it calls: its problems and its
+/// warnings.
+pub fn expected_problems(file: &str, bytes: &[u8]) -> (Vec<Problem>, Vec<Problem>) {
     if file.ends_with(".hce") {
-        return validate_bytes(bytes);
+        return (validate_bytes(bytes), Vec::new());
     }
     let a = Asset::parse(bytes).expect("suite GLBs parse");
     let buffers = a
         .buffers(|_| Err("no external buffers".into()))
         .expect("GLB buffers");
-    validate_asset(&a.json, &buffers)
+    let r = validate_asset_report(&a.json, &buffers);
+    (r.problems, r.warnings)
 }
 
 /// The containers' objects of a valid file, in container order.
@@ -970,21 +1080,31 @@ pub fn manifest(cases: &[Case]) -> Value {
     let entries: Vec<Value> = cases
         .iter()
         .map(|c| {
-            let problems = expected_problems(&c.file, &c.bytes);
+            let (problems, warnings) = expected_problems(&c.file, &c.bytes);
             let valid = problems.is_empty();
+            let listed = |list: &[Problem]| -> Vec<Value> {
+                list.iter()
+                    .map(|p| json!({ "location": p.location, "message": p.message }))
+                    .collect()
+            };
             let mut e = json!({
                 "file": c.file,
                 "description": c.description,
                 "valid": valid,
                 "exit_status": if valid { 0 } else { 3 },
-                "problems": problems.iter().map(|p| json!({ "location": p.location, "message": p.message })).collect::<Vec<_>>(),
+                "problems": listed(&problems),
             });
-            if c.baked {
-                e["generated_by"] = json!("hce bake");
+            if !warnings.is_empty() {
+                e["warnings"] = json!(listed(&warnings));
+            }
+            if let Some(by) = &c.generated_by {
+                e["generated_by"] = json!(by);
             }
             if valid {
                 e["refined"] = probes(&c.file, &c.bytes);
-                if !c.file.ends_with(".hce") {
+                // A primitive that cannot be checked (a warning) keeps `hce subdivide` from
+                // applying its lighting, so it refuses the file: no scene to record.
+                if !c.file.ends_with(".hce") && warnings.is_empty() {
                     e["scene"] = scene(&c.file, &c.bytes);
                 }
             }

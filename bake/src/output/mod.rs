@@ -301,6 +301,10 @@ fn load_source(path: &Path) -> Result<(Value, Vec<u8>), OutputError> {
     let buffers = asset.buffers(|uri| read_uri(&base, uri))?;
     let mut json = asset.json;
     strip_extension(&mut json);
+    // As the importer did (`gltf_guard::open`), so that node indices agree: one node per
+    // instance, each then given its own mesh copy by `deinstance`.
+    hce_meshio::gpu_instancing::expand(&mut json, &buffers)
+        .map_err(|message| source_error(path, message))?;
 
     // Buffer starts aligned to 16 keep every view's offset alignment (at most 16 matters).
     let mut bin = Vec::new();

@@ -15,8 +15,12 @@ fn main() -> std::io::Result<()> {
     } else {
         hce_tests::conformance::bake_cornell(&root.join("samples"), scratch.path())
     };
-    let cases = hce_tests::conformance::cases(cornell);
     let dir = root.join("conformance");
+    let mut cases = hce_tests::conformance::cases(cornell);
+    // Written by glTF Transform, not here: read as committed (`TOOL_CASES` says how to remake them).
+    cases.extend(hce_tests::conformance::tool_cases(|f| {
+        std::fs::read(dir.join(f))
+    })?);
     hce_tests::conformance::generate(&dir, &cases)?;
     println!(
         "wrote {} cases and manifest.json to {}",

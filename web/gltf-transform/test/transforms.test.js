@@ -208,3 +208,22 @@ test('the browser viewer draws every output of the Cornell box', { timeout: 600_
     await b.close();
   }
 });
+
+// The conformance files glTF Transform wrote (conformance/manifest.json names each command in
+// `generated_by`) are what its commands write today, byte for byte: the suite's meshopt and
+// Draco cases are the tools' real streams, and remade by these commands when the grid changes.
+test('the conformance files written by gltf-transform are what its commands write', () => {
+  const manifest = JSON.parse(readFileSync(join(repo, 'conformance/manifest.json'), 'utf8'));
+  const made = manifest.cases.filter((/** @type {any} */ c) => /^@gltf-transform\/cli /.test(c.generated_by ?? ''));
+  assert.ok(made.length >= 2, `${made.length} cases made by gltf-transform`);
+  for (const c of made) {
+    const words = c.generated_by.replace(/^[^:]*: gltf-transform /, '').split(/\s+/);
+    const [command, input, output, ...rest] = words;
+    assert.equal(output, `conformance/${c.file}`, c.generated_by);
+    const out = join(work, `conformance-${command}.glb`);
+    const options = rest.map((w) => (w.startsWith('web/') ? join(repo, w) : w));
+    const run = spawnSync(process.execPath, [cli, command, join(repo, input), out, ...options], { encoding: 'utf8' });
+    assert.equal(run.status, 0, `${command}: ${run.stderr}`);
+    assert.ok(Buffer.compare(readFileSync(out), readFileSync(join(repo, output))) === 0, `${c.file} differs from what \`${c.generated_by}\` writes now; remake it (conformance/README.md)`);
+  }
+});
