@@ -1,6 +1,8 @@
 //! glTF 2.0 reader: the default scene's node hierarchy with global transforms, every triangle
 //! primitive, materials (baseColorFactor and baseColorTexture, emissiveFactor with
-//! KHR_materials_emissive_strength), KHR_lights_punctual lights and the first camera.
+//! KHR_materials_emissive_strength), KHR_lights_punctual lights and the first camera;
+//! KHR_mesh_quantization accessors, and EXT_mesh_gpu_instancing nodes as one node per instance
+//! ([`crate::gpu_instancing`]).
 //!
 //! The file is opened through [`crate::gltf_guard::open`], whose buffers are loaded one by one
 //! so that a missing or short buffer only drops the primitives that read from it; every
@@ -81,10 +83,13 @@ fn import_checked(
     let buffers = &gltf.buffers;
     let mut warnings = Vec::new();
 
-    for ext in document.extensions_used() {
-        if ext == crate::gltf_guard::QUANTIZATION {
-            // Read: its integer positions and normals are dequantized.
-        } else if ext == hce_format::EXTENSION_NAME {
+    // KHR_mesh_quantization is read (its integer positions and normals dequantized), and
+    // EXT_mesh_gpu_instancing was expanded into nodes by `open`.
+    for ext in document
+        .extensions_used()
+        .filter(|&e| e != crate::gltf_guard::QUANTIZATION)
+    {
+        if ext == hce_format::EXTENSION_NAME {
             warnings.push(format!(
                 "{ext}: the input already carries baked lighting; it is ignored and replaced"
             ));
