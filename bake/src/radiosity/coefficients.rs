@@ -3,6 +3,7 @@
 //! visibility. Clusters count as discs from afar and as their triangles from near.
 
 use glam::Vec3;
+use smallvec::{smallvec, SmallVec};
 
 use super::cluster::ClusterChild;
 use super::context::Ctx;
@@ -94,34 +95,37 @@ impl Ctx<'_> {
         let mut k = vec![0.0f32; nn];
         let lifted = !self.surface[recv.root as usize].is_empty();
         let mut closure = 0.0f32;
-        let mut vis = vec![1.0f32; nn + usize::from(lifted)];
+        // Every link comes here: the scratch stays on the stack for the default normal sets
+        // (at most eight normals, and the refined surface's own), rather than five allocations
+        // a link.
+        let mut vis: SmallVec<[f32; 10]> = smallvec![1.0f32; nn + usize::from(lifted)];
         // Per slot of `vis`, the visible fraction at each corner (`[j * CORNERS + c]`).
-        let mut at_corner = vec![1.0f32; vis.len() * CORNERS];
+        let mut at_corner: SmallVec<[f32; 30]> = smallvec![1.0f32; vis.len() * CORNERS];
         match src {
             Source::Elem(sk) => {
                 let sc = (st[0] + st[1] + st[2]) / 3.0;
                 let s_size = (st[1] - st[0]).length().max((st[2] - st[0]).length());
                 // Far pairs: the centroid suffices; near pairs: four stratified points.
                 let dist = (sc - rc).length();
-                let pts: Vec<Vec3> = if dist > 3.0 * (r_size + s_size) {
-                    vec![rc]
+                let pts: SmallVec<[Vec3; 4]> = if dist > 3.0 * (r_size + s_size) {
+                    smallvec![rc]
                 } else if dist > r_size + s_size {
                     split(rt)
                         .iter()
                         .map(|t| (t[0] + t[1] + t[2]) / 3.0)
                         .collect()
                 } else {
-                    stratified_points(rt, 2)
+                    stratified_points(rt, 2).into()
                 };
                 // Points and source on the refined surfaces where the objects have them.
                 let mut buf = [st; 4];
                 let polys = self.source_shape(sk, st, pts.len() > 1, &mut buf);
                 // The receiver's normals, and the refined surface's own after them.
-                let mut normals = root.normals.clone();
+                let mut normals: SmallVec<[Vec3; 10]> = root.normals.iter().copied().collect();
                 normals.push(Vec3::ZERO);
                 let m = nn + usize::from(lifted);
                 // Per polygon and normal (`[t * m + j]`), summed over the polygons in order.
-                let mut f = vec![0.0f32; polys.len() * m];
+                let mut f: SmallVec<[f32; 40]> = smallvec![0.0f32; polys.len() * m];
                 for p in &pts {
                     let (p, pn) = self.on_surface(recv.root, *p);
                     normals[nn] = pn;
