@@ -209,7 +209,43 @@ fn quad_gltf() -> String {
         bin.extend(p.iter().flat_map(|c| c.to_le_bytes()));
     }
     bin.extend([0u8, 1, 2, 0, 2, 3]);
-    let uri = format!("data:application/octet-stream;base64,{}", base64(&bin));
+    quad_gltf_with(&bin)
+}
+
+/// [`quad_gltf`] drawn twice by EXT_mesh_gpu_instancing (required), so that mutations reach the
+/// instance expansion: translations and quaternion rotations in accessors 2 and 3.
+fn quad_instanced_gltf() -> String {
+    let mut bin = Vec::new();
+    for p in [[0f32, 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]] {
+        bin.extend(p.iter().flat_map(|c| c.to_le_bytes()));
+    }
+    bin.extend([0u8, 1, 2, 0, 2, 3, 0, 0]);
+    for x in [
+        0f32, 0., 0., 3., 0., 0., 0., 0., 0., 1., 0., 0., 0.7071068, 0.7071068,
+    ] {
+        bin.extend(x.to_le_bytes());
+    }
+    let mut j: serde_json::Value = serde_json::from_str(&quad_gltf_with(&bin)).unwrap();
+    j["extensionsUsed"]
+        .as_array_mut()
+        .unwrap()
+        .push("EXT_mesh_gpu_instancing".into());
+    j["extensionsRequired"] = serde_json::json!(["EXT_mesh_gpu_instancing"]);
+    j["bufferViews"].as_array_mut().unwrap().extend([
+        serde_json::json!({"buffer": 0, "byteOffset": 56, "byteLength": 24}),
+        serde_json::json!({"buffer": 0, "byteOffset": 80, "byteLength": 32}),
+    ]);
+    j["accessors"].as_array_mut().unwrap().extend([
+        serde_json::json!({"bufferView": 2, "componentType": 5126, "count": 2, "type": "VEC3"}),
+        serde_json::json!({"bufferView": 3, "componentType": 5126, "count": 2, "type": "VEC4"}),
+    ]);
+    j["nodes"][0]["extensions"] = serde_json::json!({"EXT_mesh_gpu_instancing":
+        {"attributes": {"TRANSLATION": 2, "ROTATION": 3}}});
+    j.to_string()
+}
+
+fn quad_gltf_with(bin: &[u8]) -> String {
+    let uri = format!("data:application/octet-stream;base64,{}", base64(bin));
     format!(
         r#"{{"asset": {{"version": "2.0"}},
  "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_emissive_strength"],
@@ -262,11 +298,12 @@ fn seeds() -> Vec<Target> {
     let cornell_bin = asset.bin.clone().unwrap();
     let obj_mtl = [OBJ.as_bytes(), &[0], MTL.as_bytes()].concat();
     let gltf = quad_gltf().into_bytes();
+    let instanced = quad_instanced_gltf().into_bytes();
     vec![
         (
             "import_gltf",
             bodies::import_gltf as fn(&[u8]),
-            vec![cornell.clone(), gltf.clone()],
+            vec![cornell.clone(), gltf.clone(), instanced],
         ),
         (
             "import_obj",
@@ -304,6 +341,19 @@ fn seeds_are_accepted_and_mutations_never_panic() {
     assert_eq!((s.objects.len(), s.lights.len()), (1, 1));
     assert!(s.objects[0].multires, "node extras select multiresolution");
     assert_eq!(s.materials[0].emission, [4.0, 2.0, 0.0]);
+    let s = hce_meshio::scene::import_scene_bytes(
+        hce_meshio::scene::SceneBytes::Gltf(quad_instanced_gltf().as_bytes()),
+        &Default::default(),
+    )
+    .unwrap();
+    // Two instances: the second turned a quarter about z and moved 3 along x, then scaled by
+    // the node's 2, so corner (1, 0, 0) lands at (6, 2, 0).
+    assert_eq!(s.objects.len(), 2);
+    let far = s.objects[1].world_positions[1];
+    assert!(
+        (far[0] - 6.0).abs() < 1e-5 && (far[1] - 2.0).abs() < 1e-5,
+        "{far:?}"
+    );
     let s = hce_meshio::scene::import_scene_bytes(
         hce_meshio::scene::SceneBytes::Obj {
             obj: OBJ.as_bytes(),
