@@ -220,9 +220,8 @@ fn quad_instanced_gltf() -> String {
         bin.extend(p.iter().flat_map(|c| c.to_le_bytes()));
     }
     bin.extend([0u8, 1, 2, 0, 2, 3, 0, 0]);
-    for x in [
-        0f32, 0., 0., 3., 0., 0., 0., 0., 0., 1., 0., 0., 0.7071068, 0.7071068,
-    ] {
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    for x in [0f32, 0., 0., 3., 0., 0., 0., 0., 0., 1., 0., 0., h, h] {
         bin.extend(x.to_le_bytes());
     }
     let mut j: serde_json::Value = serde_json::from_str(&quad_gltf_with(&bin)).unwrap();
