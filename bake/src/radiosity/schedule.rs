@@ -110,6 +110,13 @@ pub fn bake_with_progress(
                 out
             })
             .collect();
+        // The previous pass's links were read by the refinement alone (its cache of known
+        // links); the solution and the trees' shape stay for the warm start below. Freed
+        // here, they are not held beside the new pass's links at the bake's memory peak.
+        for t in &mut trees {
+            t.links = Vec::new();
+            t.k = Vec::new();
+        }
         // Every source element must exist in its tree: collect keys per root in fixed order.
         let mut needed: Vec<Vec<ElemKey>> = vec![Vec::new(); n_roots as usize];
         for (links, _) in &refined {
