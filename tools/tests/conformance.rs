@@ -41,18 +41,7 @@ fn hce_validate_gives_every_expected_outcome() {
         let expected: Vec<String> = if c["valid"] == true {
             vec![format!("{}: valid", file.display())]
         } else {
-            c["problems"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|p| {
-                    format!(
-                        "{}: {}",
-                        p["location"].as_str().unwrap(),
-                        p["message"].as_str().unwrap()
-                    )
-                })
-                .collect()
+            located_lines(&c["problems"])
         };
         let got: Vec<&str> = stdout.lines().collect();
         assert_eq!(got, expected, "{}", c["file"]);
@@ -61,21 +50,24 @@ fn hce_validate_gives_every_expected_outcome() {
             .lines()
             .filter_map(|l| l.strip_prefix("warning: "))
             .collect();
-        let expected: Vec<String> = c
-            .get("warnings")
-            .and_then(Value::as_array)
-            .map_or(&[][..], Vec::as_slice)
-            .iter()
-            .map(|p| {
-                format!(
-                    "{}: {}",
-                    p["location"].as_str().unwrap(),
-                    p["message"].as_str().unwrap()
-                )
-            })
-            .collect();
+        let expected = located_lines(c.get("warnings").unwrap_or(&Value::Null));
         assert_eq!(warned, expected, "{}: warnings", c["file"]);
     }
+}
+
+/// A manifest list of `{location, message}` (absent: none) as `hce validate` prints its lines.
+fn located_lines(list: &Value) -> Vec<String> {
+    list.as_array()
+        .map_or(&[][..], Vec::as_slice)
+        .iter()
+        .map(|p| {
+            format!(
+                "{}: {}",
+                p["location"].as_str().unwrap(),
+                p["message"].as_str().unwrap()
+            )
+        })
+        .collect()
 }
 
 /// Per vertex of an OBJ written by `hce subdivide --merge`: position, colour (`v x y z r g b`)
