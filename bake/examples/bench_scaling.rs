@@ -2,10 +2,12 @@
 //! several sizes and prints time, elements and links against the number of input triangles.
 //! Run with `cargo run --release -p hce-bake --example bench_scaling [sizes...]`.
 
-use std::time::Instant;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
 
 use glam::Vec3;
-use hce_bake::{bake, BakeParams, LightKind, PunctualLight, Scene, SolverObject};
+use hce_bake::{bake_with_progress, BakeParams, LightKind, PunctualLight, Scene, SolverObject};
 
 /// An `n × n` grid of quads over the parallelogram `o, o+u, o+u+v, o+v`, facing `u × v`.
 fn grid(o: Vec3, u: Vec3, v: Vec3, n: u32, pos: &mut Vec<[f32; 3]>, tris: &mut Vec<[u32; 3]>) {
@@ -134,7 +136,17 @@ fn main() {
     for n in sizes {
         let scene = room(n, normals);
         let t = Instant::now();
-        let res = bake(&scene, &BakeParams::default()).expect("bake");
+        let peaks = PhasePeaks::default();
+        let done = AtomicBool::new(false);
+        let res = std::thread::scope(|s| {
+            s.spawn(|| peaks.sample_until(&done));
+            let res = bake_with_progress(&scene, &BakeParams::default(), &|phase, _, _| {
+                peaks.enter(phase)
+            })
+            .expect("bake");
+            done.store(true, Ordering::Relaxed);
+            res
+        });
         let secs = t.elapsed().as_secs_f64();
         let phases: Vec<String> = res
             .stats
@@ -150,5 +162,56 @@ fn main() {
             res.stats.iterations,
             phases.join(", ")
         );
+        println!("resident memory, peak by phase: {}", peaks.report());
+    }
+}
+
+/// The process's resident memory sampled every 20 ms, its peak kept per bake phase (the phase
+/// the progress callback last named), to show which phase sets the bake's memory peak. Linux
+/// only (`/proc/self/statm`); elsewhere it reports nothing.
+#[derive(Default)]
+struct PhasePeaks {
+    phase: Mutex<String>,
+    peaks: Mutex<Vec<(String, u64)>>,
+}
+
+impl PhasePeaks {
+    fn enter(&self, phase: &str) {
+        if let Ok(mut p) = self.phase.lock() {
+            if *p != phase {
+                *p = phase.to_string();
+            }
+        }
+    }
+
+    fn sample_until(&self, done: &AtomicBool) {
+        // statm gives pages; 4 KiB pages on the machines this runs on.
+        let page = 4096u64;
+        while !done.load(Ordering::Relaxed) {
+            let rss = std::fs::read_to_string("/proc/self/statm")
+                .ok()
+                .and_then(|s| s.split_whitespace().nth(1)?.parse::<u64>().ok())
+                .map_or(0, |p| p * page);
+            let phase = self.phase.lock().map(|p| p.clone()).unwrap_or_default();
+            if let Ok(mut peaks) = self.peaks.lock() {
+                match peaks.iter_mut().find(|(p, _)| *p == phase) {
+                    Some((_, m)) => *m = (*m).max(rss),
+                    None => peaks.push((phase, rss)),
+                }
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    fn report(&self) -> String {
+        let peaks = self.peaks.lock().map(|p| p.clone()).unwrap_or_default();
+        peaks
+            .iter()
+            .map(|(p, m)| {
+                let name = if p.is_empty() { "setup" } else { p };
+                format!("{name} {:.2} GB", *m as f64 / 1e9)
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 }

@@ -119,11 +119,20 @@ pub fn bake_with_progress(
         }
         // Every source element must exist in its tree: collect keys per root in fixed order.
         let mut needed: Vec<Vec<ElemKey>> = vec![Vec::new(); n_roots as usize];
+        // A receiver's links come one after another, and so mostly do a source's: a key is
+        // left out when it repeats the last one pushed, which `build_tree` would drop anyway
+        // (a key a link names, most of this list, at the memory peak).
+        let mut push = |k: ElemKey| {
+            let list = &mut needed[k.root as usize];
+            if list.last() != Some(&k) {
+                list.push(k);
+            }
+        };
         for (links, _) in &refined {
             for l in links {
-                needed[l.recv.root as usize].push(l.recv);
+                push(l.recv);
                 if let Source::Elem(k) = l.src {
-                    needed[k.root as usize].push(k);
+                    push(k);
                 }
             }
         }

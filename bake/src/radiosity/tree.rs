@@ -141,6 +141,9 @@ impl Ctx<'_> {
         }
         all.sort_by_key(|k| (k.level, k.path));
         all.dedup();
+        // Made for every key a link named, duplicates and ancestors included, and kept as the
+        // tree's keys.
+        all.shrink_to_fit();
         let n = all.len();
         let mut tree = Tree {
             child: vec![u32::MAX; n],
