@@ -5,6 +5,7 @@ use glam::Vec3;
 
 use super::cluster::READ_PARTS;
 use super::element::ElemKey;
+use super::tree::Tree;
 
 /// A link's coefficients are a linear function over its receiver, stored as its values at the
 /// receiver's three corners (per normal: `k[c * nn + j]`). A constant per link, pushed down to
@@ -23,10 +24,13 @@ pub(super) enum Source {
     Elem(ElemKey),
 }
 
-/// A link as refinement produces it; `k[nn]` form factors (visibility included) per normal.
-pub(super) struct RawLink {
-    pub(super) recv: ElemKey,
-    pub(super) src: Source,
+/// A link inside a root's tree; `k_start` is where its coefficients start in the tree's `k`
+/// (`CORNERS × nn` form factors, visibility included, and on a refined surface `CORNERS` more:
+/// [`Ctx::link_coefficients`](super::context::Ctx::link_coefficients)).
+pub(super) struct Link {
+    /// The receiver's index in the tree.
+    pub(super) recv: u32,
+    pub(super) src: SrcIdx,
     /// Where the link looks: for a cluster source, the direction light leaves it towards the
     /// receiver; for an element source, the barycentric coordinates over the source of the
     /// centre of the receiver's view of it
@@ -56,21 +60,82 @@ pub(super) struct RawLink {
     pub(super) bend: f32,
 }
 
-/// A resolved link inside a root's tree.
-pub(super) struct Link {
-    pub(super) recv: u32,
-    pub(super) src: SrcIdx,
-    /// As in [`RawLink`].
-    pub(super) aim: Vec3,
-    pub(super) share: [f32; READ_PARTS],
-    pub(super) deep: bool,
-    pub(super) facing: u8,
-    pub(super) depth: u8,
-    pub(super) k_start: u32,
-    pub(super) visible: f32,
-    pub(super) bend: f32,
+/// What a link joins, by key: its receiver and its source.
+pub(super) type Ends = (ElemKey, Source);
+
+/// One root's links as refinement makes them, before the trees that index their ends exist:
+/// `ends[i]` names the ends of `links[i]`, whose `recv` and element `src` wait for
+/// [`RawLinks::resolve`]. The links are made once, in the form the solve reads, with their
+/// keys beside them; a keyed copy converted into a resolved one held both at the bake's memory
+/// peak (72 and 60 bytes a link).
+#[derive(Default)]
+pub(super) struct RawLinks {
+    pub(super) links: Vec<Link>,
+    pub(super) ends: Vec<Ends>,
+    pub(super) k: Vec<f32>,
 }
 
+impl RawLinks {
+    /// Appends `link` with its ends and coefficients; sets its `k_start`.
+    pub(super) fn push(&mut self, mut link: Link, ends: Ends, k: &[f32]) {
+        link.k_start = self.k.len() as u32;
+        self.k.extend_from_slice(k);
+        self.links.push(link);
+        self.ends.push(ends);
+    }
+
+    /// Appends every link of `other`, in order.
+    pub(super) fn append(&mut self, other: RawLinks) {
+        let offset = self.k.len() as u32;
+        self.links.extend(other.links.into_iter().map(|mut l| {
+            l.k_start += offset;
+            l
+        }));
+        self.ends.extend(other.ends);
+        self.k.extend(other.k);
+    }
+
+    pub(super) fn with_capacity(links: usize, k: usize) -> Self {
+        RawLinks {
+            links: Vec::with_capacity(links),
+            ends: Vec::with_capacity(links),
+            k: Vec::with_capacity(k),
+        }
+    }
+
+    /// Gives back the slack of vectors grown by doubling: a root's links are held for every
+    /// root at once until the trees are built.
+    pub(super) fn shrink_to_fit(&mut self) {
+        self.links.shrink_to_fit();
+        self.ends.shrink_to_fit();
+        self.k.shrink_to_fit();
+    }
+
+    /// The links and coefficients of root `r`'s tree, their ends found in `trees` (which hold
+    /// every key a link names).
+    pub(super) fn resolve(self, r: usize, trees: &[Tree]) -> (Vec<Link>, Vec<f32>) {
+        let RawLinks {
+            mut links,
+            ends,
+            k,
+        } = self;
+        for (l, (recv, src)) in links.iter_mut().zip(ends) {
+            l.recv = trees[r].index_of(recv).expect("receiver present");
+            if let Source::Elem(k) = src {
+                l.src = SrcIdx::Node {
+                    root: k.root,
+                    node: trees[k.root as usize]
+                        .index_of(k)
+                        .expect("source present"),
+                };
+            }
+        }
+        (links, k)
+    }
+}
+
+/// A link's source in the trees. While a link waits for [`RawLinks::resolve`], an element
+/// source's `node` is not yet known.
 #[derive(Clone, Copy)]
 pub(super) enum SrcIdx {
     Cluster(u32),

@@ -5,7 +5,7 @@
 
 use rayon::prelude::*;
 
-use super::links::RawLink;
+use super::links::RawLinks;
 
 /// Pairs one part of a root's refinement takes before it hands the pairs left on its stack
 /// to parts that run in parallel ([`refine_in_parallel`]).
@@ -18,21 +18,19 @@ pub(super) const REFINE_STEPS: usize = 16384;
 /// Where the parts fall depends on the step count alone, so the links come out the same for
 /// any number of threads. A room of a few large coarse triangles was refined one triangle per
 /// thread, and the floor's alone took most of the time (the Cornell box: 1.2 cores busy of 2).
-#[allow(clippy::type_complexity)]
 pub(super) fn refine_in_parallel<P: Send>(
-    run: &(dyn Fn(Vec<P>) -> (Vec<RawLink>, Vec<f32>, Vec<P>) + Sync),
+    run: &(dyn Fn(Vec<P>) -> (RawLinks, Vec<P>) + Sync),
     stack: Vec<P>,
-) -> (Vec<RawLink>, Vec<f32>) {
+) -> RawLinks {
     // The parts' results in order, joined once at the end.
-    #[allow(clippy::type_complexity)]
     fn parts<P: Send>(
-        run: &(dyn Fn(Vec<P>) -> (Vec<RawLink>, Vec<f32>, Vec<P>) + Sync),
+        run: &(dyn Fn(Vec<P>) -> (RawLinks, Vec<P>) + Sync),
         stack: Vec<P>,
-    ) -> Vec<(Vec<RawLink>, Vec<f32>)> {
-        let (links, ks, left) = run(stack);
-        let mut out = vec![(links, ks)];
+    ) -> Vec<RawLinks> {
+        let (links, left) = run(stack);
+        let mut out = vec![links];
         if !left.is_empty() {
-            let rest: Vec<Vec<(Vec<RawLink>, Vec<f32>)>> = left
+            let rest: Vec<Vec<RawLinks>> = left
                 .into_par_iter()
                 .rev()
                 .map(|p| parts(run, vec![p]))
@@ -45,17 +43,12 @@ pub(super) fn refine_in_parallel<P: Send>(
     if all.len() == 1 {
         return all.pop().unwrap_or_default();
     }
-    let (mut links, mut ks) = (
-        Vec::with_capacity(all.iter().map(|p| p.0.len()).sum()),
-        Vec::with_capacity(all.iter().map(|p| p.1.len()).sum()),
+    let mut links = RawLinks::with_capacity(
+        all.iter().map(|p| p.links.len()).sum(),
+        all.iter().map(|p| p.k.len()).sum(),
     );
-    for (part_links, part_ks) in all {
-        let offset = ks.len() as u32;
-        links.extend(part_links.into_iter().map(|mut l| {
-            l.k_start += offset;
-            l
-        }));
-        ks.extend(part_ks);
+    for part in all {
+        links.append(part);
     }
-    (links, ks)
+    links
 }

@@ -20,7 +20,7 @@ use super::element::{split, ElemKey};
 use super::factor_variation::factor_variation_splits;
 use super::formfactor::{disc_estimate, point_to_polygon, point_to_polygon_each};
 use super::link_visibility::{rays_for, LIGHT_RAY_FACTOR, MAX_RAY_FACTOR};
-use super::links::{RawLink, Source, SrcIdx, CORNERS};
+use super::links::{Ends, Link, RawLinks, Source, SrcIdx, CORNERS};
 use super::narrow_shadow::taken_down_with;
 use super::parallel_walk::{refine_in_parallel, REFINE_STEPS};
 use super::power::{power_split, Split};
@@ -99,7 +99,7 @@ struct Estimate {
     s_splittable: bool,
     /// The geometric normal's form factors the rules computed, which the link reuses.
     known: KnownFactors,
-    /// A cluster link's bend, as in [`RawLink::bend`].
+    /// A cluster link's bend, as in [`Link::bend`].
     bend: f32,
 }
 
@@ -151,18 +151,16 @@ impl Ctx<'_> {
         spreads: &[Vec<f32>],
         eps_power: f32,
         judge: Judge,
-    ) -> (Vec<RawLink>, Vec<f32>) {
+    ) -> RawLinks {
         let refinement = RootRefinement::new(self, r, trees, cl, spreads, eps_power, judge);
-        let (links, ks) = refine_in_parallel(
+        let links = refine_in_parallel(
             &|stack| refinement.walk(stack),
             vec![refinement.first_pair()],
         );
-        let (mut links, mut ks) = refinement.take_narrow_receivers_down(links, ks);
-        // The walk's vectors grew by doubling; these are held for every root at once until
-        // the trees are built, where the slack was a third of the bake's memory peak.
+        let mut links = refinement.take_narrow_receivers_down(links);
+        // Where the walk's slack was, it was a third of the bake's memory peak.
         links.shrink_to_fit();
-        ks.shrink_to_fit();
-        (links, ks)
+        links
     }
 }
 
@@ -279,9 +277,8 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
 
     /// Refines the pairs on `stack` depth-first for at most [`REFINE_STEPS`] pairs; returns the
     /// links, their coefficients and the pairs left.
-    fn walk(&self, mut stack: Vec<Pair>) -> (Vec<RawLink>, Vec<f32>, Vec<Pair>) {
-        let mut links = Vec::new();
-        let mut ks = Vec::new();
+    fn walk(&self, mut stack: Vec<Pair>) -> (RawLinks, Vec<Pair>) {
+        let mut links = RawLinks::default();
         let mut steps = 0;
         while let Some(pair) = stack.pop() {
             if steps == REFINE_STEPS {
@@ -289,19 +286,18 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
                 break;
             }
             steps += 1;
-            self.refine_pair(pair, &mut stack, &mut links, &mut ks);
+            self.refine_pair(pair, &mut stack, &mut links);
         }
-        (links, ks, stack)
+        (links, stack)
     }
 
     /// One pair through the rules: split (its children pushed on `stack`), dropped, or made a
-    /// link (pushed on `links`, its coefficients on `ks`).
+    /// link (pushed on `links`).
     fn refine_pair(
         &self,
         (recv, rt, src, st, judged): Pair,
         stack: &mut Vec<Pair>,
-        links: &mut Vec<RawLink>,
-        ks: &mut Vec<f32>,
+        links: &mut RawLinks,
     ) {
         let ctx = self.ctx;
         let r_area = self.root.area / 4f32.powi(recv.level as i32);
@@ -344,7 +340,6 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
             }
             None => {}
         }
-        let k_start = ks.len() as u32;
         let share = est / (r_area * std::f32::consts::PI) * lum(ctx.reflectance(recv));
         let (k, visible) = self.coefficients((recv, rt), (src, st), est, share, known);
         if k.iter().all(|&v| v <= 0.0) {
@@ -374,8 +369,8 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
                 return;
             }
         }
-        ks.extend(k);
-        links.push(self.make_link(recv, rc, src, st, k_start, visible, bend));
+        let (link, ends) = self.make_link(recv, rc, src, st, visible, bend);
+        links.push(link, ends, &k);
     }
 
     /// The culls and rules for a pair whose source is element `sk` (corners `st`): `None` where
@@ -700,10 +695,9 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
         rc: Vec3,
         src: Source,
         st: [Vec3; 3],
-        k_start: u32,
         visible: f32,
         bend: f32,
-    ) -> RawLink {
+    ) -> (Link, Ends) {
         let ctx = self.ctx;
         let normal = self.root.normal;
         // The last pass's links read near clusters by their deeper parts ([`Ctx::reads_deep`]):
@@ -728,31 +722,36 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
                 (aim, [0.0; READ_PARTS], ctx.facing_normal(sk, rc), depth)
             }
         };
-        RawLink {
-            recv,
-            src,
+        // The ends are indices in trees not built yet ([`RawLinks::resolve`]).
+        let src_idx = match src {
+            Source::Cluster(c) => SrcIdx::Cluster(c),
+            Source::Elem(sk) => SrcIdx::Node {
+                root: sk.root,
+                node: u32::MAX,
+            },
+        };
+        let link = Link {
+            recv: u32::MAX,
+            src: src_idx,
             aim,
             share,
             deep,
             facing,
             depth,
-            k_start,
+            k_start: 0,
             visible,
             bend,
-        }
+        };
+        (link, (recv, src))
     }
 
     /// Takes every link of a receiver the narrow shadow rule split down with the light's
     /// ([`taken_down_with`]), recomputing the coefficients of the links it becomes.
-    fn take_narrow_receivers_down(
-        &self,
-        links: Vec<RawLink>,
-        ks: Vec<f32>,
-    ) -> (Vec<RawLink>, Vec<f32>) {
+    fn take_narrow_receivers_down(&self, raw: RawLinks) -> RawLinks {
         let ctx = self.ctx;
         let narrow = std::mem::take(&mut *self.narrow.lock().unwrap_or_else(|e| e.into_inner()));
         if narrow.is_empty() {
-            return (links, ks);
+            return raw;
         }
         let (above, graded) = taken_down_with(&narrow);
         let nn = self.nn;
@@ -772,22 +771,29 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
                 || graded.contains(&recv)
                 || above.contains(&recv) && near(recv, src)
         };
-        let expand = |l: &RawLink| -> Option<Vec<(RawLink, Vec<f32>)>> {
-            if !goes_down(l.recv, l.src) {
+        let RawLinks {
+            links,
+            ends,
+            k: ks,
+        } = raw;
+        // Per link: the links it became, where it went down.
+        type Expanded = Option<Vec<(Link, Ends, Vec<f32>)>>;
+        let expand = |(l, &(l_recv, l_src)): (&Link, &Ends)| -> Expanded {
+            if !goes_down(l_recv, l_src) {
                 return None;
             }
             let at = l.k_start as usize;
             let k = &ks[at..at + link_len];
-            let lt = ctx.elem_corners(l.recv);
-            let share = lum(ctx.reflectance(l.recv))
-                * lum(ctx.src_radiance(self.trees, self.cl, l.src, (lt[0] + lt[1] + lt[2]) / 3.0))
+            let lt = ctx.elem_corners(l_recv);
+            let share = lum(ctx.reflectance(l_recv))
+                * lum(ctx.src_radiance(self.trees, self.cl, l_src, (lt[0] + lt[1] + lt[2]) / 3.0))
                 * (k[0] + k[nn] + k[2 * nn])
                 / 3.0;
-            let st = self.corners_of(l.src);
+            let st = self.corners_of(l_src);
             let mut out = Vec::new();
-            let mut stack = vec![(l.recv, lt)];
+            let mut stack = vec![(l_recv, lt)];
             while let Some((recv, rt)) = stack.pop() {
-                if goes_down(recv, l.src) {
+                if goes_down(recv, l_src) {
                     let children = split(rt);
                     for c in (0..4).rev() {
                         stack.push((recv.child(c), children[c as usize]));
@@ -796,7 +802,7 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
                 }
                 let (k, visible) = self.coefficients(
                     (recv, rt),
-                    (l.src, st),
+                    (l_src, st),
                     f32::INFINITY,
                     share,
                     KnownFactors::default(),
@@ -805,32 +811,26 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
                     continue;
                 }
                 let rc = (rt[0] + rt[1] + rt[2]) / 3.0;
-                out.push((self.make_link(recv, rc, l.src, st, 0, visible, f32::NAN), k));
+                let (link, ends) = self.make_link(recv, rc, l_src, st, visible, f32::NAN);
+                out.push((link, ends, k));
             }
             Some(out)
         };
-        // Per link: the links it became, where it went down.
-        type Expanded = Option<Vec<(RawLink, Vec<f32>)>>;
-        let expanded: Vec<Expanded> = links.par_iter().map(expand).collect();
-        let mut out_links = Vec::with_capacity(links.len());
-        let mut out_ks = Vec::with_capacity(ks.len());
-        for (l, e) in links.into_iter().zip(expanded) {
+        let expanded: Vec<Expanded> = links.par_iter().zip(&ends).map(expand).collect();
+        let mut out = RawLinks::with_capacity(links.len(), ks.len());
+        for ((l, l_ends), e) in links.into_iter().zip(ends).zip(expanded) {
             match e {
                 None => {
                     let at = l.k_start as usize;
-                    let k_start = out_ks.len() as u32;
-                    out_ks.extend_from_slice(&ks[at..at + link_len]);
-                    out_links.push(RawLink { k_start, ..l });
+                    out.push(l, l_ends, &ks[at..at + link_len]);
                 }
                 Some(v) => {
-                    for (mut nl, k) in v {
-                        nl.k_start = out_ks.len() as u32;
-                        out_ks.extend(k);
-                        out_links.push(nl);
+                    for (nl, nl_ends, k) in v {
+                        out.push(nl, nl_ends, &k);
                     }
                 }
             }
         }
-        (out_links, out_ks)
+        out
     }
 }

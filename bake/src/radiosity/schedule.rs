@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use super::cluster_reading::ClusterLight;
 use super::context::{lum, Ctx};
 use super::element::ElemKey;
-use super::links::{Link, RawLink, Source, SrcIdx};
+use super::links::{RawLinks, Source};
 use super::params::BakeParams;
 use super::refine::Judge;
 use super::solution::{BakeResult, BakeStats, ObjectSolution, TriangleSolution};
@@ -101,7 +101,7 @@ pub fn bake_with_progress(
             },
             last_pass: pass + 1 >= params.refine_passes.max(1),
         };
-        let refined: Vec<(Vec<RawLink>, Vec<f32>)> = (0..n_roots)
+        let refined: Vec<RawLinks> = (0..n_roots)
             .into_par_iter()
             .map(|r| {
                 let out = ctx.refine_root(r, &trees, &cl, &spreads, eps_power, judge);
@@ -128,10 +128,10 @@ pub fn bake_with_progress(
                 list.push(k);
             }
         };
-        for (links, _) in &refined {
-            for l in links {
-                push(l.recv);
-                if let Source::Elem(k) = l.src {
+        for raw in &refined {
+            for &(recv, src) in &raw.ends {
+                push(recv);
+                if let Source::Elem(k) = src {
                     push(k);
                 }
             }
@@ -142,33 +142,9 @@ pub fn bake_with_progress(
             .map(|(r, keys)| ctx.build_tree(r as u32, keys, &direct[r]))
             .collect();
         stats.links = 0;
-        for (r, (links, ks)) in refined.into_iter().enumerate() {
-            stats.links += links.len();
-            let resolved: Vec<Link> = links
-                .iter()
-                .map(|l| Link {
-                    recv: new_trees[r].index_of(l.recv).expect("receiver present"),
-                    src: match l.src {
-                        Source::Cluster(c) => SrcIdx::Cluster(c),
-                        Source::Elem(k) => SrcIdx::Node {
-                            root: k.root,
-                            node: new_trees[k.root as usize]
-                                .index_of(k)
-                                .expect("source present"),
-                        },
-                    },
-                    aim: l.aim,
-                    share: l.share,
-                    deep: l.deep,
-                    facing: l.facing,
-                    depth: l.depth,
-                    k_start: l.k_start,
-                    visible: l.visible,
-                    bend: l.bend,
-                })
-                .collect();
-            new_trees[r].links = resolved;
-            new_trees[r].k = ks;
+        for (r, raw) in refined.into_iter().enumerate() {
+            stats.links += raw.links.len();
+            (new_trees[r].links, new_trees[r].k) = raw.resolve(r, &new_trees);
             (new_trees[r].closure, new_trees[r].self_view) = ctx.closure(r as u32, &new_trees[r]);
         }
         // Start from the previous solution where it exists so that the solve converges fast.
