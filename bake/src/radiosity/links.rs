@@ -114,19 +114,13 @@ impl RawLinks {
     /// The links and coefficients of root `r`'s tree, their ends found in `trees` (which hold
     /// every key a link names).
     pub(super) fn resolve(self, r: usize, trees: &[Tree]) -> (Vec<Link>, Vec<f32>) {
-        let RawLinks {
-            mut links,
-            ends,
-            k,
-        } = self;
+        let RawLinks { mut links, ends, k } = self;
         for (l, (recv, src)) in links.iter_mut().zip(ends) {
             l.recv = trees[r].index_of(recv).expect("receiver present");
             if let Source::Elem(k) = src {
                 l.src = SrcIdx::Node {
                     root: k.root,
-                    node: trees[k.root as usize]
-                        .index_of(k)
-                        .expect("source present"),
+                    node: trees[k.root as usize].index_of(k).expect("source present"),
                 };
             }
         }

@@ -127,8 +127,8 @@ struct RootRefinement<'c, 'a> {
     /// Per link: its coefficients, and on a refined surface those of the surface's own normal
     /// ([`Ctx::link_coefficients`]).
     link_len: usize,
-    /// The root's tree in the previous solution.
-    prev: &'c Tree,
+    /// The coefficients of the root's links in the previous pass, which `cache` points into.
+    prev_k: Vec<f32>,
     /// Coefficients are a pure function of the pair: those of the previous pass, reused.
     cache: Cache,
     /// Radius and area of the clusters of its own object holding this root, largest first: the
@@ -146,13 +146,14 @@ impl Ctx<'_> {
     pub(super) fn refine_root(
         &self,
         r: u32,
+        prev: (Vec<Link>, Vec<f32>),
         trees: &[Tree],
         cl: &[ClusterLight],
         spreads: &[Vec<f32>],
         eps_power: f32,
         judge: Judge,
     ) -> RawLinks {
-        let refinement = RootRefinement::new(self, r, trees, cl, spreads, eps_power, judge);
+        let refinement = RootRefinement::new(self, r, prev, trees, cl, spreads, eps_power, judge);
         let links = refine_in_parallel(
             &|stack| refinement.walk(stack),
             vec![refinement.first_pair()],
@@ -165,9 +166,11 @@ impl Ctx<'_> {
 }
 
 impl<'c, 'a> RootRefinement<'c, 'a> {
+    #[allow(clippy::too_many_arguments)]
     fn new(
         ctx: &'c Ctx<'a>,
         r: u32,
+        (prev_links, prev_k): (Vec<Link>, Vec<f32>),
         trees: &'c [Tree],
         cl: &'c [ClusterLight],
         spreads: &'c [Vec<f32>],
@@ -182,8 +185,7 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
                 CORNERS
             };
         let prev = &trees[r as usize];
-        let cache: Cache = prev
-            .links
+        let cache: Cache = prev_links
             .iter()
             .map(|l| {
                 let src = match l.src {
@@ -219,7 +221,7 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
             eps_power,
             judge,
             link_len,
-            prev,
+            prev_k,
             cache,
             neighbourhood,
             narrow: Default::default(),
@@ -680,7 +682,7 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
         );
         match self.cache.get(&(recv, src)) {
             Some(&(at, visible, _)) if rays <= nv => {
-                (self.prev.k[at..at + self.link_len].to_vec(), visible)
+                (self.prev_k[at..at + self.link_len].to_vec(), visible)
             }
             _ => ctx.link_coefficients((recv, rt), (src, st), rays, known),
         }
@@ -771,11 +773,7 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
                 || graded.contains(&recv)
                 || above.contains(&recv) && near(recv, src)
         };
-        let RawLinks {
-            links,
-            ends,
-            k: ks,
-        } = raw;
+        let RawLinks { links, ends, k: ks } = raw;
         // Per link: the links it became, where it went down.
         type Expanded = Option<Vec<(Link, Ends, Vec<f32>)>>;
         let expand = |(l, &(l_recv, l_src)): (&Link, &Ends)| -> Expanded {

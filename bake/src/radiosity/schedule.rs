@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use super::cluster_reading::ClusterLight;
 use super::context::{lum, Ctx};
 use super::element::ElemKey;
-use super::links::{RawLinks, Source};
+use super::links::{Link, RawLinks, Source};
 use super::params::BakeParams;
 use super::refine::Judge;
 use super::solution::{BakeResult, BakeStats, ObjectSolution, TriangleSolution};
@@ -101,22 +101,25 @@ pub fn bake_with_progress(
             },
             last_pass: pass + 1 >= params.refine_passes.max(1),
         };
-        let refined: Vec<RawLinks> = (0..n_roots)
+        // A root's links of the previous pass are read by its own refinement alone (its cache
+        // of known links), so they go to it and are freed when it is done: they are not held
+        // beside the new pass's links at the bake's memory peak. The solution and the trees'
+        // shape stay for the warm start below.
+        let prev: Vec<(Vec<Link>, Vec<f32>)> = trees
+            .iter_mut()
+            .map(|t| (std::mem::take(&mut t.links), std::mem::take(&mut t.k)))
+            .collect();
+        let refined: Vec<RawLinks> = prev
             .into_par_iter()
-            .map(|r| {
-                let out = ctx.refine_root(r, &trees, &cl, &spreads, eps_power, judge);
+            .enumerate()
+            .map(|(r, prev)| {
+                let r = r as u32;
+                let out = ctx.refine_root(r, prev, &trees, &cl, &spreads, eps_power, judge);
                 let done = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                 progress(&phase, done, n_roots as usize);
                 out
             })
             .collect();
-        // The previous pass's links were read by the refinement alone (its cache of known
-        // links); the solution and the trees' shape stay for the warm start below. Freed
-        // here, they are not held beside the new pass's links at the bake's memory peak.
-        for t in &mut trees {
-            t.links = Vec::new();
-            t.k = Vec::new();
-        }
         // Every source element must exist in its tree: collect keys per root in fixed order.
         let mut needed: Vec<Vec<ElemKey>> = vec![Vec::new(); n_roots as usize];
         // A receiver's links come one after another, and so mostly do a source's: a key is
