@@ -20,10 +20,9 @@ impl Ctx<'_> {
         let block = CORNERS * self.nn(r);
         let n = t.keys.len();
         let mut f = vec![0.0f32; n * CORNERS];
-        for link in &t.links {
-            let at = link.k_start as usize + block;
+        for (link, k) in t.links_with_k() {
             for c in 0..CORNERS {
-                f[link.recv as usize * CORNERS + c] += t.k[at + c];
+                f[link.recv as usize * CORNERS + c] += k[block + c];
             }
         }
         push_linear(t, &mut f, 1);
@@ -73,9 +72,9 @@ impl Ctx<'_> {
         let n = t.keys.len();
         let mut ff = vec![0.0f32; n * CORNERS * nn];
         let mut ff_lit = vec![0.0f32; n * CORNERS * nn];
-        for link in &t.links {
+        for (link, k) in t.links_with_k() {
             let base = link.recv as usize * CORNERS * nn;
-            let ks = &t.k[link.k_start as usize..link.k_start as usize + CORNERS * nn];
+            let ks = &k[..CORNERS * nn];
             for (x, &k) in ks.iter().enumerate() {
                 ff[base + x] += k;
             }
@@ -98,7 +97,7 @@ impl Ctx<'_> {
     /// Whether `link` brings a light's own light: its source is an element of a light
     /// ([`Ctx::is_light`]).
     pub(super) fn brings_light(&self, link: &Link) -> bool {
-        matches!(link.src, SrcIdx::Node { root, .. } if self.is_light(root))
+        matches!(link.src.get(), SrcIdx::Node { root, .. } if self.is_light(root))
     }
 
     /// One Jacobi step for root `r`: its nodes' new radiance from what its links gather from
@@ -130,8 +129,8 @@ impl Ctx<'_> {
         let mut lit = q.clone();
         let mut g0 = vec![Vec3::ZERO; n * CORNERS];
         let mut g0_rest = vec![Vec3::ZERO; n * CORNERS];
-        for link in &t.links {
-            let ls = match link.src {
+        for (link, k) in t.links_with_k() {
+            let ls = match link.src.get() {
                 SrcIdx::Cluster(c) => {
                     self.cluster_seen(trees, cl, c, link.aim, &link.share, link.deep)
                 }
@@ -144,7 +143,7 @@ impl Ctx<'_> {
                 ),
             };
             let base = link.recv as usize * CORNERS * nn;
-            let ks = &t.k[link.k_start as usize..link.k_start as usize + CORNERS * nn];
+            let ks = &k[..CORNERS * nn];
             for (x, &k) in ks.iter().enumerate() {
                 q[base + x] += ls * k;
             }

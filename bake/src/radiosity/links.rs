@@ -24,13 +24,15 @@ pub(super) enum Source {
     Elem(ElemKey),
 }
 
-/// A link inside a root's tree; `k_start` is where its coefficients start in the tree's `k`
-/// (`CORNERS × nn` form factors, visibility included, and on a refined surface `CORNERS` more:
-/// [`Ctx::link_coefficients`](super::context::Ctx::link_coefficients)).
+/// A link inside a root's tree. Its coefficients (`CORNERS × nn` form factors, visibility
+/// included, and on a refined surface `CORNERS` more:
+/// [`Ctx::link_coefficients`](super::context::Ctx::link_coefficients)) are the tree's `k`, the
+/// same number for every link of a root, in the links' order ([`Tree::links_with_k`]).
+/// 52 bytes: a million triangles make some eighty million links, so every field counts.
 pub(super) struct Link {
     /// The receiver's index in the tree.
     pub(super) recv: u32,
-    pub(super) src: SrcIdx,
+    pub(super) src: PackedSrc,
     /// Where the link looks: for a cluster source, the direction light leaves it towards the
     /// receiver; for an element source, the barycentric coordinates over the source of the
     /// centre of the receiver's view of it
@@ -49,7 +51,6 @@ pub(super) struct Link {
     /// For an element source: how many levels below it the receiver's view is read
     /// ([`Ctx::footprint`](super::context::Ctx::footprint)); 0 for a cluster.
     pub(super) depth: u8,
-    pub(super) k_start: u32,
     /// Fraction of the visibility rays that were clear.
     pub(super) visible: f32,
     /// For a cluster source on a receiver that may split: how far its form factor bends over
@@ -63,43 +64,60 @@ pub(super) struct Link {
 /// What a link joins, by key: its receiver and its source.
 pub(super) type Ends = (ElemKey, Source);
 
-/// One root's links as refinement makes them, before the trees that index their ends exist:
-/// `ends[i]` names the ends of `links[i]`, whose `recv` and element `src` wait for
-/// [`RawLinks::resolve`]. The links are made once, in the form the solve reads, with their
-/// keys beside them; a keyed copy converted into a resolved one held both at the bake's memory
-/// peak (72 and 60 bytes a link).
+/// One root's links as refinement makes them, before the trees that index their ends exist.
+/// The links are made once, in the form the solve reads, with their ends' keys beside them
+/// until [`RawLinks::resolve`] (their `recv` and element `src` wait for it); a keyed copy
+/// converted into a resolved one held both at the bake's memory peak. The keys are held
+/// compactly: a receiver's links mostly come one after another, so receivers are runs, and
+/// only element sources (a tenth of the links in a large scene) need a key of their own.
 #[derive(Default)]
 pub(super) struct RawLinks {
     pub(super) links: Vec<Link>,
-    pub(super) ends: Vec<Ends>,
+    /// Per run of links with the same receiver: its key and the run's length.
+    recv_runs: Vec<(ElemKey, u32)>,
+    /// The keys of the element sources, in the order of their links.
+    elem_srcs: Vec<ElemKey>,
     pub(super) k: Vec<f32>,
 }
 
 impl RawLinks {
-    /// Appends `link` with its ends and coefficients; sets its `k_start`.
-    pub(super) fn push(&mut self, mut link: Link, ends: Ends, k: &[f32]) {
-        link.k_start = self.k.len() as u32;
+    /// Appends `link` with its ends and coefficients.
+    pub(super) fn push(&mut self, link: Link, (recv, src): Ends, k: &[f32]) {
+        debug_assert_eq!(
+            self.k.len(),
+            self.links.len() * k.len(),
+            "one length a root"
+        );
         self.k.extend_from_slice(k);
         self.links.push(link);
-        self.ends.push(ends);
+        self.push_recv(recv, 1);
+        if let Source::Elem(sk) = src {
+            self.elem_srcs.push(sk);
+        }
+    }
+
+    fn push_recv(&mut self, recv: ElemKey, n: u32) {
+        match self.recv_runs.last_mut() {
+            Some((k, len)) if *k == recv => *len += n,
+            _ => self.recv_runs.push((recv, n)),
+        }
     }
 
     /// Appends every link of `other`, in order.
     pub(super) fn append(&mut self, other: RawLinks) {
-        let offset = self.k.len() as u32;
-        self.links.extend(other.links.into_iter().map(|mut l| {
-            l.k_start += offset;
-            l
-        }));
-        self.ends.extend(other.ends);
+        self.links.extend(other.links);
+        for (recv, n) in other.recv_runs {
+            self.push_recv(recv, n);
+        }
+        self.elem_srcs.extend(other.elem_srcs);
         self.k.extend(other.k);
     }
 
     pub(super) fn with_capacity(links: usize, k: usize) -> Self {
         RawLinks {
             links: Vec::with_capacity(links),
-            ends: Vec::with_capacity(links),
             k: Vec::with_capacity(k),
+            ..Default::default()
         }
     }
 
@@ -107,21 +125,49 @@ impl RawLinks {
     /// root at once until the trees are built.
     pub(super) fn shrink_to_fit(&mut self) {
         self.links.shrink_to_fit();
-        self.ends.shrink_to_fit();
+        self.recv_runs.shrink_to_fit();
+        self.elem_srcs.shrink_to_fit();
         self.k.shrink_to_fit();
+    }
+
+    /// Each link's ends, in order.
+    pub(super) fn ends(&self) -> impl Iterator<Item = Ends> + '_ {
+        let recvs = self
+            .recv_runs
+            .iter()
+            .flat_map(|&(k, n)| std::iter::repeat_n(k, n as usize));
+        let mut elems = self.elem_srcs.iter();
+        recvs.zip(&self.links).map(move |(recv, l)| {
+            let src = match l.src.get() {
+                SrcIdx::Cluster(c) => Source::Cluster(c),
+                SrcIdx::Node { .. } => {
+                    Source::Elem(*elems.next().expect("a key per element source"))
+                }
+            };
+            (recv, src)
+        })
     }
 
     /// The links and coefficients of root `r`'s tree, their ends found in `trees` (which hold
     /// every key a link names).
     pub(super) fn resolve(self, r: usize, trees: &[Tree]) -> (Vec<Link>, Vec<f32>) {
-        let RawLinks { mut links, ends, k } = self;
-        for (l, (recv, src)) in links.iter_mut().zip(ends) {
-            l.recv = trees[r].index_of(recv).expect("receiver present");
-            if let Source::Elem(k) = src {
-                l.src = SrcIdx::Node {
-                    root: k.root,
-                    node: trees[k.root as usize].index_of(k).expect("source present"),
-                };
+        let RawLinks {
+            mut links,
+            recv_runs,
+            elem_srcs,
+            k,
+        } = self;
+        let recvs = recv_runs.iter().flat_map(|&(key, n)| {
+            let i = trees[r].index_of(key).expect("receiver present");
+            std::iter::repeat_n(i, n as usize)
+        });
+        let mut elems = elem_srcs.iter();
+        for (l, recv) in links.iter_mut().zip(recvs) {
+            l.recv = recv;
+            if let SrcIdx::Node { root, .. } = l.src.get() {
+                let key = elems.next().expect("a key per element source");
+                let node = trees[root as usize].index_of(*key).expect("source present");
+                l.src = PackedSrc::new(SrcIdx::Node { root, node });
             }
         }
         (links, k)
@@ -134,4 +180,116 @@ impl RawLinks {
 pub(super) enum SrcIdx {
     Cluster(u32),
     Node { root: u32, node: u32 },
+}
+
+/// A [`SrcIdx`] in 8 bytes rather than the enum's 12: a cluster is marked by a root that no
+/// scene has (`u32::MAX`; [`Ctx::new`](super::context::Ctx::new) refuses that many roots).
+#[derive(Clone, Copy)]
+pub(super) struct PackedSrc {
+    root: u32,
+    index: u32,
+}
+
+impl PackedSrc {
+    pub(super) fn new(src: SrcIdx) -> Self {
+        match src {
+            SrcIdx::Cluster(c) => PackedSrc {
+                root: u32::MAX,
+                index: c,
+            },
+            SrcIdx::Node { root, node } => PackedSrc { root, index: node },
+        }
+    }
+
+    pub(super) fn get(self) -> SrcIdx {
+        if self.root == u32::MAX {
+            SrcIdx::Cluster(self.index)
+        } else {
+            SrcIdx::Node {
+                root: self.root,
+                node: self.index,
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_link_stays_small() {
+        assert_eq!(std::mem::size_of::<Link>(), 52);
+    }
+
+    fn link(src: SrcIdx) -> Link {
+        Link {
+            recv: u32::MAX,
+            src: PackedSrc::new(src),
+            aim: Vec3::ZERO,
+            share: [0.0; READ_PARTS],
+            deep: false,
+            facing: 0,
+            depth: 0,
+            visible: 1.0,
+            bend: f32::NAN,
+        }
+    }
+
+    #[test]
+    fn raw_links_keep_every_links_ends_through_runs_and_appends() {
+        let key = |root, path| ElemKey {
+            root,
+            level: 1,
+            path,
+        };
+        let ends = [
+            (key(0, 0), Source::Cluster(7)),
+            (key(0, 0), Source::Elem(key(3, 2))),
+            (key(0, 1), Source::Cluster(8)),
+            (key(0, 1), Source::Elem(key(4, 1))),
+            (key(0, 0), Source::Cluster(9)),
+        ];
+        let make = |ends: &[Ends]| {
+            let mut raw = RawLinks::default();
+            for (i, &(recv, src)) in ends.iter().enumerate() {
+                let idx = match src {
+                    Source::Cluster(c) => SrcIdx::Cluster(c),
+                    Source::Elem(k) => SrcIdx::Node {
+                        root: k.root,
+                        node: u32::MAX,
+                    },
+                };
+                raw.push(link(idx), (recv, src), &[i as f32, 0.5]);
+            }
+            raw
+        };
+        let mut raw = make(&ends[..3]);
+        raw.append(make(&ends[3..]));
+        assert_eq!(raw.ends().collect::<Vec<_>>(), ends);
+        assert_eq!(raw.recv_runs.len(), 3);
+        assert_eq!(raw.k, [0.0, 0.5, 1.0, 0.5, 2.0, 0.5, 0.0, 0.5, 1.0, 0.5]);
+    }
+
+    #[test]
+    fn a_packed_source_unpacks_to_itself() {
+        for src in [
+            SrcIdx::Cluster(0),
+            SrcIdx::Cluster(u32::MAX),
+            SrcIdx::Node { root: 0, node: 5 },
+            SrcIdx::Node {
+                root: u32::MAX - 1,
+                node: u32::MAX,
+            },
+        ] {
+            let back = PackedSrc::new(src).get();
+            match (src, back) {
+                (SrcIdx::Cluster(a), SrcIdx::Cluster(b)) => assert_eq!(a, b),
+                (SrcIdx::Node { root: a, node: m }, SrcIdx::Node { root: b, node: n }) => {
+                    assert_eq!((a, m), (b, n))
+                }
+                _ => panic!("the kind changed"),
+            }
+        }
+    }
 }

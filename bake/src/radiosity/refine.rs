@@ -20,7 +20,7 @@ use super::element::{split, ElemKey};
 use super::factor_variation::factor_variation_splits;
 use super::formfactor::{disc_estimate, point_to_polygon, point_to_polygon_each};
 use super::link_visibility::{rays_for, LIGHT_RAY_FACTOR, MAX_RAY_FACTOR};
-use super::links::{Ends, Link, RawLinks, Source, SrcIdx, CORNERS};
+use super::links::{Ends, Link, PackedSrc, RawLinks, Source, SrcIdx, CORNERS};
 use super::narrow_shadow::taken_down_with;
 use super::parallel_walk::{refine_in_parallel, REFINE_STEPS};
 use super::power::{power_split, Split};
@@ -187,8 +187,9 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
         let prev = &trees[r as usize];
         let cache: Cache = prev_links
             .iter()
-            .map(|l| {
-                let src = match l.src {
+            .enumerate()
+            .map(|(i, l)| {
+                let src = match l.src.get() {
                     SrcIdx::Cluster(c) => Source::Cluster(c),
                     SrcIdx::Node { root, node } => {
                         Source::Elem(trees[root as usize].keys[node as usize])
@@ -196,7 +197,7 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
                 };
                 (
                     (prev.keys[l.recv as usize], src),
-                    (l.k_start as usize, l.visible, l.bend),
+                    (i * link_len, l.visible, l.bend),
                 )
             })
             .collect();
@@ -734,13 +735,12 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
         };
         let link = Link {
             recv: u32::MAX,
-            src: src_idx,
+            src: PackedSrc::new(src_idx),
             aim,
             share,
             deep,
             facing,
             depth,
-            k_start: 0,
             visible,
             bend,
         };
@@ -773,15 +773,15 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
                 || graded.contains(&recv)
                 || above.contains(&recv) && near(recv, src)
         };
-        let RawLinks { links, ends, k: ks } = raw;
+        let ends: Vec<Ends> = raw.ends().collect();
+        let RawLinks { links, k: ks, .. } = raw;
         // Per link: the links it became, where it went down.
         type Expanded = Option<Vec<(Link, Ends, Vec<f32>)>>;
-        let expand = |(l, &(l_recv, l_src)): (&Link, &Ends)| -> Expanded {
+        let expand = |(i, &(l_recv, l_src)): (usize, &Ends)| -> Expanded {
             if !goes_down(l_recv, l_src) {
                 return None;
             }
-            let at = l.k_start as usize;
-            let k = &ks[at..at + link_len];
+            let k = &ks[i * link_len..(i + 1) * link_len];
             let lt = ctx.elem_corners(l_recv);
             let share = lum(ctx.reflectance(l_recv))
                 * lum(ctx.src_radiance(self.trees, self.cl, l_src, (lt[0] + lt[1] + lt[2]) / 3.0))
@@ -814,13 +814,12 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
             }
             Some(out)
         };
-        let expanded: Vec<Expanded> = links.par_iter().zip(&ends).map(expand).collect();
+        let expanded: Vec<Expanded> = ends.par_iter().enumerate().map(expand).collect();
         let mut out = RawLinks::with_capacity(links.len(), ks.len());
-        for ((l, l_ends), e) in links.into_iter().zip(ends).zip(expanded) {
+        for (i, ((l, l_ends), e)) in links.into_iter().zip(ends).zip(expanded).enumerate() {
             match e {
                 None => {
-                    let at = l.k_start as usize;
-                    out.push(l, l_ends, &ks[at..at + link_len]);
+                    out.push(l, l_ends, &ks[i * link_len..(i + 1) * link_len]);
                 }
                 Some(v) => {
                     for (nl, nl_ends, k) in v {

@@ -132,7 +132,7 @@ pub fn bake_with_progress(
             }
         };
         for raw in &refined {
-            for &(recv, src) in &raw.ends {
+            for (recv, src) in raw.ends() {
                 push(recv);
                 if let Source::Elem(k) = src {
                     push(k);

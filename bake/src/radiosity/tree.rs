@@ -43,6 +43,13 @@ pub(super) struct Tree {
 }
 
 impl Tree {
+    /// Each link with its coefficients: every link of a root has as many, one after another
+    /// in `k` in the links' order.
+    pub(super) fn links_with_k(&self) -> impl Iterator<Item = (&Link, &[f32])> {
+        let len = self.k.len().checked_div(self.links.len()).unwrap_or(0);
+        self.links.iter().zip(self.k.chunks(len.max(1)))
+    }
+
     pub(super) fn index_of(&self, key: ElemKey) -> Option<u32> {
         self.keys
             .binary_search_by(|k| (k.level, k.path).cmp(&(key.level, key.path)))
