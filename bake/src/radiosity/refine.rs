@@ -143,6 +143,7 @@ impl Ctx<'_> {
     /// walk over (receiver, source) pairs from (the root, the scene's top cluster), whose
     /// pairs left after [`REFINE_STEPS`] go on in parallel ([`refine_in_parallel`]); then the
     /// receivers the narrow shadow rule split take their other links down with them.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn refine_root(
         &self,
         r: u32,
