@@ -139,24 +139,28 @@ pub fn bake_with_progress(
                 }
             }
         }
+        // Each tree starts from the previous solution where it exists, so that the solve
+        // converges fast; the previous tree is dropped as soon as it has been read, not held
+        // beside the new ones.
         let mut new_trees: Vec<Tree> = needed
             .into_par_iter()
+            .zip(std::mem::take(&mut trees))
             .enumerate()
-            .map(|(r, keys)| ctx.build_tree(r as u32, keys, &direct[r]))
+            .map(|(r, (keys, old))| {
+                let mut nt = ctx.build_tree(r as u32, keys, &direct[r]);
+                let nn = nt.l.len() / nt.keys.len();
+                for i in 0..nt.keys.len() {
+                    let j = old.deepest_toward(nt.keys[i]) as usize;
+                    nt.l[i * nn..(i + 1) * nn].copy_from_slice(&old.l[j * nn..(j + 1) * nn]);
+                }
+                nt
+            })
             .collect();
         stats.links = 0;
         for (r, raw) in refined.into_iter().enumerate() {
             stats.links += raw.links.len();
             (new_trees[r].links, new_trees[r].k) = raw.resolve(r, &new_trees);
             (new_trees[r].closure, new_trees[r].self_view) = ctx.closure(r as u32, &new_trees[r]);
-        }
-        // Start from the previous solution where it exists so that the solve converges fast.
-        for (nt, ot) in new_trees.iter_mut().zip(&trees) {
-            let nn = nt.l.len() / nt.keys.len();
-            for i in 0..nt.keys.len() {
-                let j = ot.deepest_toward(nt.keys[i]) as usize;
-                nt.l[i * nn..(i + 1) * nn].copy_from_slice(&ot.l[j * nn..(j + 1) * nn]);
-            }
         }
         trees = new_trees;
         stats

@@ -310,9 +310,15 @@ impl Bars {
                 bar.finish();
             }
             let bar = ProgressBar::new(total as u64);
-            if let Ok(style) =
-                ProgressStyle::with_template("{prefix:>26} [{bar:30}] {pos}/{len} {elapsed}")
-            {
+            // A solve's total is its iteration cap, which it mostly stops short of: no time
+            // estimate there. The other phases count coarse triangles, whose cost is even
+            // enough for one.
+            let template = if phase.starts_with("solve") {
+                "{prefix:>26} [{bar:30}] {pos}/{len} {elapsed}"
+            } else {
+                "{prefix:>26} [{bar:30}] {pos}/{len} {elapsed} (eta {eta})"
+            };
+            if let Ok(style) = ProgressStyle::with_template(template) {
                 bar.set_style(style.progress_chars("=> "));
             }
             bar.set_prefix(phase.to_string());
