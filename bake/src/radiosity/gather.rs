@@ -132,13 +132,14 @@ impl Ctx<'_> {
         for (link, k) in t.links_with_k() {
             let ls = match link.src.get() {
                 SrcIdx::Cluster(c) => {
-                    self.cluster_seen(trees, cl, c, link.aim, &link.share, link.deep)
+                    let aim = self.leaving(c, t.centre[link.recv as usize]);
+                    self.cluster_seen(trees, cl, c, aim, &link.share, link.deep)
                 }
                 SrcIdx::Node { root, node } => self.seen_radiance(
                     root,
                     &trees[root as usize],
                     (node as usize, link.depth),
-                    link.aim,
+                    link.aim_over_source(),
                     link.facing as usize,
                 ),
             };

@@ -28,18 +28,17 @@ pub(super) enum Source {
 /// included, and on a refined surface `CORNERS` more:
 /// [`Ctx::link_coefficients`](super::context::Ctx::link_coefficients)) are the tree's `k`, the
 /// same number for every link of a root, in the links' order ([`Tree::links_with_k`]).
-/// 52 bytes: a million triangles make some eighty million links, so every field counts.
+/// 40 bytes: a million triangles make some eighty million links, so every field counts.
 pub(super) struct Link {
     /// The receiver's index in the tree.
     pub(super) recv: u32,
     pub(super) src: PackedSrc,
-    /// Where the link looks: for a cluster source, the direction light leaves it towards the
-    /// receiver; for an element source, the barycentric coordinates over the source of the
-    /// centre of the receiver's view of it
-    /// ([`Ctx::kernel_centre`](super::context::Ctx::kernel_centre)).
-    pub(super) aim: Vec3,
     /// For a cluster source, the share of each of its parts in what the receiver sees of it
-    /// ([`Ctx::cluster_share`](super::context::Ctx::cluster_share)); unused for an element source.
+    /// ([`Ctx::cluster_share`](super::context::Ctx::cluster_share)). For an element source, in
+    /// its first three, where the link looks ([`Link::aim_over_source`]). A cluster link looks
+    /// along the direction light leaves the cluster towards the receiver's centre
+    /// ([`Ctx::leaving`](super::context::Ctx::leaving)), found from the tree
+    /// ([`Tree::centre`]) rather than held: nine links in ten are cluster links.
     pub(super) share: [f32; READ_PARTS],
     /// For a cluster source: whether its parts are its
     /// [`READ_DEPTH`](super::cluster::READ_DEPTH)-level descendants
@@ -59,6 +58,15 @@ pub(super) struct Link {
     /// was not judged. The geometry's alone, so the next pass reads it here and does not walk
     /// the cluster again (a tenth of the scaling scene's bake).
     pub(super) bend: f32,
+}
+
+impl Link {
+    /// For an element source: the barycentric coordinates over the source of the centre of the
+    /// receiver's view of it ([`Ctx::kernel_centre`](super::context::Ctx::kernel_centre)), or
+    /// of its footprint ([`Ctx::footprint`](super::context::Ctx::footprint)).
+    pub(super) fn aim_over_source(&self) -> Vec3 {
+        Vec3::new(self.share[0], self.share[1], self.share[2])
+    }
 }
 
 /// What a link joins, by key: its receiver and its source.
@@ -219,14 +227,13 @@ mod tests {
 
     #[test]
     fn a_link_stays_small() {
-        assert_eq!(std::mem::size_of::<Link>(), 52);
+        assert_eq!(std::mem::size_of::<Link>(), 40);
     }
 
     fn link(src: SrcIdx) -> Link {
         Link {
             recv: u32::MAX,
             src: PackedSrc::new(src),
-            aim: Vec3::ZERO,
             share: [0.0; READ_PARTS],
             deep: false,
             facing: 0,

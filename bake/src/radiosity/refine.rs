@@ -12,7 +12,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::bend::bend_splits;
-use super::cluster::{ClusterChild, READ_PARTS};
+use super::cluster::ClusterChild;
 use super::cluster_reading::ClusterLight;
 use super::coefficients::{inset_corners, KnownFactors};
 use super::context::{lum, Ctx, Root};
@@ -709,13 +709,8 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
         // cost 15-20% of the scaling scene's bake.
         let deep =
             self.judge.last_pass && matches!(src, Source::Cluster(c) if ctx.reads_deep(c, rc));
-        let (aim, share, facing, depth) = match src {
-            Source::Cluster(c) => (
-                ctx.leaving(c, rc),
-                ctx.cluster_share(self.trees, c, rc, normal, deep),
-                0,
-                0,
-            ),
+        let (share, facing, depth) = match src {
+            Source::Cluster(c) => (ctx.cluster_share(self.trees, c, rc, normal, deep), 0, 0),
             Source::Elem(sk) => {
                 let (depth, foot) = ctx.footprint(rc, normal, sk, st);
                 let aim = if depth > 0 {
@@ -723,7 +718,8 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
                 } else {
                     ctx.kernel_centre(rc, normal, sk, st)
                 };
-                (aim, [0.0; READ_PARTS], ctx.facing_normal(sk, rc), depth)
+                let share = [aim.x, aim.y, aim.z, 0.0];
+                (share, ctx.facing_normal(sk, rc), depth)
             }
         };
         // The ends are indices in trees not built yet ([`RawLinks::resolve`]).
@@ -737,7 +733,6 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
         let link = Link {
             recv: u32::MAX,
             src: PackedSrc::new(src_idx),
-            aim,
             share,
             deep,
             facing,

@@ -13,6 +13,9 @@ pub(super) struct Tree {
     /// Index of the first of four children, or `u32::MAX` for a leaf.
     pub(super) child: Vec<u32>,
     pub(super) area: Vec<f32>,
+    /// Centroid per node, as the refinement's walk finds it (the same values to the bit): where
+    /// a cluster link's light goes ([`Link::share`]).
+    pub(super) centre: Vec<Vec3>,
     /// Reflectance per node (used at leaves).
     pub(super) rho: Vec<Vec3>,
     /// Direct-light `H / π` per node and normal (non-zero at direct-pass leaves only).
@@ -157,6 +160,13 @@ impl Ctx<'_> {
             area: all
                 .iter()
                 .map(|k| self.roots[r as usize].area / 4f32.powi(k.level as i32))
+                .collect(),
+            centre: all
+                .iter()
+                .map(|&k| {
+                    let t = self.elem_corners(k);
+                    (t[0] + t[1] + t[2]) / 3.0
+                })
                 .collect(),
             rho: vec![Vec3::ZERO; n],
             open: vec![1.0; n],
