@@ -5,7 +5,6 @@ use glam::Vec3;
 
 use super::cluster::READ_PARTS;
 use super::element::ElemKey;
-use super::tree::Tree;
 
 /// A link's coefficients are a linear function over its receiver, stored as its values at the
 /// receiver's three corners (per normal: `k[c * nn + j]`). A constant per link, pushed down to
@@ -27,7 +26,7 @@ pub(super) enum Source {
 /// A link inside a root's tree. Its coefficients (`CORNERS × nn` form factors, visibility
 /// included, and on a refined surface `CORNERS` more:
 /// [`Ctx::link_coefficients`](super::context::Ctx::link_coefficients)) are the tree's `k`, the
-/// same number for every link of a root, in the links' order ([`Tree::links_with_k`]).
+/// same number for every link of a root, in the links' order ([`Tree::links_with_k`](super::tree::Tree::links_with_k)).
 /// 40 bytes: a million triangles make some eighty million links, so every field counts.
 pub(super) struct Link {
     /// The receiver's index in the tree.
@@ -38,7 +37,7 @@ pub(super) struct Link {
     /// its first three, where the link looks ([`Link::aim_over_source`]). A cluster link looks
     /// along the direction light leaves the cluster towards the receiver's centre
     /// ([`Ctx::leaving`](super::context::Ctx::leaving)), found from the tree
-    /// ([`Tree::centre`]) rather than held: nine links in ten are cluster links.
+    /// ([`Tree::centre`](super::tree::Tree::centre)) rather than held: nine links in ten are cluster links.
     pub(super) share: [f32; READ_PARTS],
     /// For a cluster source: whether its parts are its
     /// [`READ_DEPTH`](super::cluster::READ_DEPTH)-level descendants
@@ -156,9 +155,13 @@ impl RawLinks {
         })
     }
 
-    /// The links and coefficients of root `r`'s tree, their ends found in `trees` (which hold
-    /// every key a link names).
-    pub(super) fn resolve(self, r: usize, trees: &[Tree]) -> (Vec<Link>, Vec<f32>) {
+    /// The links and coefficients of root `r`'s tree, their ends found by `index_of(root, key)`:
+    /// the node of `key` in root `root`'s tree, which holds every key a link names.
+    pub(super) fn resolve(
+        self,
+        r: usize,
+        index_of: impl Fn(usize, ElemKey) -> u32,
+    ) -> (Vec<Link>, Vec<f32>) {
         let RawLinks {
             mut links,
             recv_runs,
@@ -166,7 +169,7 @@ impl RawLinks {
             k,
         } = self;
         let recvs = recv_runs.iter().flat_map(|&(key, n)| {
-            let i = trees[r].index_of(key).expect("receiver present");
+            let i = index_of(r, key);
             std::iter::repeat_n(i, n as usize)
         });
         let mut elems = elem_srcs.iter();
@@ -174,7 +177,7 @@ impl RawLinks {
             l.recv = recv;
             if let SrcIdx::Node { root, .. } = l.src.get() {
                 let key = elems.next().expect("a key per element source");
-                let node = trees[root as usize].index_of(*key).expect("source present");
+                let node = index_of(root as usize, *key);
                 l.src = PackedSrc::new(SrcIdx::Node { root, node });
             }
         }

@@ -159,7 +159,12 @@ pub fn bake_with_progress(
         stats.links = 0;
         for (r, raw) in refined.into_iter().enumerate() {
             stats.links += raw.links.len();
-            (new_trees[r].links, new_trees[r].k) = raw.resolve(r, &new_trees);
+            let (links, k) = raw.resolve(r, |root, key| {
+                new_trees[root]
+                    .index_of(key)
+                    .expect("a link's ends are in the trees")
+            });
+            (new_trees[r].links, new_trees[r].k) = (links, k);
             (new_trees[r].closure, new_trees[r].self_view) = ctx.closure(r as u32, &new_trees[r]);
         }
         trees = new_trees;
