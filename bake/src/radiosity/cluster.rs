@@ -8,6 +8,7 @@
 //! bounds, with ties broken by triangle index, so the tree is deterministic.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 /// A child of a cluster: another cluster or a root triangle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -284,9 +285,11 @@ impl ClusterTree {
 
     /// Whether the triangles `tris` this tree was built over form a convex surface: every
     /// vertex lies on or behind (within `eps`) the plane of every triangle, degenerate triangles
-    /// aside. A point on one of its triangles sees none of the others.
+    /// aside. A point on one of its triangles sees none of the others. On a curved surface the
+    /// boxes near each triangle reach past its plane, so the walks grow with the surface's
+    /// detail: they run in parallel.
     pub fn is_convex(&self, tris: &[[Vec3; 3]], eps: f32) -> bool {
-        tris.iter().all(|t| {
+        tris.par_iter().all(|t| {
             let n = (t[1] - t[0]).cross(t[2] - t[0]);
             let len = n.length();
             if len <= 0.0 || !len.is_finite() {
