@@ -125,9 +125,11 @@ pub fn bake_with_progress(
         // A receiver's links come one after another, and so mostly do a source's: a key is
         // left out when it repeats the last one pushed, which `build_tree` would drop anyway
         // (a key a link names, most of this list, at the memory peak).
+        // A root's own key is left out too: `build_tree` adds it to every tree (in a scene of
+        // unsplit roots, every key a link names).
         let mut push = |k: ElemKey| {
             let list = &mut needed[k.root as usize];
-            if list.last() != Some(&k) {
+            if k.level > 0 && list.last() != Some(&k) {
                 list.push(k);
             }
         };
