@@ -49,6 +49,20 @@ fn encode_triangles(
                 tri.colours.len()
             )));
         }
+        // Corner colours are all or nothing within an object (SPEC.md A.10).
+        let corners = !tri.corner_colours.is_empty();
+        let (before, had) = (
+            !object.colours.is_empty(),
+            !object.corner_colours.is_empty(),
+        );
+        if corners && tri.corner_colours.len() != 3 * tri.colours.len() || before && corners != had
+        {
+            return Err(err(format!(
+                "{} corner colours for {} colours (none, or three each, in every triangle)",
+                tri.corner_colours.len(),
+                tri.colours.len()
+            )));
+        }
         let to_u32 = |v: usize, what: &str| {
             u32::try_from(v).map_err(|_| err(format!("{what} exceeds the 32-bit index range")))
         };
@@ -68,6 +82,9 @@ fn encode_triangles(
         object
             .colours
             .extend(tri.colours.iter().map(|&c| rgb9e5::encode(c)));
+        object
+            .corner_colours
+            .extend(tri.corner_colours.iter().map(|&c| rgb9e5::encode(c)));
         object.normals.extend_from_slice(&tri.normals);
         object.triangles.push(record);
     }
@@ -124,6 +141,7 @@ mod tests {
             nodes: Vec::new(),
             subdivided,
             colours: (0..n * nn).map(|i| [i as f32, 0.5, 0.25]).collect(),
+            corner_colours: Vec::new(),
         }
     }
 
@@ -156,6 +174,37 @@ mod tests {
             let c = rgb9e5::decode(o.colours[rec.colour_start as usize + last]);
             assert_eq!(c, [last as f32, 0.5, 0.25]);
         }
+    }
+
+    #[test]
+    fn corner_colours_follow_their_colours_in_every_triangle_or_none() {
+        let with = |mut t: TriangleSolution| {
+            t.corner_colours = (0..3 * t.colours.len())
+                .map(|x| [x as f32, 1.0, 2.0])
+                .collect();
+            t
+        };
+        let (a, b) = (
+            with(tri(vec![true, false, false, false, false], 2)),
+            with(tri(vec![false], 1)),
+        );
+        let mut o = Object::default();
+        encode_object(&mut o, &[a.clone(), b.clone()]).unwrap();
+        // Colour `i` has corner colours `3i`, `3i + 1`, `3i + 2` (SPEC.md A.10).
+        assert_eq!(o.corner_colours.len(), 3 * o.colours.len());
+        let start = o.triangles[1].colour_start as usize;
+        assert_eq!(
+            rgb9e5::decode(o.corner_colours[3 * start + 2]),
+            [2.0, 1.0, 2.0]
+        );
+        // Some triangles with corner colours and some without, or too few, are refused.
+        let mut o = Object::default();
+        let err = encode_object(&mut o, &[a.clone(), tri(vec![false], 1)]).unwrap_err();
+        assert!(err.to_string().contains("corner colours"), "{err}");
+        let mut short = b;
+        short.corner_colours.pop();
+        let err = encode_object(&mut Object::default(), &[short]).unwrap_err();
+        assert!(err.to_string().contains("corner colours"), "{err}");
     }
 
     #[test]

@@ -582,6 +582,20 @@ fn mirror_tree(ts: &TriangleSolution) -> TriangleSolution {
             .iter()
             .flat_map(|&k| ts.colours[k * nn..(k + 1) * nn].iter().copied())
             .collect(),
+        // Mirrored, a node's corners 1 and 2 trade places.
+        corner_colours: if ts.corner_colours.is_empty() {
+            Vec::new()
+        } else {
+            order
+                .iter()
+                .flat_map(|&k| {
+                    (k * nn..(k + 1) * nn).flat_map(|x| {
+                        let c = &ts.corner_colours[3 * x..3 * x + 3];
+                        [c[0], c[2], c[1]]
+                    })
+                })
+                .collect()
+        },
     }
 }
 
@@ -698,6 +712,7 @@ mod tests {
             ],
             subdivided: sub,
             colours: (0..9).map(|k| [k as f32, 0.0, 0.0]).collect(),
+            corner_colours: (0..27).map(|x| [x as f32, 1.0, 0.0]).collect(),
         };
         let m = mirror_tree(&ts);
         // New order: root, Top, Right(old 4), Center, Left(old 2), then old 2's children
@@ -710,6 +725,10 @@ mod tests {
         );
         // Old node 7, path (Left, Center) = 6, becomes (Right, Center) = 14.
         assert_eq!(m.nodes[7], (2, 14));
+        // Each node's corners 1 and 2 trade places: the root's (0, 1, 2) become (0, 2, 1), and
+        // the Top child's (3, 4, 5) its (3, 5, 4).
+        let corners: Vec<f32> = m.corner_colours[..6].iter().map(|c| c[0]).collect();
+        assert_eq!(corners, vec![0.0, 2.0, 1.0, 3.0, 5.0, 4.0]);
         assert_eq!(mirror_tree(&m), ts);
     }
 }

@@ -161,6 +161,14 @@ fn tetrahedron(n: u32) -> SolverObject {
 /// Worst relative error of any node (interior or leaf) for any normal, with where it is.
 fn worst_node(scene: &Scene) -> (f32, String) {
     let res = bake(scene, &BakeParams::default()).expect("bakes");
+    let with_corners =
+        |t: &hce_bake::TriangleSolution| t.corner_colours.len() == 3 * t.colours.len();
+    assert!(
+        res.objects
+            .iter()
+            .all(|o| o.triangles.iter().all(with_corners)),
+        "the default bake stores every colour at its node's corners too"
+    );
     let expect = EMISSION / (1.0 - RHO);
     let mut worst = (0.0f32, String::new());
     for (oi, o) in res.objects.iter().enumerate() {
@@ -174,8 +182,12 @@ fn worst_node(scene: &Scene) -> (f32, String) {
         println!("  object {oi}: {:+.3}% .. {:+.3}%", lo * 100.0, hi * 100.0);
         for (t, sol) in o.triangles.iter().enumerate() {
             let nn = sol.normals.len();
-            for (i, c) in sol.colours.iter().enumerate() {
-                // Every normal of the set: node-major, `colours[node * nn + normal]`.
+            // Every normal of the set (node-major, `colours[node * nn + normal]`), and every
+            // corner colour (three per colour, SPEC.md A.10): the property holds at points too.
+            let means = sol.colours.iter().enumerate().map(|(i, c)| (i, None, c));
+            let corners =
+                (sol.corner_colours.iter().enumerate()).map(|(x, c)| (x / 3, Some(x % 3), c));
+            for (i, corner, c) in means.chain(corners) {
                 let err = (c[0] - expect) / expect;
                 if err.abs() > worst.0.abs() {
                     let (level, path) = sol.nodes[i / nn];
@@ -192,7 +204,7 @@ fn worst_node(scene: &Scene) -> (f32, String) {
                         err,
                         format!(
                             "object {oi} triangle {t} level {level} path {path} normal {normal} \
-                             leaf {leaf}, centre {centre:.3}"
+                             leaf {leaf}, centre {centre:.3}, corner {corner:?}"
                         ),
                     );
                 }

@@ -80,6 +80,7 @@ fn container_for(scene: &ImportedScene) -> (Container, Vec<Option<ObjectLink>>) 
             colours: (0..f)
                 .map(|t| rgb9e5::encode([t as f32 / f as f32, 0.5, 0.25]))
                 .collect(),
+            corner_colours: Vec::new(),
         });
     }
     let links = (0..objects.len())

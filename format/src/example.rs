@@ -49,6 +49,7 @@ pub fn single_triangle() -> Container {
             bits,
             bit_len,
             colours,
+            corner_colours: Vec::new(),
         }],
     }
 }
@@ -115,6 +116,7 @@ pub fn two_triangles() -> Container {
             colours: (0..11u8)
                 .map(|k| rgb9e5::encode([1.0, f32::from(k), 0.5]))
                 .collect(),
+            corner_colours: Vec::new(),
         }],
     }
 }
@@ -351,6 +353,7 @@ pub fn grid(n: u32, max_depth: u32) -> Container {
             bits,
             bit_len,
             colours,
+            corner_colours: Vec::new(),
         }],
     }
 }

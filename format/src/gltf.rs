@@ -413,9 +413,18 @@ pub fn embed_container(
     let views = array_mut(json, "bufferViews")?;
     views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": container.len() }));
     let view = views.len() - 1;
+    // The version of the container embedded (A.3): 1.0 without corner colours, 1.1 with them.
+    let version = match container.get(8..12) {
+        Some(v) => format!(
+            "{}.{}",
+            u16::from_le_bytes([v[0], v[1]]),
+            u16::from_le_bytes([v[2], v[3]])
+        ),
+        None => format!("{}.{}", crate::MAJOR_VERSION, crate::MINOR_VERSION),
+    };
     object_mut(json, "extensions")?.insert(
         EXTENSION_NAME.into(),
-        json!({ "bufferView": view, "version": format!("{}.{}", crate::MAJOR_VERSION, crate::MINOR_VERSION) }),
+        json!({ "bufferView": view, "version": version }),
     );
     let used = array_mut(json, "extensionsUsed")?;
     if !used.iter().any(|e| e == EXTENSION_NAME) {

@@ -10,7 +10,7 @@ pub const IDENTIFIER: [u8; 8] = [0x89, b'H', b'C', b'E', 0x0D, 0x0A, 0x1A, 0x0A]
 /// The major version this crate reads and writes (SPEC.md A.3).
 pub const MAJOR_VERSION: u16 = 1;
 /// The minor version this crate writes; it reads every minor version of [`MAJOR_VERSION`].
-pub const MINOR_VERSION: u16 = 0;
+pub const MINOR_VERSION: u16 = 1;
 /// Identifier plus header.
 pub const HEADER_LEN: u64 = 32;
 /// One directory entry (SPEC.md A.4).

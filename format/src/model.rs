@@ -77,6 +77,10 @@ pub struct Object {
     /// Colours in RGB9E5 (see [`rgb9e5`]): triangle `t`'s tree node `k` (breadth-first) and
     /// normal `j` is `colours[t.colour_start + k * t.normal_count + j]`.
     pub colours: Vec<u32>,
+    /// Colours at the corners of the nodes (SPEC.md A.10), in RGB9E5: colour `i` of
+    /// [`Object::colours`] has three, at its node's corners 0, 1, 2:
+    /// `corner_colours[3 * i + c]`. Empty when the object has none (a version 1.0 file).
+    pub corner_colours: Vec<u32>,
 }
 
 /// Per coarse triangle: where its tree, colours and normals start. 16 bytes, GPU-uploadable.

@@ -178,6 +178,7 @@ pub fn expected_length(kind: SectionType, r: &ObjectRecord) -> Option<u64> {
         SectionType::NRML => 3 * u64::from(r.normal_count),
         SectionType::BITS => r.bit_len.div_ceil(32),
         SectionType::COLR => u64::from(r.colour_count),
+        SectionType::CCOL => 3 * u64::from(r.colour_count),
         _ => return None,
     };
     elements.checked_mul(4)
@@ -257,6 +258,21 @@ pub fn read_from_layout(
             data[slot] = s.data(bytes);
         }
         let [posn, tris, rofs, ring, vflg, sflg, cspk, nbrs, edge, trec, nrml, bits, colr] = data;
+        // Optional (SPEC.md A.10): absent, the object has no corner colours.
+        let ccol = match by_key.get(&(i, SectionType::CCOL)) {
+            None => &[][..],
+            Some(s) => {
+                let expected = expected_length(SectionType::CCOL, r);
+                if expected != Some(s.length) {
+                    return Err(ReadError::SectionLength {
+                        section: s.describe(),
+                        expected: expected.unwrap_or(u64::MAX),
+                        actual: s.length,
+                    });
+                }
+                s.data(bytes)
+            }
+        };
         let edges = u32_array(edge);
         let computed_edges = edges.iter().max().map_or(0, |&e| u64::from(e) + 1);
         if computed_edges != u64::from(r.edge_count) {
@@ -298,6 +314,7 @@ pub fn read_from_layout(
             bits: u32_array(bits),
             bit_len: r.bit_len,
             colours: u32_array(colr),
+            corner_colours: u32_array(ccol),
         });
     }
     Ok(Container { metadata, objects })

@@ -24,6 +24,8 @@ impl SectionType {
     pub const NRML: Self = Self(*b"NRML");
     pub const BITS: Self = Self(*b"BITS");
     pub const COLR: Self = Self(*b"COLR");
+    /// Corner colours (SPEC.md A.10): optional, since version 1.1.
+    pub const CCOL: Self = Self(*b"CCOL");
 
     /// The per-object sections, in the order the writer emits them.
     pub const PER_OBJECT: [Self; 13] = [
@@ -52,12 +54,12 @@ impl SectionType {
 
     /// True for the types this version of the specification defines.
     pub fn is_known(self) -> bool {
-        self == Self::META || self == Self::OBJS || Self::PER_OBJECT.contains(&self)
+        self == Self::META || self == Self::OBJS || self.is_per_object()
     }
 
     /// True for types that belong to an object rather than to the file.
     pub fn is_per_object(self) -> bool {
-        Self::PER_OBJECT.contains(&self)
+        Self::PER_OBJECT.contains(&self) || self == Self::CCOL
     }
 }
 

@@ -94,6 +94,14 @@ fn object_counts(i: usize, o: &Object) -> Result<Counts, WriteError> {
         f,
         "one record per mesh triangle",
     )?;
+    if !o.corner_colours.is_empty() {
+        expect(
+            "corner_colours",
+            o.corner_colours.len(),
+            3 * o.colours.len(),
+            "none, or three per colour",
+        )?;
+    }
     let words = o.bit_len.div_ceil(32);
     if words != o.bits.len() as u64 {
         return Err(shape(
@@ -159,6 +167,7 @@ fn per_object_section(kind: SectionType, o: &Object) -> Vec<u8> {
         SectionType::NRML => f32s(o.normals.iter().flatten().copied()),
         SectionType::BITS => u32s(&o.bits),
         SectionType::COLR => u32s(&o.colours),
+        SectionType::CCOL => u32s(&o.corner_colours),
         _ => Vec::new(),
     }
 }
@@ -236,7 +245,17 @@ pub fn write(c: &Container) -> Result<Vec<u8>, WriteError> {
             // i < u32::MAX: objects_section checked the object count.
             sections.push((kind, i as u32, per_object_section(kind, o)));
         }
+        if !o.corner_colours.is_empty() {
+            let kind = SectionType::CCOL;
+            sections.push((kind, i as u32, per_object_section(kind, o)));
+        }
     }
+    // A file without corner colours is a version 1.0 file, byte for byte as before them.
+    let minor = if c.objects.iter().any(|o| !o.corner_colours.is_empty()) {
+        MINOR_VERSION
+    } else {
+        0
+    };
     let section_count = count_u32(sections.len(), || "the section directory".into())?;
     let directory_end = HEADER_LEN + DIRECTORY_ENTRY_LEN * u64::from(section_count);
 
@@ -262,7 +281,7 @@ pub fn write(c: &Container) -> Result<Vec<u8>, WriteError> {
     let mut out = Vec::with_capacity(file_len);
     out.extend_from_slice(&IDENTIFIER);
     out.extend_from_slice(&MAJOR_VERSION.to_le_bytes());
-    out.extend_from_slice(&MINOR_VERSION.to_le_bytes());
+    out.extend_from_slice(&minor.to_le_bytes());
     out.extend_from_slice(&section_count.to_le_bytes());
     out.extend_from_slice(&file_length.to_le_bytes());
     out.extend_from_slice(&0u32.to_le_bytes());

@@ -355,3 +355,33 @@ fn unknown_sections_are_skipped() {
     assert_eq!(read(&b).unwrap(), c);
     assert_eq!(validate_bytes(&b), vec![]);
 }
+
+#[test]
+fn corner_colours_are_optional_and_checked_against_the_colours() {
+    // With corner colours (SPEC.md A.10) the file is a 1.1 file that reads back the same.
+    let mut c = example::single_triangle();
+    let o = &mut c.objects[0];
+    o.corner_colours = o.colours.iter().flat_map(|&x| [x, x ^ 1, x ^ 2]).collect();
+    let mut b = write(&c).unwrap();
+    assert_eq!(u16::from_le_bytes([b[10], b[11]]), 1, "minor version");
+    assert_eq!(read(&b).unwrap(), c);
+    // Without them, a 1.0 file as before.
+    assert_eq!(
+        u16::from_le_bytes([example_bytes()[10], example_bytes()[11]]),
+        0
+    );
+    // A CCOL one word short is refused, naming it.
+    let count = u32::from_le_bytes(b[12..16].try_into().unwrap()) as usize;
+    let at = (0..count)
+        .map(|i| 32 + 32 * i)
+        .find(|&e| b[e..e + 4] == *b"CCOL")
+        .expect("a CCOL entry");
+    let len = u64::from_le_bytes(b[at + 16..at + 24].try_into().unwrap());
+    put_u64(&mut b, at + 16, len - 4);
+    reseal(&mut b);
+    let err = read(&b).unwrap_err();
+    assert!(
+        matches!(&err, ReadError::SectionLength { section, .. } if section.contains("CCOL")),
+        "{err:?}"
+    );
+}

@@ -75,6 +75,15 @@ fn object() -> impl Strategy<Value = Object> {
                             normals,
                             bits,
                             bit_len,
+                            // Half the objects carry corner colours (SPEC.md A.10, optional).
+                            corner_colours: if hash % 2 == 1 {
+                                colours
+                                    .iter()
+                                    .flat_map(|&c| [c, c ^ 1, c.rotate_left(7)])
+                                    .collect()
+                            } else {
+                                Vec::new()
+                            },
                             colours,
                         }
                     },

@@ -308,6 +308,7 @@ fn nearest_normal_colours(
             normals,
             tree,
             colours,
+            ..
         } = triangle_lighting(object, t)?;
         let nc = normals.len();
         for f in t * per..(t + 1) * per {

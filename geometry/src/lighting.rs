@@ -44,6 +44,11 @@
 //!   the fit already reproduces the field, constant (a closed furnace) or linear inside a
 //!   regular grid of leaves, the residuals are zero.
 //!
+//! An object whose bake stored each colour at its leaves' corners too (SPEC.md A.10: the light
+//! at those points, not a mean) gives each point those samples in place of its leaves' colours,
+//! and makes no correction: the means it would correct towards are what the corner colours
+//! replace.
+//!
 //! A refined vertex with unit normal `n` at lattice point `p` of coarse triangle `t` then gets
 //! `max(0, c(p) + G(p) n)`, evaluated per channel. The corner models are computed once per
 //! object on the CPU ([`LightingTable::build`]); the GPU kernels read the same table.
@@ -148,6 +153,9 @@ pub struct TriangleLighting<'a> {
     pub tree: Tree<'a>,
     /// Node-major: node `k`, normal `j` is `colours[k * normals.len() + j]`.
     pub colours: &'a [u32],
+    /// The colours at the nodes' corners (SPEC.md A.10), three per colour:
+    /// `corner_colours[3 * (k * normals.len() + j) + c]`; empty when the object has none.
+    pub corner_colours: &'a [u32],
 }
 
 /// The normals, tree and colours of triangle `t` of `object`, checked against what the object
@@ -193,10 +201,25 @@ pub fn triangle_lighting(object: &Object, t: usize) -> Result<TriangleLighting<'
                 object.colours.len()
             ))
         })?;
+    let corner_colours = if object.corner_colours.is_empty() {
+        &[][..]
+    } else {
+        object
+            .corner_colours
+            .get(3 * cs..3 * (cs + colours.len()))
+            .ok_or_else(|| {
+                record_err(format!(
+                    "the corner colours of colours {cs}+{} lie outside the {} stored",
+                    colours.len(),
+                    object.corner_colours.len()
+                ))
+            })?
+    };
     Ok(TriangleLighting {
         normals,
         tree,
         colours,
+        corner_colours,
     })
 }
 
@@ -319,6 +342,7 @@ impl LightingTable {
         let gouraud = reconstruction == Reconstruction::Gouraud;
         let surface = Surface::new(object);
         let mut point_index: HashMap<PointKey, usize> = HashMap::new();
+
         let mut moments: Vec<Moments> = Vec::new();
         let mut leaves: Vec<Leaf> = Vec::new();
         let mut samples_of: Vec<Sample> = Vec::new();
@@ -340,6 +364,7 @@ impl LightingTable {
                 normals,
                 tree,
                 colours,
+                corner_colours,
             } = triangle_lighting(object, t)?;
             let nc = normals.len();
             let area = coarse_area(object, t);
@@ -369,15 +394,27 @@ impl LightingTable {
                         rgb9e5::decode(colours[k * nc + j]).map(f64::from),
                     )
                 }));
-                let own = &samples_of[first_sample..];
+                let mut at_corner: Vec<Sample> = Vec::new();
                 let mut corners = [0usize; 3];
-                for (slot, p) in corners.iter_mut().zip(cell.corners()) {
+                for (c, (slot, p)) in corners.iter_mut().zip(cell.corners()).enumerate() {
                     let key = surface.key(t, p[0], p[1]);
                     let i = *point_index.entry(key).or_insert_with(|| {
                         moments.push(Moments::default());
                         moments.len() - 1
                     });
-                    moments[i].add(w, own);
+                    // With corner colours, a leaf's samples at a point are its colours there.
+                    if corner_colours.is_empty() {
+                        moments[i].add(w, &samples_of[first_sample..]);
+                    } else {
+                        at_corner.clear();
+                        at_corner.extend((0..samples).map(|j| {
+                            (
+                                normals[j].map(f64::from),
+                                rgb9e5::decode(corner_colours[3 * (k * nc + j) + c]).map(f64::from),
+                            )
+                        }));
+                        moments[i].add(w, &at_corner);
+                    }
                     *slot = i;
                 }
                 nodes.push(
@@ -401,8 +438,9 @@ impl LightingTable {
         let mut order: Vec<usize> = (0..leaves.len()).collect();
         order.sort_by_key(|&i| leaves[i].depth);
         resolve_t_vertices(&surface, &point_index, &leaves, &order, &mut values);
-        // Gouraud, classic radiosity shading for comparison, keeps the corner means.
-        if !gouraud {
+        // Gouraud, classic radiosity shading for comparison, keeps the corner means; corner
+        // colours are the light at the points already, not means to correct towards.
+        if !gouraud && object.corner_colours.is_empty() {
             correct(&leaves, &samples_of, &moments, &mut values);
             resolve_t_vertices(&surface, &point_index, &leaves, &order, &mut values);
         }

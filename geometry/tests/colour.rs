@@ -505,3 +505,68 @@ fn correction_sharpens_a_penumbra_and_stays_within_the_colours_around() {
         }
     }
 }
+
+#[test]
+fn corner_colours_are_drawn_where_they_lie_without_correction() {
+    // A full tree of depth 3 whose leaves store the light at their corners (SPEC.md A.10): a
+    // penumbra, and means that say otherwise (a constant). Every leaf corner must draw the light
+    // there (all the leaves meeting at a point agree on it), not the means nor a correction
+    // towards them; a point inside a leaf, the mean of its corners.
+    use hce_format::ObjectKind;
+    use hce_geometry::lattice::LatticeTriangle;
+    const DEPTH: u32 = 3;
+    for kind in [ObjectKind::Flat, ObjectKind::Multiresolution] {
+        let mut c = example::single_triangle();
+        let o = &mut c.objects[0];
+        o.kind = kind;
+        let mut flags = Vec::new();
+        let mut cells = vec![LatticeTriangle::root(4096)];
+        let mut nodes = Vec::new();
+        for d in 0..=DEPTH {
+            let mut next = Vec::new();
+            for &cell in &cells {
+                flags.push(d < DEPTH);
+                nodes.push(cell);
+                if d < DEPTH {
+                    next.extend((0..4).map(|c| cell.child(c)));
+                }
+            }
+            cells = next;
+        }
+        let (bits, bit_len) = encode_tree(&flags).unwrap();
+        o.bits = bits;
+        o.bit_len = bit_len;
+        let light = |p: [i32; 2]| {
+            let t = ((p[0] as f32 / 4096.0 - 0.3) / 0.3).clamp(0.0, 1.0);
+            rgb9e5::decode(rgb9e5::encode([1.0 - 0.875 * t, 0.5, 0.25 + t]))
+        };
+        o.colours = vec![rgb9e5::encode([0.5; 3]); nodes.len()];
+        o.corner_colours = nodes
+            .iter()
+            .flat_map(|cell| cell.corners().map(|p| rgb9e5::encode(light(p))))
+            .collect();
+        let table = LightingTable::build(o).unwrap();
+        let normal = o.normals[0];
+        let drawn = |p: [i32; 2]| table.evaluate(0, p[0] as u32 * 16, p[1] as u32 * 16, normal);
+        let near = |a: [f32; 3], b: [f32; 3]| (0..3).all(|k| (a[k] - b[k]).abs() < 1e-5);
+        for cell in nodes.iter().skip(nodes.len() - 4usize.pow(DEPTH)) {
+            let corners = cell.corners();
+            for p in corners {
+                assert!(
+                    near(drawn(p), light(p)),
+                    "{kind:?} at {p:?}: {:?} against {:?}",
+                    drawn(p),
+                    light(p)
+                );
+            }
+            let centre = [0, 1].map(|k| corners.iter().map(|p| p[k]).sum::<i32>() / 3);
+            let mean = [0, 1, 2].map(|ch| corners.iter().map(|&p| light(p)[ch]).sum::<f32>() / 3.0);
+            let at = drawn(centre);
+            // The centre on the lattice is within a 4096th of the true one.
+            assert!(
+                (0..3).all(|k| (at[k] - mean[k]).abs() < 2e-3),
+                "{kind:?} at {centre:?}"
+            );
+        }
+    }
+}

@@ -117,6 +117,7 @@ fn coloured_cube(mesh: ControlMesh) -> Object {
         triangles,
         normals,
         colours,
+        corner_colours: Vec::new(),
         bits: vec![0; f.div_ceil(32)],
         bit_len: f as u64,
         geometry_hash: 0,

@@ -212,6 +212,7 @@ pub fn to_flat_object(name: &str, mesh: &PlainMesh) -> (Object, usize) {
         bits: vec![0; f.div_ceil(32)],
         bit_len: f as u64,
         colours: tri_colours,
+        corner_colours: Vec::new(),
     };
     (object, dropped)
 }

@@ -179,6 +179,7 @@ fn flat_fold() -> Container {
             bits,
             bit_len,
             colours,
+            corner_colours: Vec::new(),
         }],
     }
 }
@@ -261,6 +262,7 @@ fn uneven_normals() -> Container {
             bits,
             bit_len,
             colours,
+            corner_colours: Vec::new(),
         }],
     }
 }

@@ -71,7 +71,7 @@ pub const NO_NODE: u32 = u32::MAX;
 /// object count, then per object: `u32` index, `str` name, `u32` kind (0 multiresolution, 1
 /// flat), `u64` geometry hash, `u64` bit length, `u32` deepest tree, `floats` positions, `words`
 /// triangles, ring offsets, ring, vertex flags, spoke flags, corner spokes, neighbours, edges,
-/// records (4 per triangle), `floats` normals (3 per normal), `words` bits, colours; `floats`
+/// records (4 per triangle), `floats` normals (3 per normal), `words` bits, colours, corner colours; `floats`
 /// bounds (min, max), `f32` mean edge length, `u32` instance count and per instance `u32` node
 /// ([`NO_NODE`] for none), `str` name, `floats` transform (16, column-major).
 pub fn load(request: &[u32]) -> Result<Vec<u32>, String> {
@@ -175,7 +175,7 @@ fn write_asset(asset: &Asset) -> Vec<u32> {
     w.finish()
 }
 
-/// An object as [`load`] writes it and [`tables`] reads it, from `name` to `colours`.
+/// An object as [`load`] writes it and [`tables`] reads it, from `name` to `corner_colours`.
 fn write_object(w: &mut Writer, o: &Object) {
     w.string(&o.name);
     w.u32(kind_code(o.kind));
@@ -204,6 +204,7 @@ fn write_object(w: &mut Writer, o: &Object) {
     w.floats(o.normals.as_flattened());
     w.words(&o.bits);
     w.words(&o.colours);
+    w.words(&o.corner_colours);
 }
 
 fn kind_code(kind: ObjectKind) -> u32 {
@@ -291,12 +292,13 @@ fn read_object(r: &mut Reader) -> Result<Object, String> {
         bits: r.words()?,
         bit_len,
         colours: r.words()?,
+        corner_colours: r.words()?,
     })
 }
 
 /// The tables the kernels read of one object, checked first as the native runtime's upload
 /// checks them. Request: `u32` index (names the object in messages), the object as [`load`]
-/// writes it from `name` to `colours`, `u32` reconstruction (0 smooth, 1 nearest: no lighting
+/// writes it from `name` to `corner_colours`, `u32` reconstruction (0 smooth, 1 nearest: no lighting
 /// table, 2 Gouraud), `u32` flat refinement (0 adaptive, 1 uniform; read for every object, used
 /// for flat ones).
 ///

@@ -12,7 +12,7 @@ use crate::{read_flat_refinement, read_object, read_reconstruction};
 /// level) or the linear split to the level (F.7.2, `--flat uniform`); the vertices split at
 /// sharp edges and folds (F.5), the baked light evaluated at every refined vertex. Request:
 /// `u32` index (names the object in messages), the object as [`crate::load`] writes it from
-/// `name` to `colours`, `u32` level (0 to 6), `u32` reconstruction (0 smooth, 1 nearest, 2
+/// `name` to `corner_colours`, `u32` level (0 to 6), `u32` reconstruction (0 smooth, 1 nearest, 2
 /// Gouraud), `u32` flat refinement (0 adaptive, 1 uniform).
 ///
 /// Result: `u32` level of the triangles' numbering (0 for an adaptive flat object), `floats`

@@ -59,7 +59,7 @@ fn truncated_requests_are_errors_not_traps() {
     assert!(refine(&[0, 5]).is_err());
 }
 
-/// Each object's words as `load` writes them (from `name` to `colours`), with its index.
+/// Each object's words as `load` writes them (from `name` to `corner_colours`), with its index.
 fn object_frames(file: &str) -> Vec<(u32, Vec<u32>)> {
     let bytes = std::fs::read(conformance(file)).unwrap();
     let asset = Asset::open(conformance(file)).unwrap();
@@ -89,7 +89,7 @@ fn object_frames(file: &str) -> Vec<(u32, Vec<u32>)> {
             r.u32().unwrap();
         }
         r.floats().unwrap();
-        for _ in 0..12 {
+        for _ in 0..13 {
             r.words().unwrap();
         }
         frames.push((index, out[start..r.position()].to_vec()));
@@ -201,7 +201,7 @@ fn tables_are_the_crates_own() {
             r.u32().unwrap();
         }
         r.floats().unwrap();
-        for _ in 0..12 {
+        for _ in 0..13 {
             r.words().unwrap();
         }
         let object_words = &out[start..r.position()];

@@ -211,6 +211,8 @@ function call(name, request) {
  * @property {Uint32Array} bits
  * @property {number} bitLen
  * @property {Uint32Array} colours RGB9E5
+ * @property {Uint32Array} cornerColours RGB9E5, three per colour at its node's corners (SPEC.md
+ *   A.10); empty when the object has none
  * @property {number} treeDepth the deepest tree
  */
 
@@ -319,7 +321,7 @@ function readObject(r, index) {
     positions: r.floats(), triangles: r.words(), ringOffsets: r.words(), ring: r.words(), vertexFlags: r.words(),
     spokeFlags: r.words(), cornerSpokes: r.words(), neighbours: r.words(), edges: r.words(),
   };
-  return { index, name, kind, geometryHash, mesh, records: r.words(), normals: r.floats(), bits: r.words(), bitLen, colours: r.words(), treeDepth: 0 };
+  return { index, name, kind, geometryHash, mesh, records: r.words(), normals: r.floats(), bits: r.words(), bitLen, colours: r.words(), cornerColours: r.words(), treeDepth: 0 };
 }
 
 /**
@@ -369,6 +371,7 @@ function objectRequest(object) {
   w.words(object.normals);
   w.words(object.bits);
   w.words(object.colours);
+  w.words(object.cornerColours);
   return w;
 }
 

@@ -5,7 +5,7 @@ use glam::Vec3;
 
 use super::context::{lum, Ctx};
 use super::element::{jittered_point, ElemKey, Rng};
-use crate::scene::LightKind;
+use crate::scene::{LightKind, PunctualLight};
 
 /// Below `max_level`, direct light splits an element where a child's direct light differs from
 /// the element's by this fraction of the brightest of them (`Ctx::direct_tree`).
@@ -33,35 +33,8 @@ impl Ctx<'_> {
                 } else {
                     jittered_point(tri, i, samples, &mut rng)
                 };
-                let (w, dist, scale) = match light.kind {
-                    LightKind::Directional => {
-                        let w = -Vec3::from(light.direction).normalize();
-                        (w, f32::INFINITY, 1.0)
-                    }
-                    LightKind::Point | LightKind::Spot { .. } => {
-                        let d = Vec3::from(light.position) - p;
-                        let dist = d.length();
-                        if dist <= 1e-12 {
-                            continue;
-                        }
-                        let w = d / dist;
-                        let mut s = 1.0 / (dist * dist);
-                        if let Some(range) = light.range {
-                            s *= (1.0 - (dist / range).powi(4)).clamp(0.0, 1.0);
-                        }
-                        if let LightKind::Spot {
-                            inner_cone_angle,
-                            outer_cone_angle,
-                        } = light.kind
-                        {
-                            let axis = Vec3::from(light.direction).normalize();
-                            let cd = (-w).dot(axis);
-                            let (ci, co) = (inner_cone_angle.cos(), outer_cone_angle.cos());
-                            let t = ((cd - co) / (ci - co).max(1e-4)).clamp(0.0, 1.0);
-                            s *= t * t;
-                        }
-                        (w, dist, s)
-                    }
+                let Some((w, dist, scale)) = light_toward(light, p) else {
+                    continue;
                 };
                 if scale <= 0.0 || root.normals.iter().all(|n| n.dot(w) <= 0.0) {
                     continue;
@@ -78,6 +51,31 @@ impl Ctx<'_> {
             }
             for (qj, a) in q.iter_mut().zip(&acc) {
                 *qj += *a / (samples as f32 * std::f32::consts::PI);
+            }
+        }
+        q
+    }
+
+    /// Direct irradiance / π per normal of root `r` at point `p` of its coarse triangle, from
+    /// every punctual light through one shadow ray each: the value at a point, where
+    /// [`Ctx::direct`] is an element's mean.
+    pub(super) fn direct_at(&self, r: u32, p: Vec3) -> Vec<Vec3> {
+        let root = &self.roots[r as usize];
+        let mut q = vec![Vec3::ZERO; root.normals.len()];
+        for light in &self.scene.lights {
+            let Some((w, dist, scale)) = light_toward(light, p) else {
+                continue;
+            };
+            if scale <= 0.0 || root.normals.iter().all(|n| n.dot(w) <= 0.0) {
+                continue;
+            }
+            let (a, _) = self.on_surface(r, p);
+            if !self.occ.ray_clear(a, w, dist * (1.0 - 1e-5)) {
+                continue;
+            }
+            let colour = Vec3::from(light.color) * light.intensity;
+            for (qj, n) in q.iter_mut().zip(&root.normals) {
+                *qj += colour * (scale * n.dot(w).max(0.0)) / std::f32::consts::PI;
             }
         }
         q
@@ -136,4 +134,39 @@ impl Ctx<'_> {
         out.sort_by_key(|(k, _)| (k.level, k.path));
         out
     }
+}
+
+/// The direction from `p` to `light`, its distance and the light's falloff there (inverse
+/// square, range and spot cone); `None` for a point light at `p` itself.
+fn light_toward(light: &PunctualLight, p: Vec3) -> Option<(Vec3, f32, f32)> {
+    Some(match light.kind {
+        LightKind::Directional => {
+            let w = -Vec3::from(light.direction).normalize();
+            (w, f32::INFINITY, 1.0)
+        }
+        LightKind::Point | LightKind::Spot { .. } => {
+            let d = Vec3::from(light.position) - p;
+            let dist = d.length();
+            if dist <= 1e-12 {
+                return None;
+            }
+            let w = d / dist;
+            let mut s = 1.0 / (dist * dist);
+            if let Some(range) = light.range {
+                s *= (1.0 - (dist / range).powi(4)).clamp(0.0, 1.0);
+            }
+            if let LightKind::Spot {
+                inner_cone_angle,
+                outer_cone_angle,
+            } = light.kind
+            {
+                let axis = Vec3::from(light.direction).normalize();
+                let cd = (-w).dot(axis);
+                let (ci, co) = (inner_cone_angle.cos(), outer_cone_angle.cos());
+                let t = ((cd - co) / (ci - co).max(1e-4)).clamp(0.0, 1.0);
+                s *= t * t;
+            }
+            (w, dist, s)
+        }
+    })
 }

@@ -11,21 +11,27 @@ use super::formfactor::point_to_polygon_each;
 use super::links::{Link, SrcIdx, CORNERS};
 use super::tree::{corner_mean, push_linear, Tree};
 
+/// What a root's nodes gather, at each node's corners (the links are linear over their
+/// receivers) and pushed down from every receiver above: per corner and normal
+/// (`[(i * CORNERS + c) * nn + j]`) direct light plus all links (`q`) and what comes from the
+/// lights, directly or through links from their elements (`lit`); per corner, what the
+/// geometric normal gathers from all links (`g0`) and from the rest (`g0_rest`). A closed
+/// leaf's sum leaves `lit` alone and fills or scales the rest.
+pub(super) struct Gathered {
+    pub(super) q: Vec<Vec3>,
+    pub(super) lit: Vec<Vec3>,
+    pub(super) g0: Vec<Vec3>,
+    pub(super) g0_rest: Vec<Vec3>,
+}
+
 impl Ctx<'_> {
     /// [`Tree::closure`] and [`Tree::self_view`] of tree `t` (root `r`), from its links.
     pub(super) fn closure(&self, r: u32, t: &Tree) -> (Vec<f32>, Vec<f32>) {
         if self.surface[r as usize].is_empty() {
             return (Vec::new(), Vec::new());
         }
-        let block = CORNERS * self.nn(r);
         let n = t.keys.len();
-        let mut f = vec![0.0f32; n * CORNERS];
-        for (link, k) in t.links_with_k() {
-            for c in 0..CORNERS {
-                f[link.recv as usize * CORNERS + c] += k[block + c];
-            }
-        }
-        push_linear(t, &mut f, 1);
+        let f = self.closure_corners(r, t);
         let mut closure: Vec<f32> = (0..n)
             .map(|i| (f[i * CORNERS] + f[i * CORNERS + 1] + f[i * CORNERS + 2]) / 3.0)
             .collect();
@@ -61,13 +67,42 @@ impl Ctx<'_> {
         (closure, view)
     }
 
-    /// One gather + push-pull for root `r`; returns the new radiance array.
+    /// The form factors [`Tree::closure`] averages, at each node's corners
+    /// (`[i * CORNERS + c]`; empty where root `r` has no refined surface).
+    pub(super) fn closure_corners(&self, r: u32, t: &Tree) -> Vec<f32> {
+        if self.surface[r as usize].is_empty() {
+            return Vec::new();
+        }
+        let block = CORNERS * self.nn(r);
+        let mut f = vec![0.0f32; t.keys.len() * CORNERS];
+        for (link, k) in t.links_with_k() {
+            for c in 0..CORNERS {
+                f[link.recv as usize * CORNERS + c] += k[block + c];
+            }
+        }
+        push_linear(t, &mut f, 1);
+        f
+    }
+
     /// Per node and normal of root `r`'s tree (`out[i * nn + j]`), the sum of the form factors
     /// its links give it, pushed down from every receiver above it and averaged over its
     /// corners ([`push_linear`]): of all its links, and of those from the lights'
     /// ([`Ctx::is_light`]) elements alone. They depend on the links alone, so every iteration
     /// of a solve reads them ([`Ctx::iterate_root`]).
     pub(super) fn form_factor_sums(&self, r: u32, t: &Tree) -> Vec<[f32; 2]> {
+        let nn = self.nn(r);
+        let (ff, ff_lit) = self.form_factor_corners(r, t);
+        (0..t.keys.len() * nn)
+            .map(|x| {
+                let (i, j) = (x / nn, x % nn);
+                [corner_mean(&ff, i, j, nn), corner_mean(&ff_lit, i, j, nn)]
+            })
+            .collect()
+    }
+
+    /// The sums of [`Ctx::form_factor_sums`] at each node's corners, before their mean:
+    /// corner-major (`[(i * CORNERS + c) * nn + j]`), of all links and of the lights' alone.
+    pub(super) fn form_factor_corners(&self, r: u32, t: &Tree) -> (Vec<f32>, Vec<f32>) {
         let nn = self.nn(r);
         let n = t.keys.len();
         let mut ff = vec![0.0f32; n * CORNERS * nn];
@@ -86,12 +121,7 @@ impl Ctx<'_> {
         }
         push_linear(t, &mut ff, nn);
         push_linear(t, &mut ff_lit, nn);
-        (0..n * nn)
-            .map(|x| {
-                let (i, j) = (x / nn, x % nn);
-                [corner_mean(&ff, i, j, nn), corner_mean(&ff_lit, i, j, nn)]
-            })
-            .collect()
+        (ff, ff_lit)
     }
 
     /// Whether `link` brings a light's own light: its source is an element of a light
@@ -100,27 +130,21 @@ impl Ctx<'_> {
         matches!(link.src.get(), SrcIdx::Node { root, .. } if self.is_light(root))
     }
 
-    /// One Jacobi step for root `r`: its nodes' new radiance from what its links gather from
-    /// `trees` and `cl`; `sums` are its [`Ctx::form_factor_sums`].
-    pub(super) fn iterate_root(
+    /// What root `r`'s nodes gather at their corners from `trees` and `cl`, pushed down to
+    /// every node ([`Gathered`]); with the direct light of the elements ([`Tree::direct`]) when
+    /// `with_direct`.
+    pub(super) fn gathered(
         &self,
         r: u32,
         trees: &[Tree],
         cl: &[ClusterLight],
-        sums: &[[f32; 2]],
-    ) -> Vec<Vec3> {
+        with_direct: bool,
+    ) -> Gathered {
         let t = &trees[r as usize];
         let nn = self.nn(r);
         let n = t.keys.len();
-        // Direct light plus gathered radiance at each node's corners (the links are linear
-        // over their receivers), and the gathered part alone for the geometric normal.
-        // Corner-major per node: `q[(i * CORNERS + c) * nn + j]`. Apart, what comes from the
-        // lights, directly or through links from their elements (`lit`), and what the
-        // geometric normal gathers from the rest (`g0_rest`): what a closed leaf's sum leaves
-        // alone and what it fills or scales. The form factors they were gathered through are
-        // in `sums`.
         let mut q = vec![Vec3::ZERO; n * CORNERS * nn];
-        for i in 0..n {
+        for i in (0..n).filter(|_| with_direct) {
             for c in 0..CORNERS {
                 let at = (i * CORNERS + c) * nn;
                 q[at..at + nn].copy_from_slice(&t.direct[i * nn..(i + 1) * nn]);
@@ -166,6 +190,32 @@ impl Ctx<'_> {
         push_linear(t, &mut lit, nn);
         push_linear(t, &mut g0, 1);
         push_linear(t, &mut g0_rest, 1);
+        Gathered {
+            q,
+            lit,
+            g0,
+            g0_rest,
+        }
+    }
+
+    /// One Jacobi step for root `r`: its nodes' new radiance from what its links gather from
+    /// `trees` and `cl`; `sums` are its [`Ctx::form_factor_sums`].
+    pub(super) fn iterate_root(
+        &self,
+        r: u32,
+        trees: &[Tree],
+        cl: &[ClusterLight],
+        sums: &[[f32; 2]],
+    ) -> Vec<Vec3> {
+        let t = &trees[r as usize];
+        let nn = self.nn(r);
+        let n = t.keys.len();
+        let Gathered {
+            q,
+            lit,
+            g0,
+            g0_rest,
+        } = self.gathered(r, trees, cl, true);
         // What each leaf gathers: the mean of its linear function, the value at its centroid.
         let mut q_leaf = vec![Vec3::ZERO; n * nn];
         for i in 0..n {

@@ -61,7 +61,8 @@
 //! 4. The refinement rules judged by the geometry: [`narrow_shadow`], [`near_occluder`], then
 //!    [`self_shade`]; and [`source_variation`], [`solution`] (what the bake hands back).
 //! 5. The steps: [`refine`] walks the (receiver, source) pairs of one root, asking each rule in
-//!    turn; [`gather`] (gather, push-pull, Jacobi iterations).
+//!    turn; [`gather`] (gather, push-pull, Jacobi iterations); [`point_values`] (after the
+//!    last solve, the light at every leaf's corners: the points the runtime reads it at).
 //! 6. [`schedule`]: the passes, and the parallel work of each.
 
 mod bend;
@@ -81,6 +82,7 @@ mod narrow_shadow;
 mod near_occluder;
 mod parallel_walk;
 mod params;
+mod point_values;
 mod power;
 mod prepare;
 mod refine;

@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use super::cluster_reading::ClusterLight;
 use super::context::{lum, Ctx};
 use super::element::ElemKey;
-use super::links::{Link, RawLinks, Source};
+use super::links::{Link, RawLinks, Source, CORNERS};
 use super::params::BakeParams;
 use super::refine::Judge;
 use super::solution::{BakeResult, BakeStats, ObjectSolution, TriangleSolution};
@@ -196,9 +196,26 @@ pub fn bake_with_progress(
             triangles: Vec::with_capacity(o.triangles.len()),
         })
         .collect();
-    for (r, t) in trees.iter().enumerate() {
+    let corners: Vec<Vec<Vec3>> = (0..trees.len() as u32)
+        .into_par_iter()
+        .map(|r| {
+            if params.corner_colours {
+                ctx.corner_values(r, &trees, &cl)
+            } else {
+                Vec::new()
+            }
+        })
+        .collect();
+    for ((r, t), corners) in trees.iter().enumerate().zip(corners) {
         let root = &ctx.roots[r];
+        let nn = root.normals.len();
         objects[root.object].triangles.push(TriangleSolution {
+            corner_colours: (0..corners.len())
+                .map(|x| {
+                    let (kj, c) = (x / CORNERS, x % CORNERS);
+                    corners[((kj / nn) * CORNERS + c) * nn + kj % nn].to_array()
+                })
+                .collect(),
             normals: root.normals.iter().map(|n| n.to_array()).collect(),
             nodes: t.keys.iter().map(|k| (k.level, k.path)).collect(),
             subdivided: t.child.iter().map(|&c| c != u32::MAX).collect(),

@@ -18,6 +18,9 @@ pub struct TriangleSolution {
     /// Outgoing radiance per node and normal, node-major: `colours[k * normals.len() + j]`.
     /// Interior nodes hold the area-weighted average of their children.
     pub colours: Vec<[f32; 3]>,
+    /// Outgoing radiance at each node's corners 0, 1, 2 (SPEC.md A.10) per normal, three for
+    /// each colour: `corner_colours[(k * normals.len() + j) * 3 + c]`.
+    pub corner_colours: Vec<[f32; 3]>,
 }
 
 /// The solution for one scene object.

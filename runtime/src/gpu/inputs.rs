@@ -135,6 +135,7 @@ pub fn random_object(
         bits,
         bit_len,
         colours,
+        corner_colours: Vec::new(),
     }
 }
 

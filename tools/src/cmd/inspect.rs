@@ -137,6 +137,7 @@ fn object_json(index: usize, o: &hce_format::Object) -> Value {
         "leaves": leaves,
         "bits": o.bit_len,
         "colours": o.colours.len(),
+        "corner_colours": o.corner_colours.len(),
         "colour_range": range,
     })
 }
@@ -310,8 +311,8 @@ fn text_report(v: &Value) -> String {
         );
         let _ = writeln!(
             out,
-            "      nodes {} ({} leaves), bits {}, colours {}",
-            o["nodes"], o["leaves"], o["bits"], o["colours"]
+            "      nodes {} ({} leaves), bits {}, colours {}, corner colours {}",
+            o["nodes"], o["leaves"], o["bits"], o["colours"], o["corner_colours"]
         );
         if !o["colour_range"].is_null() {
             let _ = writeln!(

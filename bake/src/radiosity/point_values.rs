@@ -1,0 +1,149 @@
+//! Values where they are read: the radiance at every leaf's corners, the points a renderer
+//! reads the field at (SPEC.md G.2), gathered there rather than averaged over the leaf.
+//!
+//! A leaf's colour is the mean of the light over its area. A renderer that fits its corners to
+//! those means draws, in the corner of a room or along the edge of a shadow, a value between
+//! the means of the leaves around the point, where the light itself goes beyond them. Every
+//! link is linear over its receiver (its form factors and visibility at the three corners), so
+//! evaluated at a corner the links give the light at that point; punctual lights are sampled
+//! there by a shadow ray of their own. A closed leaf's sum of form factors is kept per corner
+//! ([`Ctx::enclosure`]), so a closed furnace stays exact at every point.
+
+use glam::Vec3;
+
+use super::cluster_reading::ClusterLight;
+use super::context::Ctx;
+use super::gather::Gathered;
+use super::links::CORNERS;
+use super::tree::{corner_mean, Tree};
+
+/// The child of a split node that holds its corner `c` as its own corner `c`
+/// ([`super::tree::CHILD_CORNERS`]: Top, Left and Right hold corners 0, 1 and 2).
+const CHILD_AT_CORNER: [usize; CORNERS] = [0, 1, 3];
+
+impl Ctx<'_> {
+    /// The radiance shown at each corner of each node of root `r`'s tree, per normal,
+    /// corner-major (`out[(i * CORNERS + c) * nn + j]`): at a leaf, what its links and the
+    /// punctual lights bring to that point, reflected, with its open part's radiance as
+    /// [`Ctx::shown`] gives the leaf; at a split node, the value of the leaf that holds the
+    /// corner. Read after a solve, from the radiance `trees` and `cl` hold.
+    pub(super) fn corner_values(&self, r: u32, trees: &[Tree], cl: &[ClusterLight]) -> Vec<Vec3> {
+        let t = &trees[r as usize];
+        let nn = self.nn(r);
+        let n = t.keys.len();
+        let Gathered {
+            mut q,
+            mut lit,
+            g0,
+            g0_rest,
+        } = self.gathered(r, trees, cl, false);
+        let (ff, ff_lit) = self.form_factor_corners(r, t);
+        let closure = self.closure_corners(r, t);
+        let le = self.roots[r as usize].emission;
+        let mut out = vec![Vec3::ZERO; n * CORNERS * nn];
+        for i in (0..n).filter(|&i| t.child[i] == u32::MAX) {
+            let points = self.elem_corners(t.keys[i]);
+            let view = |j: usize| t.self_view.get(i * nn + j).copied().unwrap_or(0.0);
+            for (c, &p) in points.iter().enumerate() {
+                let at = (i * CORNERS + c) * nn;
+                if !self.scene.lights.is_empty() {
+                    for (j, d) in self.direct_at(r, p).into_iter().enumerate() {
+                        q[at + j] += d;
+                        lit[at + j] += d;
+                    }
+                }
+                // A refined patch gathers its own radiance where it sees itself; apart, so
+                // that the sums below scale what the links bring alone.
+                let own = |j: usize| {
+                    if closure.is_empty() {
+                        Vec3::ZERO
+                    } else {
+                        t.l[i * nn] * t.self_view[i * nn + j]
+                    }
+                };
+                let f = |j: usize| ff[at + j];
+                let f_lit = |j: usize| ff_lit[at + j];
+                let mean = |v: &[f32], j: usize| corner_mean(v, i, j, nn);
+                let f0 = f(0);
+                let enclosed = t.enclosed[i];
+                if f0 > 0.0 && enclosed >= 0.0 {
+                    // The closed leaf's rule of `Ctx::iterate_root`, at the point: the lights'
+                    // links as they are, the rest scaled or filled to the enclosure.
+                    let rest0 = f0 - f_lit(0);
+                    let m_rest = if rest0 > 0.0 {
+                        g0_rest[i * CORNERS + c] / rest0
+                    } else {
+                        g0[i * CORNERS + c] / f0
+                    };
+                    for j in 0..nn {
+                        let fixed = lit[at + j];
+                        let from_lights = f_lit(j);
+                        let seen = f(j) - from_lights + view(j);
+                        let due = (enclosed - from_lights).max(0.0);
+                        let rest = q[at + j] + own(j) - fixed;
+                        q[at + j] = fixed
+                            + if seen > due {
+                                rest * (due / seen)
+                            } else {
+                                rest + m_rest * (due - seen)
+                            };
+                    }
+                } else if f0 > 0.0 {
+                    // Elsewhere what a leaf's links sees in all is known best as their mean
+                    // over it: at a corner their linear functions are extrapolated, and
+                    // where the light changes fastest, where a face meets the floor it stands
+                    // on, they fell a quarter short of it. A corner takes from them the mix of
+                    // what it sees, scaled to the leaf's sum; the lights' links stay as they
+                    // are.
+                    for j in 0..nn {
+                        let seen = f(j) - f_lit(j);
+                        let want = mean(&ff, j) - mean(&ff_lit, j);
+                        if seen > 0.0 && want > 0.0 {
+                            q[at + j] = lit[at + j] + (q[at + j] - lit[at + j]) * (want / seen);
+                        }
+                        q[at + j] += own(j);
+                    }
+                    if nn > 1 || !closure.is_empty() {
+                        // A tilted normal's missing form factors, filled as
+                        // `Ctx::iterate_root` fills them.
+                        let m = g0[i * CORNERS + c] / f0;
+                        let (full, first) = match t.closure.get(i) {
+                            Some(&full) => (full, 0),
+                            None => (mean(&ff, 0), 1),
+                        };
+                        for j in first..nn {
+                            let missing = (full - mean(&ff, j) - view(j)).max(0.0);
+                            q[at + j] += m * missing;
+                        }
+                    }
+                } else {
+                    for j in 0..nn {
+                        q[at + j] += own(j);
+                    }
+                }
+                let o = t.open[i];
+                for j in 0..nn {
+                    let l = le + t.rho[i] * q[at + j];
+                    out[at + j] = if o > 0.0 && o < 1.0 {
+                        le + (l - le) / o
+                    } else {
+                        l
+                    };
+                }
+            }
+        }
+        // Breadth-first: children come after their parent, so reverse is bottom-up.
+        for i in (0..n).rev() {
+            let first = t.child[i];
+            if first == u32::MAX {
+                continue;
+            }
+            for (c, ch) in CHILD_AT_CORNER.into_iter().enumerate() {
+                let from = ((first as usize + ch) * CORNERS + c) * nn;
+                let to = (i * CORNERS + c) * nn;
+                out.copy_within(from..from + nn, to);
+            }
+        }
+        out
+    }
+}
