@@ -22,6 +22,11 @@ pub(super) struct Gathered {
     pub(super) lit: Vec<Vec3>,
     pub(super) g0: Vec<Vec3>,
     pub(super) g0_rest: Vec<Vec3>,
+    /// For points only (empty otherwise): per corner, what the geometric normal gathers from
+    /// the links that are not the lights', each weighed by its own form factor there again,
+    /// and the sum of those weights: their mean is the radiance of what the corner sees most.
+    pub(super) g0_dominant: Vec<Vec3>,
+    pub(super) w_dominant: Vec<f32>,
 }
 
 impl Ctx<'_> {
@@ -131,20 +136,20 @@ impl Ctx<'_> {
     }
 
     /// What root `r`'s nodes gather at their corners from `trees` and `cl`, pushed down to
-    /// every node ([`Gathered`]); with the direct light of the elements ([`Tree::direct`]) when
-    /// `with_direct`.
+    /// every node ([`Gathered`]): for the elements (with their direct light, [`Tree::direct`]),
+    /// or `for_points`, for their corners ([`Ctx::corner_values`]).
     pub(super) fn gathered(
         &self,
         r: u32,
         trees: &[Tree],
         cl: &[ClusterLight],
-        with_direct: bool,
+        for_points: bool,
     ) -> Gathered {
         let t = &trees[r as usize];
         let nn = self.nn(r);
         let n = t.keys.len();
         let mut q = vec![Vec3::ZERO; n * CORNERS * nn];
-        for i in (0..n).filter(|_| with_direct) {
+        for i in (0..n).filter(|_| !for_points) {
             for c in 0..CORNERS {
                 let at = (i * CORNERS + c) * nn;
                 q[at..at + nn].copy_from_slice(&t.direct[i * nn..(i + 1) * nn]);
@@ -153,6 +158,9 @@ impl Ctx<'_> {
         let mut lit = q.clone();
         let mut g0 = vec![Vec3::ZERO; n * CORNERS];
         let mut g0_rest = vec![Vec3::ZERO; n * CORNERS];
+        let width = if for_points { n * CORNERS } else { 0 };
+        let mut g0_dominant = vec![Vec3::ZERO; width];
+        let mut w_dominant = vec![0.0f32; width];
         for (link, k) in t.links_with_k() {
             let ls = match link.src.get() {
                 SrcIdx::Cluster(c) => {
@@ -183,6 +191,10 @@ impl Ctx<'_> {
                 g0[link.recv as usize * CORNERS + c] += g;
                 if !from_light {
                     g0_rest[link.recv as usize * CORNERS + c] += g;
+                    if for_points {
+                        g0_dominant[link.recv as usize * CORNERS + c] += g * ks[c * nn];
+                        w_dominant[link.recv as usize * CORNERS + c] += ks[c * nn] * ks[c * nn];
+                    }
                 }
             }
         }
@@ -190,11 +202,17 @@ impl Ctx<'_> {
         push_linear(t, &mut lit, nn);
         push_linear(t, &mut g0, 1);
         push_linear(t, &mut g0_rest, 1);
+        if for_points {
+            push_linear(t, &mut g0_dominant, 1);
+            push_linear(t, &mut w_dominant, 1);
+        }
         Gathered {
             q,
             lit,
             g0,
             g0_rest,
+            g0_dominant,
+            w_dominant,
         }
     }
 
@@ -215,7 +233,8 @@ impl Ctx<'_> {
             lit,
             g0,
             g0_rest,
-        } = self.gathered(r, trees, cl, true);
+            ..
+        } = self.gathered(r, trees, cl, false);
         // What each leaf gathers: the mean of its linear function, the value at its centroid.
         let mut q_leaf = vec![Vec3::ZERO; n * nn];
         for i in 0..n {
