@@ -136,9 +136,22 @@ impl Ctx<'_> {
                         }
                     }
                 }
+                // A leaf partly shut in (under a block on the floor, inside a spout where it
+                // meets a body) shows its open part's radiance ([`Ctx::shown`]): its links'
+                // visibility, at a corner too, is weighed from rays of points all over it, the
+                // shut ones dark, so an open corner's value is scaled up as the leaf's mean is
+                // (without it the teapot's handle, where it meets the body, came out dark). A
+                // shut corner (of any leaf open somewhere: the corner of a handle's leaf inside
+                // the body), which is never drawn, shows the open part's mean, so that the fit
+                // at a point by the shut region does not darken what is drawn.
                 let o = t.open[i];
+                let shut = o > 0.0 && self.shut_at(r, p);
                 for j in 0..nn {
-                    let l = le + t.rho[i] * q[at + j];
+                    let l = if shut {
+                        t.l[i * nn + j]
+                    } else {
+                        le + t.rho[i] * q[at + j]
+                    };
                     out[at + j] = if o > 0.0 && o < 1.0 {
                         le + (l - le) / o
                     } else {
