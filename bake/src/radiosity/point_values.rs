@@ -13,7 +13,7 @@
 //!
 //! Measured on the Cornell box against Cycles at its level-2 vertices (BENCHMARKS.md): the
 //! corners' links alone drew the feet of the blocks a quarter dark; scaled to the leaf's sum,
-//! the ceiling along the walls 7-10% bright; made up from the dominant source, 1.22% in all
+//! the ceiling along the walls 7-10% bright; made up from the dominant source, 1.18% in all
 //! against the leaf means' 1.84%.
 
 use glam::Vec3;

@@ -12,13 +12,13 @@ use hce_bake::BakeParams;
 /// default's, which survives a faster solver better than seconds).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Quality {
-    /// --bf-epsilon 1e-3 --detail-level 4 --visibility-rays 4 (Cornell box: 2.3% error, a
-    /// fifteenth of the default's time)
+    /// --bf-epsilon 1e-3 --detail-level 4 --visibility-rays 4 (Cornell box: 2.5% error, a
+    /// twelfth of the default's time)
     Draft,
     /// --bf-epsilon 1e-4 --detail-level 7 --visibility-rays 8 (Cornell box: 1.2% error)
     Default,
     /// --bf-epsilon 1e-5 --detail-level 7 --visibility-rays 8 (Cornell box: 1.2% error, no
-    /// better than the default there, in 3.7 times its time)
+    /// better than the default there, in 3.5 times its time)
     High,
 }
 
@@ -35,7 +35,7 @@ impl Quality {
         let default = BakeParams::default();
         match self {
             // Coarser links, shadows resolved to level 4 and half the rays: for previews and
-            // iteration, twice the default's error in a fifteenth of its time.
+            // iteration, twice the default's error in a twelfth of its time.
             Quality::Draft => Preset {
                 bf_epsilon: 1e-3,
                 detail_level: 4,
