@@ -410,6 +410,28 @@ fn gouraud_draws_the_geometric_normals_colours_without_slopes() {
     assert_eq!("gouraud".parse(), Ok(Reconstruction::Gouraud));
 }
 
+/// Gives `o`'s first triangle the full tree of `depth` and returns its nodes' cells in
+/// breadth-first order (the leaves last, `4^depth` of them).
+fn full_tree(o: &mut Object, depth: u32) -> Vec<hce_geometry::lattice::LatticeTriangle> {
+    let mut nodes = vec![hce_geometry::lattice::LatticeTriangle::root(4096)];
+    let mut flags = Vec::new();
+    let mut level = 0..1;
+    for d in 0..=depth {
+        for k in level.clone() {
+            flags.push(d < depth);
+            if d < depth {
+                let cell = nodes[k];
+                nodes.extend((0..4).map(|c| cell.child(c)));
+            }
+        }
+        level = level.end..nodes.len();
+    }
+    let (bits, bit_len) = encode_tree(&flags).unwrap();
+    o.bits = bits;
+    o.bit_len = bit_len;
+    nodes
+}
+
 #[test]
 fn correction_sharpens_a_penumbra_and_stays_within_the_colours_around() {
     // A full tree of depth 4 on the unit right triangle, its leaves holding the mean over their
@@ -427,26 +449,9 @@ fn correction_sharpens_a_penumbra_and_stays_within_the_colours_around() {
         let mut c = example::single_triangle();
         let o = &mut c.objects[0];
         o.kind = kind;
-        let mut flags = Vec::new();
-        let mut cells = vec![LatticeTriangle::root(4096)];
-        let mut leaves = Vec::new();
-        for d in 0..=DEPTH {
-            let mut next = Vec::new();
-            for &cell in &cells {
-                flags.push(d < DEPTH);
-                if d < DEPTH {
-                    next.extend((0..4).map(|c| cell.child(c)));
-                } else {
-                    leaves.push(cell);
-                }
-            }
-            if d < DEPTH {
-                cells = next;
-            }
-        }
-        let (bits, bit_len) = encode_tree(&flags).unwrap();
-        o.bits = bits;
-        o.bit_len = bit_len;
+        let nodes = full_tree(o, DEPTH);
+        let inner = nodes.len() - 4usize.pow(DEPTH);
+        let leaves = &nodes[inner..];
         let light = |x: f32| {
             let t = ((x / 4096.0 - 0.3) / 0.15).clamp(0.0, 1.0);
             bright + (dim - bright) * t
@@ -465,7 +470,6 @@ fn correction_sharpens_a_penumbra_and_stays_within_the_colours_around() {
             }
             sum / count
         };
-        let inner = flags.len() - leaves.len();
         o.colours = (0..inner)
             .map(|_| rgb9e5::encode([0.5, 0.5, 0.5]))
             .chain(leaves.iter().map(|l| rgb9e5::encode([colour_of(l); 3])))
@@ -475,14 +479,14 @@ fn correction_sharpens_a_penumbra_and_stays_within_the_colours_around() {
         let drawn = |p: [i32; 2]| table.evaluate(0, p[0] as u32 * 16, p[1] as u32 * 16, normal)[0];
         // The fit alone: every leaf has the same area, so a corner's value is its leaves' mean.
         let mut around: HashMap<[i32; 2], Vec<f32>> = HashMap::new();
-        for l in &leaves {
+        for l in leaves {
             for p in l.corners() {
                 around.entry(p).or_default().push(colour_of(l));
             }
         }
         let fitted = |p: [i32; 2]| around[&p].iter().sum::<f32>() / around[&p].len() as f32;
         let (mut before, mut after) = (0.0f64, 0.0f64);
-        for l in &leaves {
+        for l in leaves {
             let mean =
                 |f: &dyn Fn([i32; 2]) -> f32| l.corners().iter().map(|&p| f(p)).sum::<f32>() / 3.0;
             before += f64::from(mean(&fitted) - colour_of(l)).powi(2);
@@ -513,29 +517,12 @@ fn corner_colours_are_drawn_where_they_lie_without_correction() {
     // there (all the leaves meeting at a point agree on it), not the means nor a correction
     // towards them; a point inside a leaf, the mean of its corners.
     use hce_format::ObjectKind;
-    use hce_geometry::lattice::LatticeTriangle;
     const DEPTH: u32 = 3;
     for kind in [ObjectKind::Flat, ObjectKind::Multiresolution] {
         let mut c = example::single_triangle();
         let o = &mut c.objects[0];
         o.kind = kind;
-        let mut flags = Vec::new();
-        let mut cells = vec![LatticeTriangle::root(4096)];
-        let mut nodes = Vec::new();
-        for d in 0..=DEPTH {
-            let mut next = Vec::new();
-            for &cell in &cells {
-                flags.push(d < DEPTH);
-                nodes.push(cell);
-                if d < DEPTH {
-                    next.extend((0..4).map(|c| cell.child(c)));
-                }
-            }
-            cells = next;
-        }
-        let (bits, bit_len) = encode_tree(&flags).unwrap();
-        o.bits = bits;
-        o.bit_len = bit_len;
+        let nodes = full_tree(o, DEPTH);
         let light = |p: [i32; 2]| {
             let t = ((p[0] as f32 / 4096.0 - 0.3) / 0.3).clamp(0.0, 1.0);
             rgb9e5::decode(rgb9e5::encode([1.0 - 0.875 * t, 0.5, 0.25 + t]))
