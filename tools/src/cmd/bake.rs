@@ -72,7 +72,7 @@ pub struct BakeArgs {
     pub detail_level: Option<u32>,
     /// Store only the elements' means, not their colours at the corners too (SPEC.md A.10):
     /// files about 3.5 times smaller, drawn with more error where the light changes fast (the
-    /// Cornell box against Cycles: 1.84% instead of 1.45%).
+    /// Cornell box against Cycles: 1.84% instead of 1.18%).
     #[arg(long)]
     pub no_corner_colours: bool,
     /// Worker threads (default: all cores). The output is the same whatever the count.
