@@ -8,7 +8,7 @@ use smallvec::{smallvec, SmallVec};
 use super::cluster::ClusterChild;
 use super::context::Ctx;
 use super::element::{jittered_point, split, ElemKey};
-use super::formfactor::{point_to_polygon, point_to_polygon_each, stratified_points};
+use super::formfactor::{point_to_polygon, point_to_polygon_each, stratified_16};
 use super::links::{Source, CORNERS};
 
 /// A cluster is one disc in a link's coefficient while its radius is below this fraction of
@@ -107,7 +107,7 @@ impl Ctx<'_> {
                 let s_size = (st[1] - st[0]).length().max((st[2] - st[0]).length());
                 // Far pairs: the centroid suffices; near pairs: four stratified points.
                 let dist = (sc - rc).length();
-                let pts: SmallVec<[Vec3; 4]> = if dist > 3.0 * (r_size + s_size) {
+                let pts: SmallVec<[Vec3; 16]> = if dist > 3.0 * (r_size + s_size) {
                     smallvec![rc]
                 } else if dist > r_size + s_size {
                     split(rt)
@@ -115,7 +115,7 @@ impl Ctx<'_> {
                         .map(|t| (t[0] + t[1] + t[2]) / 3.0)
                         .collect()
                 } else {
-                    stratified_points(rt, 2).into()
+                    SmallVec::from_slice(&stratified_16(rt))
                 };
                 // Points and source on the refined surfaces where the objects have them.
                 let mut buf = [st; 4];

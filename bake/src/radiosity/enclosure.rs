@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use super::context::Ctx;
 use super::element::ElemKey;
-use super::formfactor::stratified_points;
+use super::formfactor::{stratified_16, stratified_points};
 
 /// Cosine-weighted rings and azimuths of the directions [`Ctx::root_closed`] casts from each
 /// of a root's four points (and [`Ctx::enclosure`] from each of a partly shut leaf's sixteen).
@@ -149,7 +149,7 @@ impl Ctx<'_> {
             let closed = self.memo(root, |m| &mut m.closed, || self.root_closed(k.root));
             return if closed { 1.0 } else { -1.0 };
         }
-        let all_open_closed = stratified_points(self.elem_corners(k), 2)
+        let all_open_closed = stratified_16(self.elem_corners(k))
             .iter()
             .enumerate()
             .all(|(s, &p)| self.shut_at(k.root, p) || self.point_closed(k.root, p, s));

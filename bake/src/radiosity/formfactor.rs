@@ -195,16 +195,33 @@ fn angle(y: f64, x: f64) -> f64 {
 }
 
 /// Stratified sample points of a triangle: the centroids of its `4^level` subtriangles after
-/// `level` rounds of the 1-to-4 split (so the points tile the triangle evenly).
+/// `level` rounds of the 1-to-4 split (so the points tile the triangle evenly), in the order of
+/// their paths (first choice most significant).
 pub fn stratified_points(tri: [Vec3; 3], level: u32) -> Vec<Vec3> {
-    let mut tris = vec![tri];
-    for _ in 0..level {
-        tris = tris
-            .iter()
-            .flat_map(|&t| super::element::split(t))
-            .collect();
+    fn rec(t: [Vec3; 3], level: u32, out: &mut Vec<Vec3>) {
+        if level == 0 {
+            out.push((t[0] + t[1] + t[2]) / 3.0);
+            return;
+        }
+        for child in super::element::split(t) {
+            rec(child, level - 1, out);
+        }
     }
-    tris.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect()
+    let mut out = Vec::with_capacity(1 << (2 * level.min(12)));
+    rec(tri, level, &mut out);
+    out
+}
+
+/// [`stratified_points`] at level 2, on the stack: a near link's sixteen receiver points,
+/// found for every such link.
+pub fn stratified_16(tri: [Vec3; 3]) -> [Vec3; 16] {
+    let mut out = [Vec3::ZERO; 16];
+    for (i, a) in super::element::split(tri).into_iter().enumerate() {
+        for (j, b) in super::element::split(a).into_iter().enumerate() {
+            out[i * 4 + j] = (b[0] + b[1] + b[2]) / 3.0;
+        }
+    }
+    out
 }
 
 /// Area-to-area form factor from triangle `recv` to triangle `src`, unoccluded: the
@@ -245,6 +262,21 @@ pub fn disc_estimate(cos_r: f32, cos_s: f32, src_area: f32, dist2: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn sixteen_stratified_points_on_the_stack_are_level_twos() {
+        let tri = [
+            Vec3::new(0.3, -1.0, 2.0),
+            Vec3::new(4.0, 0.1, -0.7),
+            Vec3::new(-2.0, 3.0, 0.9),
+        ];
+        assert_eq!(stratified_16(tri).to_vec(), stratified_points(tri, 2));
+        assert_eq!(
+            stratified_points(tri, 0),
+            vec![(tri[0] + tri[1] + tri[2]) / 3.0]
+        );
+        assert_eq!(stratified_points(tri, 3).len(), 64);
+    }
 
     #[test]
     fn angle_is_atan2_over_the_upper_half_plane() {

@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use super::context::Ctx;
 use super::element::{child_toward, ElemKey};
-use super::formfactor::stratified_points;
+use super::formfactor::stratified_16;
 use super::tree::Tree;
 
 impl Ctx<'_> {
@@ -138,7 +138,7 @@ impl Ctx<'_> {
         }
         // The kernel's centre over sixteen stratified points of the source.
         let (mut sum, mut total) = (Vec3::ZERO, 0.0f32);
-        for q in stratified_points(st, 2) {
+        for q in stratified_16(st) {
             let v = q - p;
             let d2 = v.length_squared().max(f32::MIN_POSITIVE);
             let w = n.dot(v).max(0.0) * (-sn.dot(v)).max(0.0) / (d2 * d2);
