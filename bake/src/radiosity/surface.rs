@@ -2,6 +2,8 @@
 //! triangle maps to the refined triangle's point with the same lattice coordinates, so that rays
 //! and form factors leave from the surface that is drawn, and cast shadows with it.
 
+use std::sync::OnceLock;
+
 use glam::Vec3;
 
 use super::context::Ctx;
@@ -47,8 +49,7 @@ pub(super) fn surface_point(
         side = h;
     }
     if let Some(tri) = surface.get(path) {
-        let c = hce_geometry::lattice::fine_corners(level, path as u32)
-            .map(|x| [x[0] as f32, x[1] as f32]);
+        let c = lattice_cells(level)[path];
         // Barycentric weights of q in the lattice triangle c.
         let a = [c[1][0] - c[0][0], c[1][1] - c[0][1]];
         let b = [c[2][0] - c[0][0], c[2][1] - c[0][1]];
@@ -65,6 +66,21 @@ pub(super) fn surface_point(
         return (at, refined);
     }
     (p, normal)
+}
+
+/// The lattice corners of every level-`level` subtriangle, by path
+/// ([`hce_geometry::lattice::subtriangle_cells`]), found once per level: every ray's two ends
+/// and every link's points are carried onto the surface, and each took a second descent of
+/// the split to find its cell's corners. Only the levels refined surfaces have are built.
+fn lattice_cells(level: u32) -> &'static [[[f32; 2]; 3]] {
+    const LEVELS: usize = hce_format::MAX_TREE_DEPTH as usize + 1;
+    static CELLS: [OnceLock<Vec<[[f32; 2]; 3]>>; LEVELS] = [const { OnceLock::new() }; LEVELS];
+    CELLS[level as usize].get_or_init(|| {
+        hce_geometry::lattice::subtriangle_cells(level)
+            .into_iter()
+            .map(|c| c.map(|x| [x[0] as f32, x[1] as f32]))
+            .collect()
+    })
 }
 
 impl Ctx<'_> {
