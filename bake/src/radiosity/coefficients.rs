@@ -29,6 +29,11 @@ pub(super) struct KnownFactors {
     pub(super) corners: Option<[f32; 3]>,
 }
 
+/// A link's coefficients ([`Ctx::link_coefficients`]), on the stack for the default normal
+/// sets (eight normals and the refined surface's own at three corners): every link makes one,
+/// and its two allocations were a share of the bake's time in `malloc` and `free`.
+pub(super) type Coefficients = SmallVec<[f32; 32]>;
+
 pub(super) fn inset_corners(t: [Vec3; 3]) -> [Vec3; CORNERS] {
     let c = (t[0] + t[1] + t[2]) / 3.0;
     t.map(|v| v + (c - v) * CORNER_INSET)
@@ -39,9 +44,9 @@ pub(super) fn inset_corners(t: [Vec3; 3]) -> [Vec3; CORNERS] {
 /// `at` sampled at the inset corners (the slope is the geometry's: distance and angle to the
 /// source change alike for every normal), as corner values, never below zero. Corner-major:
 /// `out[c * nn + j]`.
-pub(super) fn linear_over_receiver(mean: &[f32], at: [f32; CORNERS]) -> Vec<f32> {
+pub(super) fn linear_over_receiver(mean: &[f32], at: [f32; CORNERS]) -> Coefficients {
     let nn = mean.len();
-    let mut out = vec![0.0f32; CORNERS * nn];
+    let mut out: Coefficients = smallvec![0.0f32; CORNERS * nn];
     let fm = (at[0] + at[1] + at[2]) / 3.0;
     // Relative change at each corner; none when the geometric normal sees nothing (a source
     // below the coarse plane that only tilted normals see).
@@ -83,7 +88,7 @@ impl Ctx<'_> {
         (src, st): (Source, [Vec3; 3]),
         nv: u32,
         known: KnownFactors,
-    ) -> (Vec<f32>, f32) {
+    ) -> (Coefficients, f32) {
         let root = &self.roots[recv.root as usize];
         let nn = root.normals.len();
         let rc = (rt[0] + rt[1] + rt[2]) / 3.0;
@@ -92,7 +97,7 @@ impl Ctx<'_> {
             Source::Cluster(c) => 0x8000_0000_0000_0000 | u64::from(c),
             Source::Elem(k) => k.id(),
         };
-        let mut k = vec![0.0f32; nn];
+        let mut k: Coefficients = smallvec![0.0f32; nn];
         let lifted = !self.surface[recv.root as usize].is_empty();
         let mut closure = 0.0f32;
         // Every link comes here: the scratch stays on the stack for the default normal sets

@@ -14,7 +14,7 @@ use rayon::prelude::*;
 use super::bend::bend_splits;
 use super::cluster::ClusterChild;
 use super::cluster_reading::ClusterLight;
-use super::coefficients::{inset_corners, KnownFactors};
+use super::coefficients::{inset_corners, Coefficients, KnownFactors};
 use super::context::{lum, Ctx, Root};
 use super::element::{split, ElemKey};
 use super::factor_variation::factor_variation_splits;
@@ -663,7 +663,7 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
         est: f32,
         share: f32,
         known: KnownFactors,
-    ) -> (Vec<f32>, f32) {
+    ) -> (Coefficients, f32) {
         let ctx = self.ctx;
         let nv = ctx.params.visibility_rays;
         // A light's link to a receiver as small as the shadow rule goes carries most of its
@@ -683,9 +683,10 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
             (est, self.eps_power),
         );
         match self.cache.get(&(recv, src)) {
-            Some(&(at, visible, _)) if rays <= nv => {
-                (self.prev_k[at..at + self.link_len].to_vec(), visible)
-            }
+            Some(&(at, visible, _)) if rays <= nv => (
+                Coefficients::from_slice(&self.prev_k[at..at + self.link_len]),
+                visible,
+            ),
             _ => ctx.link_coefficients((recv, rt), (src, st), rays, known),
         }
     }
@@ -772,7 +773,7 @@ impl<'c, 'a> RootRefinement<'c, 'a> {
         let ends: Vec<Ends> = raw.ends().collect();
         let RawLinks { links, k: ks, .. } = raw;
         // Per link: the links it became, where it went down.
-        type Expanded = Option<Vec<(Link, Ends, Vec<f32>)>>;
+        type Expanded = Option<Vec<(Link, Ends, Coefficients)>>;
         let expand = |(i, &(l_recv, l_src)): (usize, &Ends)| -> Expanded {
             if !goes_down(l_recv, l_src) {
                 return None;
