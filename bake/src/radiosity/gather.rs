@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use super::cluster_reading::ClusterLight;
 use super::context::Ctx;
+use super::enclosure::{closed_sum, missing_view, rest_radiance};
 use super::formfactor::point_to_polygon_each;
 use super::links::{Link, SrcIdx, CORNERS};
 use super::tree::{corner_mean, push_linear, Tree};
@@ -259,56 +260,36 @@ impl Ctx<'_> {
                 continue;
             }
             let view = |j: usize| t.self_view.get(i * nn + j).copied().unwrap_or(0.0);
-            let mean_of = |g: &[Vec3], f: f32| {
-                (g[i * CORNERS] + g[i * CORNERS + 1] + g[i * CORNERS + 2]) / 3.0 / f
-            };
+            let avg = |g: &[Vec3]| (g[i * CORNERS] + g[i * CORNERS + 1] + g[i * CORNERS + 2]) / 3.0;
             let enclosed = t.enclosed[i];
             if enclosed >= 0.0 {
-                // A closed leaf: its form factors sum, for every normal, to the part of its
-                // hemisphere that meets the front of a surface ([`Ctx::enclosure`]; its open
-                // fraction). The lights' links are the most carefully found (analytic form
-                // factors, many rays), so they stay as they are; the rest take up the
-                // difference. What they lack is filled with the mean radiance the geometric
-                // normal gathers from them: a normal turned away from the geometric one sees,
-                // below the element's plane, surface that the coarse scene does not have
-                // there (on a refined surface, the object's own neighbouring patches). What
-                // they have too much (visibility from a few rays, a cluster's area from a
-                // bound, linear functions pushed down from coarser receivers, up to 3% and 6%
-                // off in a closed furnace) is taken off in proportion. So a closed furnace is
-                // exact at every leaf and for every normal (SPEC.md G.1).
+                // A closed leaf: its form factors sum to its enclosure ([`closed_sum`]).
                 let rest0 = f0 - ff_lit(0);
-                let m_rest = if rest0 > 0.0 {
-                    mean_of(&g0_rest, rest0)
-                } else {
-                    mean_of(&g0, f0)
-                };
+                let m_rest = rest_radiance(avg(&g0_rest), rest0, avg(&g0), f0);
                 for j in 0..nn {
                     let at = i * nn + j;
-                    let fixed = corner_mean(&lit, i, j, nn);
                     let from_lights = ff_lit(j);
-                    let seen = ff(j) - from_lights + view(j);
-                    let due = (enclosed - from_lights).max(0.0);
-                    let rest = q_leaf[at] - fixed;
-                    q_leaf[at] = fixed
-                        + if seen > due {
-                            rest * (due / seen)
-                        } else {
-                            rest + m_rest * (due - seen)
-                        };
+                    q_leaf[at] = closed_sum(
+                        corner_mean(&lit, i, j, nn),
+                        q_leaf[at],
+                        from_lights,
+                        ff(j) - from_lights + view(j),
+                        enclosed,
+                        m_rest,
+                    );
                 }
             } else if nn > 1 || closure.is_some() {
                 // Elsewhere every form factor a tilted normal lacks against the geometric one
                 // is filled with the mean radiance the geometric normal gathers; on a refined
                 // surface every normal, the geometric one too, is filled against the surface's
                 // own normal at the receiver's points ([`Tree::closure`]).
-                let m = mean_of(&g0, f0);
+                let m = avg(&g0) / f0;
                 let (full, first) = match closure {
                     Some(f) => (f, 0),
                     None => (f0, 1),
                 };
                 for j in first..nn {
-                    let missing = (full - ff(j) - view(j)).max(0.0);
-                    q_leaf[i * nn + j] += m * missing;
+                    q_leaf[i * nn + j] += m * missing_view(full, ff(j), view(j));
                 }
             }
         }

@@ -20,6 +20,7 @@ use glam::Vec3;
 
 use super::cluster_reading::ClusterLight;
 use super::context::Ctx;
+use super::enclosure::{closed_sum, missing_view, rest_radiance};
 use super::gather::Gathered;
 use super::links::CORNERS;
 use super::tree::{corner_mean, Tree};
@@ -96,27 +97,22 @@ impl Ctx<'_> {
                     }
                 }
                 if f0 > 0.0 && enclosed >= 0.0 {
-                    // Then the closed leaf's rule of `Ctx::iterate_root` with the leaf's sums:
+                    // Then the closed leaf's rule ([`closed_sum`]) with the leaf's sums:
                     // the lights' links as they are, the rest scaled or filled to the
                     // enclosure.
                     let rest0 = f0 - f_lit(0);
-                    let m_rest = if rest0 > 0.0 {
-                        g0_rest[i * CORNERS + c] / rest0
-                    } else {
-                        g0[i * CORNERS + c] / f0
-                    };
+                    let m_rest =
+                        rest_radiance(g0_rest[i * CORNERS + c], rest0, g0[i * CORNERS + c], f0);
                     for j in 0..nn {
-                        let fixed = lit[at + j];
                         let from_lights = mean(&ff_lit, j);
-                        let seen = mean(&ff, j) - from_lights + view(j);
-                        let due = (enclosed - from_lights).max(0.0);
-                        let rest = q[at + j] + own(j) - fixed;
-                        q[at + j] = fixed
-                            + if seen > due {
-                                rest * (due / seen)
-                            } else {
-                                rest + m_rest * (due - seen)
-                            };
+                        q[at + j] = closed_sum(
+                            lit[at + j],
+                            q[at + j] + own(j),
+                            from_lights,
+                            mean(&ff, j) - from_lights + view(j),
+                            enclosed,
+                            m_rest,
+                        );
                     }
                 } else {
                     for j in 0..nn {
@@ -131,8 +127,7 @@ impl Ctx<'_> {
                             None => (mean(&ff, 0), 1),
                         };
                         for j in first..nn {
-                            let missing = (full - mean(&ff, j) - view(j)).max(0.0);
-                            q[at + j] += m * missing;
+                            q[at + j] += m * missing_view(full, mean(&ff, j), view(j));
                         }
                     }
                 }
