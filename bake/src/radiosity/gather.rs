@@ -150,10 +150,14 @@ impl Ctx<'_> {
         let nn = self.nn(r);
         let n = t.keys.len();
         let mut q = vec![Vec3::ZERO; n * CORNERS * nn];
-        for i in (0..n).filter(|_| !for_points) {
-            for c in 0..CORNERS {
-                let at = (i * CORNERS + c) * nn;
-                q[at..at + nn].copy_from_slice(&t.direct[i * nn..(i + 1) * nn]);
+        // An element's direct light is its mean over the element, at each corner alike; a
+        // point's comes from its own shadow rays ([`Ctx::direct_at`]), added by the caller.
+        if !for_points {
+            for i in 0..n {
+                for c in 0..CORNERS {
+                    let at = (i * CORNERS + c) * nn;
+                    q[at..at + nn].copy_from_slice(&t.direct[i * nn..(i + 1) * nn]);
+                }
             }
         }
         let mut lit = q.clone();
