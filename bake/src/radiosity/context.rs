@@ -45,6 +45,9 @@ pub(super) struct Ctx<'a> {
     /// the object casts shadows with its own triangles): rays leave from and arrive at the
     /// points of this surface that correspond to the root's ([`Ctx::on_surface`]).
     pub(super) surface: Vec<Vec<[Vec3; 3]>>,
+    /// Per root: its [`lattice_frame`](super::surface::lattice_frame), which every point
+    /// carried onto its surface reads.
+    pub(super) frames: Vec<[f32; 4]>,
     /// Per root: its corners carried onto its refined surface ([`Ctx::on_surface`]); its own
     /// corners where it has none. The triangle that stands for it where its refined triangles
     /// would be too many to sum: in clusters, and as a far source.

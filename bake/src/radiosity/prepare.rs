@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use super::cluster::{read_parts, ClusterTree};
 use super::context::{lum, Ctx, Root, LIGHT_EMISSION};
 use super::params::BakeParams;
-use super::surface::surface_point;
+use super::surface::{lattice_frame, surface_point};
 use crate::scene::Scene;
 use crate::visibility::Occluders;
 use crate::BakeError;
@@ -144,6 +144,7 @@ impl<'a> Ctx<'a> {
                 })
                 .collect(),
             surface,
+            frames: roots.iter().map(|r| lattice_frame(r.corners)).collect(),
             min_area: {
                 let mut area = vec![0.0f64; scene.objects.len()];
                 for r in &roots {

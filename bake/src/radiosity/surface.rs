@@ -19,6 +19,27 @@ pub(super) fn surface_point(
     surface: &[[Vec3; 3]],
     p: Vec3,
 ) -> (Vec3, Vec3) {
+    surface_point_in(corners, lattice_frame(corners), normal, surface, p)
+}
+
+/// The Gram matrix of a coarse triangle's two edges from its corner 0, `[d11, d12, d22, den]`
+/// (`den` its determinant), which carries a point to lattice coordinates ([`surface_point`]):
+/// found once per root, not for every point carried.
+pub(super) fn lattice_frame(corners: [Vec3; 3]) -> [f32; 4] {
+    let [v0, v1, v2] = corners;
+    let (e1, e2) = (v1 - v0, v2 - v0);
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    [d11, d12, d22, d11 * d22 - d12 * d12]
+}
+
+/// [`surface_point`] with the coarse triangle's [`lattice_frame`] given.
+pub(super) fn surface_point_in(
+    corners: [Vec3; 3],
+    [d11, d12, d22, den]: [f32; 4],
+    normal: Vec3,
+    surface: &[[Vec3; 3]],
+    p: Vec3,
+) -> (Vec3, Vec3) {
     if surface.is_empty() {
         return (p, normal);
     }
@@ -27,8 +48,6 @@ pub(super) fn surface_point(
     // Lattice coordinates (b, c) of p: p = v0 + (b (v1 - v0) + c (v2 - v0)) / n.
     let [v0, v1, v2] = corners;
     let (e1, e2, d) = (v1 - v0, v2 - v0, p - v0);
-    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-    let den = d11 * d22 - d12 * d12;
     if den <= 0.0 {
         return (p, normal);
     }
@@ -98,7 +117,17 @@ impl Ctx<'_> {
     /// [`SolverObject::occluder`]: crate::scene::SolverObject::occluder
     pub(super) fn on_surface(&self, r: u32, p: Vec3) -> (Vec3, Vec3) {
         let root = &self.roots[r as usize];
-        surface_point(root.corners, root.normal, &self.surface[r as usize], p)
+        let surface = &self.surface[r as usize];
+        if surface.is_empty() {
+            return (p, root.normal);
+        }
+        surface_point_in(
+            root.corners,
+            self.frames[r as usize],
+            root.normal,
+            surface,
+            p,
+        )
     }
 
     /// The triangles that stand for source element `k` (corners `st`) in form factors. For an
