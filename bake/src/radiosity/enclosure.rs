@@ -222,16 +222,9 @@ mod tests {
         let (enclosed, from_lights) = (0.9, 0.2);
         for seen_rest in [0.3f32, 0.7, 0.75, 1.1] {
             let fixed = l * from_lights;
+            // `seen_rest`: what the links other than the lights' see.
             let gathered = fixed + l * seen_rest;
-            let seen = from_lights + seen_rest;
-            let q = closed_sum(
-                fixed,
-                gathered,
-                from_lights,
-                seen - from_lights,
-                enclosed,
-                l,
-            );
+            let q = closed_sum(fixed, gathered, from_lights, seen_rest, enclosed, l);
             assert!(
                 (q - l * enclosed).abs().max_element() < 1e-6,
                 "{seen_rest}: {q}"
